@@ -1,0 +1,13 @@
+"""The ``pedenv`` command line: thin commands, each calling one library function.
+
+Each command group lives in its own module and registers itself on :data:`app`.
+"""
+
+from __future__ import annotations
+
+from pedenv.cli.app import app, main
+
+# Importing the modules registers their commands on ``app``.
+from pedenv.cli import core_commands  # noqa: E402,F401
+
+__all__ = ["app", "main"]

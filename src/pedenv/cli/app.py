@@ -1,0 +1,28 @@
+"""The Typer application and the one place that turns library errors into one-line messages."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+from rich.console import Console
+
+from pedenv.errors import InputError
+
+app = typer.Typer(
+    name="pedenv",
+    help="Pedestrian environment model from a monocular camera and ego localisation.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console(stderr=True)
+
+
+def main() -> None:
+    """Entry point of the ``pedenv`` console script."""
+    try:
+        app()
+    except (InputError, FileNotFoundError, ValueError) as exc:
+        console.print(f"error: {exc}", style="red", highlight=False, markup=False)
+        sys.exit(2)

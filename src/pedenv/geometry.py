@@ -1,0 +1,115 @@
+"""Pure, vectorized camera geometry: viewing rays, ray intersection, projection, rotations."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def pixel_rays(pixels: np.ndarray, intrinsics: np.ndarray, cam_to_world: np.ndarray) -> np.ndarray:
+    """Unit viewing rays of pixels in the world frame (the paper's Eq. 3, with ``K^-1``).
+
+    pixels: (..., 2) float, pixels. intrinsics: (3, 3). cam_to_world: (4, 4) or (3, 3) rotation.
+    Returns (..., 3) unit vectors, world frame.
+    """
+    k_inv = np.linalg.inv(intrinsics)
+    rot = cam_to_world[:3, :3]
+    m = rot @ k_inv
+    d = pixels[..., 0:1] * m[:, 0] + pixels[..., 1:2] * m[:, 1] + m[:, 2]
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def closest_points(o1: np.ndarray, d1: np.ndarray, o2: np.ndarray, d2: np.ndarray, min_sin: float = 1e-9):
+    """Closest points between rays ``o1 + s d1`` and ``o2 + t d2`` (Eqs. 4-5).
+
+    o1, o2: (..., 3) origins, metres; d1, d2: (..., 3) unit directions (broadcastable).
+    Returns ``(s, t, midpoint, parallel)``: (...,) distances along each ray, (..., 3) the
+    midpoint of the two closest points, and a (...,) bool mask of rays whose angle has a
+    sine below ``min_sin``, where ``s``, ``t`` and the midpoint are NaN.
+    """
+    w0 = o1 - o2
+    b = np.sum(d1 * d2, axis=-1)
+    d = np.sum(d1 * w0, axis=-1)
+    e = np.sum(d2 * w0, axis=-1)
+    denom = 1.0 - b * b  # |d1 x d2|^2 for unit vectors
+    parallel = denom < min_sin * min_sin
+    safe = np.where(parallel, 1.0, denom)
+    s = np.where(parallel, np.nan, (b * e - d) / safe)
+    t = np.where(parallel, np.nan, (e - b * d) / safe)
+    mid = 0.5 * ((o1 + s[..., None] * d1) + (o2 + t[..., None] * d2))
+    return s, t, mid, parallel
+
+
+def project(points: np.ndarray, intrinsics: np.ndarray, world_to_cam: np.ndarray):
+    """Project world points to pixels (Eq. 6, written with ``K`` and the inverse extrinsics).
+
+    points: (..., 3) world frame, metres. Returns ``(pixels (..., 2), depth (...,))``; depth is
+    the optical z in metres, points with depth <= 0 are behind the camera.
+    """
+    cam = points @ world_to_cam[:3, :3].T + world_to_cam[:3, 3]
+    depth = cam[..., 2]
+    safe = np.where(np.abs(depth) < 1e-12, 1e-12, depth)
+    uvw = cam @ intrinsics.T
+    return uvw[..., :2] / safe[..., None], depth
+
+
+def invert_transform(t: np.ndarray) -> np.ndarray:
+    """Inverse of a (4, 4) rigid transform."""
+    inv = np.eye(4)
+    r = t[:3, :3]
+    inv[:3, :3] = r.T
+    inv[:3, 3] = -r.T @ t[:3, 3]
+    return inv
+
+
+def rotation_z(angle: float) -> np.ndarray:
+    """(3, 3) rotation by ``angle`` radians about z (counter-clockwise seen from above)."""
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
+    """(3, 3) rotation from yaw about z, pitch about y, roll about x (radians, z-y-x order).
+
+    In the vehicle frame (x forward, y left, z up) a positive pitch turns the nose down.
+    """
+    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    return rz @ ry @ rx
+
+
+def quaternion_to_rotation(q) -> np.ndarray:
+    """(3, 3) rotation of a unit quaternion ``[w, x, y, z]`` (normalised first)."""
+    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def rotation_to_quaternion(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion ``[w, x, y, z]`` with ``w >= 0`` of a (3, 3) rotation."""
+    m = np.asarray(r, float)
+    tr = np.trace(m)
+    if tr > 0:
+        s = 2.0 * np.sqrt(tr + 1.0)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+    q = np.array(q)
+    q /= np.linalg.norm(q)
+    return q if q[0] >= 0 else -q
+
+
+def wrap_angle(angle):
+    """Angle(s) wrapped to [-pi, pi)."""
+    return (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi

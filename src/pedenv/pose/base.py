@@ -1,0 +1,42 @@
+"""The pose backend Protocol and the registry that creates backends by name."""
+
+from __future__ import annotations
+
+import importlib
+from typing import Protocol, runtime_checkable
+
+from pedenv.records import Detections, Frame
+
+
+@runtime_checkable
+class PoseBackend(Protocol):
+    """Turns one frame into 2D skeletons.
+
+    ``name`` is saved with the results. ``__call__`` reads what it needs from the frame
+    (its image, or its ground truth for the ``ground-truth`` backend) and returns
+    :class:`~pedenv.records.Detections` in the frame's pixel coordinates.
+    """
+
+    name: str
+
+    def __call__(self, frame: Frame) -> Detections: ...
+
+
+#: Backend name -> "module:class"; modules are imported only when the backend is created.
+POSE_BACKENDS: dict[str, str] = {
+    "ground-truth": "pedenv.pose.ground_truth:GroundTruthPose",
+    "detector-model": "pedenv.synthetic.detector:DetectorModel",
+    "onnx": "pedenv.pose.onnx_backend:OnnxPose",
+    "ultralytics": "pedenv.pose.ultralytics_backend:UltralyticsPose",
+}
+
+
+def create_pose_backend(name: str, **options) -> PoseBackend:
+    """Create the backend registered as ``name`` with its keyword ``options``.
+
+    Raises ValueError naming the valid backends for an unknown name.
+    """
+    if name not in POSE_BACKENDS:
+        raise ValueError(f"unknown pose backend {name!r}; valid: {', '.join(POSE_BACKENDS)}")
+    module, cls = POSE_BACKENDS[name].split(":")
+    return getattr(importlib.import_module(module), cls)(**options)
