@@ -195,6 +195,7 @@ class GroundTruth:
     keypoints: optional (M, 17, 2) float, pixels: exact 2D skeletons where the data has them.
     visible: optional (M, 17) bool, which of those keypoints are seen.
     heights: optional (M,) float, metres: the persons' body heights where known.
+    keypoints_3d: optional (M, 17, 3) float, world frame, metres: the 3D skeletons.
     """
 
     ids: np.ndarray
@@ -203,6 +204,7 @@ class GroundTruth:
     keypoints: np.ndarray | None = None
     visible: np.ndarray | None = None
     heights: np.ndarray | None = None
+    keypoints_3d: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         ids = check_array("ground truth ids", self.ids, (None,), dtype=np.int64)
@@ -216,6 +218,8 @@ class GroundTruth:
             _frozen_set(self, "visible", check_array("ground truth visible", vis, (m, NUM_KEYPOINTS), dtype=bool))
         if self.heights is not None:
             _frozen_set(self, "heights", check_array("ground truth heights", self.heights, (m,)))
+        if self.keypoints_3d is not None:
+            _frozen_set(self, "keypoints_3d", check_array("ground truth keypoints_3d", self.keypoints_3d, (m, NUM_KEYPOINTS, 3)))
 
     def __len__(self) -> int:
         return self.ids.shape[0]
