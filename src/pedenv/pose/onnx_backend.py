@@ -1,0 +1,92 @@
+"""The ``onnx`` backend: a YOLO-pose ONNX model on onnxruntime, numpy pre/post-processing.
+
+No torch needed at run time. The model comes from ``pedenv models prepare`` (cached per
+input size) or from any compatible file (input (1, 3, H, W), output (1, 56, N)).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pedenv.errors import InputError
+from pedenv.pose import models
+from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
+from pedenv.records import Detections, Frame
+
+
+def _check_unit(name: str, value: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
+        raise ValueError(f"{name} must be in [0, 1], got {value!r}")
+    return float(value)
+
+
+class OnnxPose:
+    """YOLO-pose on onnxruntime.
+
+    model_path: an ONNX file; None takes the cached model prepared for ``input_size``.
+    input_size: network input, ``640`` or ``"384x640"`` / ``(384, 640)`` (height x width);
+        must match a model with a fixed input. None: the model's own size (640 if dynamic).
+        A wide input suited to the camera (384x640 for 16:9) costs about 60 % of 640x640.
+    score_threshold: persons scoring at or below this are dropped (0.25). Raising it
+        keeps fewer, surer persons.
+    iou_threshold: a box overlapping a higher-scoring one by more than this IoU is
+        suppressed (0.7). Lowering it merges nearby persons more readily.
+    max_detections: at most this many persons per image (300).
+    threads: onnxruntime intra-op threads (1..64; 2 suits a 2-core machine).
+    """
+
+    name = "onnx"
+
+    def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
+                 iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2) -> None:
+        import onnxruntime as ort
+
+        self.score_threshold = _check_unit("score_threshold", score_threshold)
+        self.iou_threshold = _check_unit("iou_threshold", iou_threshold)
+        if isinstance(max_detections, bool) or not isinstance(max_detections, int) or max_detections < 1:
+            raise ValueError(f"max_detections must be an integer >= 1, got {max_detections!r}")
+        if isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 64:
+            raise ValueError(f"threads must be an integer in [1, 64], got {threads!r}")
+        self.max_detections = max_detections
+        self.threads = threads
+        wanted = None if input_size is None else parse_input_size(input_size)
+        if model_path is None:
+            model_path = models.find_onnx_model(wanted or (640, 640))
+        self.model_path = Path(model_path).expanduser()
+        if not self.model_path.is_file():
+            raise InputError(f"{self.model_path}: ONNX model file not found")
+        options = ort.SessionOptions()
+        options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
+        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
+        options.intra_op_num_threads = threads
+        options.inter_op_num_threads = 1
+        options.log_severity_level = 3
+        try:
+            self._session = ort.InferenceSession(str(self.model_path), options, providers=["CPUExecutionProvider"])
+        except Exception as exc:
+            raise InputError(f"{self.model_path}: not a readable ONNX model: {exc}") from None
+        fixed = models.check_session(self._session, self.model_path)
+        if None in fixed:
+            self.input_size = wanted or (640, 640)
+        else:
+            if wanted is not None and wanted != fixed:
+                raise InputError(f"{self.model_path}: model input is {fixed[0]}x{fixed[1]}, "
+                                 f"asked for {wanted[0]}x{wanted[1]}")
+            self.input_size = fixed
+        self._input_name = self._session.get_inputs()[0].name
+
+    def __call__(self, frame: Frame) -> Detections:
+        return self.detect(frame_image(frame))
+
+    def detect(self, image_rgb: np.ndarray) -> Detections:
+        """2D skeletons in ``image_rgb`` (H, W, 3) uint8 RGB; pixels of that image."""
+        padded, box = letterbox(image_rgb, self.input_size)
+        (output,) = self._session.run(None, {self._input_name: to_input_tensor(padded)})
+        return decode(output, box, self.score_threshold, self.iou_threshold, self.max_detections)
+
+    def describe(self) -> dict:
+        """What to save next to results: backend, model file, input size, thresholds."""
+        return {"backend": self.name, "model": str(self.model_path), "input_size": list(self.input_size),
+                "score_threshold": self.score_threshold, "iou_threshold": self.iou_threshold}

@@ -1,0 +1,175 @@
+"""Pure numpy pre- and post-processing around a YOLO-pose network.
+
+Pre-processing fits an image into the network input by a letterbox (scale, keeping the
+aspect ratio, then pad with grey 114). Post-processing decodes the raw output
+``(1, 56, N)`` (see FORMATS.md, "Pose network"), keeps the persons above a score
+threshold, suppresses overlapping boxes (NMS) and maps everything back to image pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pedenv.errors import InputError
+from pedenv.records import Detections, Frame
+from pedenv.skeleton import NUM_KEYPOINTS
+
+#: Grey value of the letterbox padding the YOLO networks were trained with.
+PAD_VALUE = 114
+#: Rows of the raw output: 4 box + 1 score + 17 x (x, y, visibility).
+OUTPUT_ROWS = 5 + 3 * NUM_KEYPOINTS
+
+
+def parse_input_size(size) -> tuple[int, int]:
+    """``640``, ``"640"``, ``"384x640"`` or ``(384, 640)`` -> ``(height, width)`` in pixels.
+
+    Both sides must be positive multiples of 32 (the network's stride).
+    """
+    if isinstance(size, str):
+        parts = size.lower().replace(" ", "").split("x")
+        try:
+            values = [int(p) for p in parts]
+        except ValueError:
+            raise ValueError(f"input size must look like 640 or 384x640 (height x width), got {size!r}") from None
+    elif isinstance(size, (int, np.integer)) and not isinstance(size, bool):
+        values = [int(size)]
+    else:
+        try:
+            values = [int(v) for v in size]
+        except TypeError:
+            raise ValueError(f"input size must be an int or (height, width), got {size!r}") from None
+    if len(values) == 1:
+        values = values * 2
+    if len(values) != 2 or any(v <= 0 or v % 32 for v in values):
+        raise ValueError(f"input size must be one or two positive multiples of 32 (height x width), got {size!r}")
+    return values[0], values[1]
+
+
+@dataclass(frozen=True)
+class Letterbox:
+    """How an image of ``image_size`` was placed into the network input of ``input_size``.
+
+    input pixel = image pixel * scale + (pad_left, pad_top); sizes are ``(height, width)``.
+    """
+
+    scale: float
+    pad_left: int
+    pad_top: int
+    image_size: tuple[int, int]
+    input_size: tuple[int, int]
+
+    @classmethod
+    def fit(cls, image_size: tuple[int, int], input_size: tuple[int, int]) -> "Letterbox":
+        """The letterbox for an image of (height, width) into an input of (height, width)."""
+        h, w = image_size
+        in_h, in_w = input_size
+        scale = min(in_h / h, in_w / w)
+        new_w, new_h = max(round(w * scale), 1), max(round(h * scale), 1)
+        # Centred padding; an odd leftover pixel goes to the right / bottom.
+        return cls(scale, round((in_w - new_w) / 2 - 0.1), round((in_h - new_h) / 2 - 0.1), (h, w), (in_h, in_w))
+
+    @property
+    def resized_size(self) -> tuple[int, int]:
+        """(height, width) of the image after scaling, before padding."""
+        h, w = self.image_size
+        return max(round(h * self.scale), 1), max(round(w * self.scale), 1)
+
+    def to_image(self, points: np.ndarray) -> np.ndarray:
+        """Input pixels -> image pixels. points: (..., 2) float ``(x, y)``; clipped to the image."""
+        out = (points - np.array([self.pad_left, self.pad_top], float)) / self.scale
+        h, w = self.image_size
+        return np.clip(out, 0.0, [w, h])
+
+
+def read_image_rgb(path) -> np.ndarray:
+    """(H, W, 3) uint8 RGB of the image file at ``path``; an unreadable file raises InputError."""
+    data = np.fromfile(str(path), dtype=np.uint8) if Path(path).is_file() else None
+    if data is None:
+        raise InputError(f"{path}: image file not found")
+    bgr = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
+    if bgr is None:
+        raise InputError(f"{path}: cannot read the image (corrupt or not an image)")
+    return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+
+
+def frame_image(frame: Frame) -> np.ndarray:
+    """The frame's (H, W, 3) uint8 RGB image: ``frame.image``, else read from ``frame.image_path``."""
+    if frame.image is not None:
+        image = np.asarray(frame.image)
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+            raise InputError(f"frame {frame.index}: image must be (H, W, 3) uint8 RGB, got {image.shape} {image.dtype}")
+        return image
+    if frame.image_path is None:
+        raise InputError(f"frame {frame.index} of {frame.scene or 'the sequence'}: no image for the pose backend")
+    return read_image_rgb(frame.image_path)
+
+
+def letterbox(image: np.ndarray, input_size: tuple[int, int], pad_value: int = PAD_VALUE):
+    """Scale ``image`` (H, W, 3) uint8 into ``input_size`` (height, width), padding with ``pad_value``.
+
+    Returns ``(padded (in_h, in_w, 3) uint8, Letterbox)``.
+    """
+    box = Letterbox.fit(image.shape[:2], input_size)
+    new_h, new_w = box.resized_size
+    if (new_h, new_w) != image.shape[:2]:
+        image = cv2.resize(image, (new_w, new_h), interpolation=cv2.INTER_LINEAR)
+    in_h, in_w = input_size
+    padded = cv2.copyMakeBorder(image, box.pad_top, in_h - new_h - box.pad_top, box.pad_left,
+                                in_w - new_w - box.pad_left, cv2.BORDER_CONSTANT, value=(pad_value,) * 3)
+    return padded, box
+
+
+def to_input_tensor(padded: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8 RGB -> (1, 3, H, W) float32 in [0, 1], the network's input."""
+    chw = np.ascontiguousarray(padded.transpose(2, 0, 1), dtype=np.float32)
+    chw *= np.float32(1.0 / 255.0)
+    return chw[None]
+
+
+def box_iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """IoU of one box (4,) with boxes (M, 4), all ``[x_min, y_min, x_max, y_max]`` pixels -> (M,)."""
+    iw = np.clip(np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0]), 0.0, None)
+    ih = np.clip(np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1]), 0.0, None)
+    inter = iw * ih
+    area = (box[2] - box[0]) * (box[3] - box[1])
+    areas = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
+    return inter / np.maximum(area + areas - inter, 1e-12)
+
+
+def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float, max_detections: int = 300) -> np.ndarray:
+    """Greedy non-maximum suppression.
+
+    boxes: (N, 4) ``[x_min, y_min, x_max, y_max]``; scores: (N,). A box is dropped when its
+    IoU with a higher-scoring kept box is above ``iou_threshold``. Returns the kept indices
+    (K,) int64, best score first, at most ``max_detections``.
+    """
+    order = np.argsort(-scores, kind="stable")
+    keep = []
+    while order.size and len(keep) < max_detections:
+        best = order[0]
+        keep.append(best)
+        rest = order[1:]
+        order = rest[box_iou(boxes[best], boxes[rest]) <= iou_threshold]
+    return np.asarray(keep, dtype=np.int64)
+
+
+def decode(output: np.ndarray, box: Letterbox, score_threshold: float = 0.25, iou_threshold: float = 0.7,
+           max_detections: int = 300) -> Detections:
+    """Raw YOLO-pose output (1, 56, N) -> :class:`Detections` in the original image's pixels."""
+    pred = output[0]
+    scores = pred[4]
+    candidates = np.flatnonzero(scores > score_threshold)
+    if candidates.size == 0:
+        return Detections.empty()
+    pred = pred[:, candidates].T.astype(np.float64)  # (K, 56)
+    cx, cy, w, h = pred[:, 0], pred[:, 1], pred[:, 2], pred[:, 3]
+    boxes = np.stack([cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2], axis=1)
+    keep = nms(boxes, pred[:, 4], iou_threshold, max_detections)
+    pred, boxes = pred[keep], boxes[keep]
+    kpts = pred[:, 5:].reshape(-1, NUM_KEYPOINTS, 3)
+    image_boxes = box.to_image(boxes.reshape(-1, 2, 2)).reshape(-1, 4)
+    return Detections(box.to_image(kpts[..., :2]), kpts[..., 2], image_boxes, pred[:, 4])
