@@ -1,0 +1,196 @@
+"""World position of pedestrians, the paper's way (Sec. III-C, Algorithm 1).
+
+1. Initial estimate: each keypoint's viewing ray now and at the track's previous
+   observation; the midpoint of their closest points (Eqs. 4-5); points behind a camera
+   and the lowest-confidence share of keypoints dropped; the mean is the position.
+2. Refinement: a person of the assumed height is re-projected at the current estimate
+   and the distance rescaled by ``1 + (h_est / h_orig - 1) / lambda`` with
+   ``lambda = r + c`` for ``r = 1..steps``. The paper prints ``* lambda`` in Eq. 7 but
+   says the step shrinks as ``r`` grows, which only a division gives; pedenv divides.
+   The direction is the mean of the keypoint rays.
+3. Degenerate geometry (parallel rays of a standing ego and a standing person, no
+   previous observation): the distance comes from the height alone, and the result
+   says so in ``sources``. No NaN or inf leaves this module.
+
+All functions are vectorized over N pedestrians of one frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pedenv.config import PositionConfig
+from pedenv.geometry import closest_points, project
+
+TRIANGULATION = "triangulation"
+HEIGHT_FIRST = "height:first-observation"
+HEIGHT_PARALLEL = "height:no-intersection"
+
+
+@dataclass(frozen=True)
+class PositionEstimate:
+    """Positions of N pedestrians in one frame.
+
+    positions: (N, 3) world frame, metres; the ground point under each pedestrian.
+    distances: (N,) metres from the camera centre to the body centre.
+    directions: (N, 3) unit viewing direction of the body centre, world frame.
+    sources: (N,) str, how the distance was found (``triangulation`` or ``height:*``).
+    """
+
+    positions: np.ndarray
+    distances: np.ndarray
+    directions: np.ndarray
+    sources: np.ndarray
+
+
+def keep_most_confident(valid: np.ndarray, confidences: np.ndarray, drop_fraction: float) -> np.ndarray:
+    """Mask of the valid keypoints left after dropping the least confident share.
+
+    valid: (N, 17) bool, confidences: (N, 17). Of ``n`` valid keypoints of a person the
+    ``ceil((1 - drop_fraction) * n)`` most confident are kept (at least one if any).
+    """
+    score = np.where(valid, confidences, -np.inf)
+    order = np.argsort(-score, axis=1, kind="stable")
+    rank = np.empty_like(order)
+    np.put_along_axis(rank, order, np.arange(valid.shape[1])[None, :], axis=1)
+    n_keep = np.ceil((1.0 - drop_fraction) * valid.sum(axis=1) - 1e-9)
+    return valid & (rank < n_keep[:, None])
+
+
+def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarray, prev_origins: np.ndarray,
+                      usable: np.ndarray, confidences: np.ndarray, config: PositionConfig):
+    """Initial 3D body-centre estimate from two observations (Eqs. 3-5).
+
+    rays, prev_rays: (N, K, 3) unit rays, world frame (K = 17, or 1 for the midpoint
+    ablation). origin: (3,) camera centre now; prev_origins: (N, 3) at the previous
+    observation. usable: (N, K) bool, keypoints seen in both frames. confidences: (N, K).
+    Returns ``(centres (N, 3), ok (N,) bool)``; rows with ``ok`` False are undefined.
+    """
+    s, t, mid, parallel = closest_points(origin, rays, prev_origins[:, None, :], prev_rays,
+                                         min_sin=np.sin(config.min_parallax_rad))
+    with np.errstate(invalid="ignore"):
+        valid = usable & ~parallel & (s > 0) & (t > 0) & (s < config.max_distance_m) & (t < config.max_distance_m)
+    keep = keep_most_confident(valid, confidences, config.low_confidence_fraction)
+    count = keep.sum(axis=1)
+    total = np.where(keep[..., None], np.nan_to_num(mid), 0.0).sum(axis=1)
+    ok = count > 0
+    return total / np.maximum(count, 1)[:, None], ok
+
+
+def reprojected_height(centres: np.ndarray, ground_z: float, height_m: float, intrinsics: np.ndarray,
+                       world_to_cam: np.ndarray) -> np.ndarray:
+    """Pixel height of an upright person of ``height_m`` standing under ``centres`` (N, 3).
+
+    The bottom point is at ``ground_z`` and the top ``height_m`` above it (Eq. 6).
+    Returns (N,) pixels; NaN where the person is not in front of the camera.
+    """
+    bottom = np.array(centres, dtype=np.float64, copy=True)
+    bottom[:, 2] = ground_z
+    top = bottom.copy()
+    top[:, 2] += height_m
+    px, depth = project(np.stack([bottom, top], axis=1), intrinsics, world_to_cam)
+    h = np.linalg.norm(px[:, 1] - px[:, 0], axis=1)
+    return np.where((depth > 0).all(axis=1), h, np.nan)
+
+
+def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray,
+                    ground_z: float, intrinsics: np.ndarray, world_to_cam: np.ndarray, config: PositionConfig,
+                    lambdas=None) -> np.ndarray:
+    """Rescale distances so the re-projected person height meets the skeleton's (Eq. 7).
+
+    distances: (N,) metres along ``directions`` (N, 3) from ``origin`` (3,).
+    pixel_heights: (N,) the skeletons' heights in pixels. ``lambdas``: the step
+    divisors, by default ``r + c`` for ``r = 1..refinement_steps``.
+    Returns the refined (N,) distances; a step whose re-projection fails leaves it.
+    """
+    if lambdas is None:
+        lambdas = np.arange(1, config.refinement_steps + 1) + config.refinement_lambda_offset
+    d = distances.copy()
+    for lam in lambdas:
+        h_est = reprojected_height(origin + d[:, None] * directions, ground_z, config.person_height_m,
+                                   intrinsics, world_to_cam)
+        factor = 1.0 + (h_est / pixel_heights - 1.0) / lam
+        d = np.where(np.isfinite(factor) & (factor > 0), d * factor, d)
+    return np.clip(d, 0.1, config.max_distance_m)
+
+
+def height_distance(directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray, ground_z: float,
+                    intrinsics: np.ndarray, world_to_cam: np.ndarray, config: PositionConfig) -> np.ndarray:
+    """Distance (N,) at which a person of the assumed height appears ``pixel_heights`` tall.
+
+    Starts from the pinhole estimate ``f * H / h`` and iterates full steps
+    (``lambda = 1``), which converges in a few iterations.
+    """
+    start = intrinsics[1, 1] * config.person_height_m / np.maximum(pixel_heights, 1.0)
+    return refine_distance(np.clip(start, 0.5, config.max_distance_m), directions, origin, pixel_heights,
+                           ground_z, intrinsics, world_to_cam, config, lambdas=np.ones(6))
+
+
+def mean_directions(rays: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Unit mean (N, 3) of the rays (N, K, 3) under ``mask`` (N, K); all rays where none."""
+    mask = mask | ~mask.any(axis=1, keepdims=True)
+    d = np.where(mask[..., None], rays, 0.0).sum(axis=1)
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def pixel_heights(keypoints: np.ndarray, seen: np.ndarray) -> np.ndarray:
+    """Height (N,) in pixels of each skeleton's box over its seen keypoints (at least 1 px)."""
+    v = keypoints[..., 1]
+    top = np.where(seen, v, np.inf).min(axis=1)
+    bottom = np.where(seen, v, -np.inf).max(axis=1)
+    return np.where(seen.any(axis=1), np.maximum(bottom - top, 1.0), 1.0)
+
+
+def estimate_positions(rays: np.ndarray, confidences: np.ndarray, heights_px: np.ndarray, origin: np.ndarray,
+                       prev_rays: np.ndarray, prev_confidences: np.ndarray, prev_origins: np.ndarray,
+                       has_prev: np.ndarray, intrinsics: np.ndarray, world_to_cam: np.ndarray, ground_z: float,
+                       config: PositionConfig) -> PositionEstimate:
+    """The paper's position of N pedestrians seen in this frame (Algorithm 1).
+
+    rays, prev_rays: (N, 18, 3) unit rays, world frame: the 17 keypoints and, last, the
+    centre of the skeleton's box (used by the ``midpoint`` ablation), now and at each
+    track's previous observation. confidences, prev_confidences: (N, 17).
+    heights_px: (N,) skeleton heights in pixels. origin: (3,) camera centre now;
+    prev_origins: (N, 3). has_prev: (N,) bool, tracks seen before. ground_z: height of the
+    road under the ego, world frame, metres.
+    """
+    n = len(rays)
+    seen = confidences > 0
+    kept = keep_most_confident(seen, confidences, config.low_confidence_fraction)
+    directions = mean_directions(rays[:, :17], kept)
+    centres = origin + directions  # placeholder row values, replaced below
+    ok = np.zeros(n, bool)
+    if has_prev.any():
+        idx = np.flatnonzero(has_prev)
+        if config.initial_estimate == "midpoint":
+            sl, usable, conf = slice(17, 18), np.ones((len(idx), 1), bool), np.ones((len(idx), 1))
+        else:
+            sl, usable, conf = slice(0, 17), seen[idx] & (prev_confidences[idx] > 0), confidences[idx]
+        c, good = initial_positions(rays[idx, sl], origin, prev_rays[idx, sl], prev_origins[idx], usable, conf, config)
+        centres[idx[good]] = c[good]
+        ok[idx[good]] = True
+    distances = np.linalg.norm(centres - origin, axis=1)
+    if not config.refine:
+        # The initial estimate as it is: its own direction, no height prior.
+        directions = np.where(ok[:, None], (centres - origin) / np.maximum(distances, 1e-9)[:, None], directions)
+    elif ok.any():
+        distances[ok] = refine_distance(distances[ok], directions[ok], origin, heights_px[ok], ground_z,
+                                        intrinsics, world_to_cam, config)
+    if not ok.all():
+        bad = ~ok
+        distances[bad] = height_distance(directions[bad], origin, heights_px[bad], ground_z,
+                                         intrinsics, world_to_cam, config)
+    sources = np.where(ok, TRIANGULATION, np.where(has_prev, HEIGHT_PARALLEL, HEIGHT_FIRST))
+    positions = origin + distances[:, None] * directions
+    positions[:, 2] = ground_z
+    return PositionEstimate(positions, distances, directions, sources)
+
+
+def keypoints_on_plane(rays: np.ndarray, origin: np.ndarray, directions: np.ndarray, distances: np.ndarray) -> np.ndarray:
+    """3D skeleton (N, 17, 3): each keypoint ray (N, 17, 3) cut by the plane through the
+    body centre ``origin + distance * direction`` facing the camera. World frame, metres."""
+    cos = np.einsum("nkc,nc->nk", rays, directions)
+    depth = distances[:, None] / np.maximum(cos, 1e-3)
+    return origin + depth[..., None] * rays
