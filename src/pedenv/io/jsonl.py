@@ -1,0 +1,40 @@
+"""The environment model as JSON Lines: one line per frame, flushed as it is written.
+
+Each line is ``EnvironmentState.to_dict()``: scene, frame, timestamp, ego pose and the
+pedestrians with track id, position, velocity, covariance, 2D and 3D skeleton. A run
+that stops at a bad frame leaves every line written before it on disk.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from pedenv.state import EnvironmentState
+
+
+class EnvironmentWriter:
+    """Context manager appending states to ``path`` (created with its folder)."""
+
+    def __init__(self, path: str | Path, decimals: int = 3) -> None:
+        self.path = Path(path)
+        self.decimals = decimals
+        self._file = None
+
+    def __enter__(self) -> "EnvironmentWriter":
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._file = self.path.open("w")
+        return self
+
+    def write(self, state: EnvironmentState) -> None:
+        self._file.write(json.dumps(state.to_dict(self.decimals), separators=(",", ":")) + "\n")
+        self._file.flush()
+
+    def __exit__(self, *exc) -> None:
+        self._file.close()
+
+
+def read_environment(path: str | Path) -> list[dict]:
+    """The lines of a JSON Lines environment model as dicts."""
+    with Path(path).open() as f:
+        return [json.loads(line) for line in f if line.strip()]
