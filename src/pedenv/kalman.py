@@ -29,12 +29,12 @@ def transition(dt: float, acceleration_std: float) -> tuple[np.ndarray, np.ndarr
 
 
 def initial_state(z: np.ndarray, r: np.ndarray, velocity_std: float) -> tuple[np.ndarray, np.ndarray]:
-    """New tracks at measurements z (N, 2) with per-axis variance r (N,), standing still."""
+    """New tracks at measurements z (N, 2) with covariance r (N, 2, 2), standing still."""
     n = len(z)
     x = np.zeros((n, 4))
     x[:, 0], x[:, 2] = z[:, 0], z[:, 1]
     P = np.zeros((n, 4, 4))
-    P[:, 0, 0] = P[:, 2, 2] = r
+    P[:, 0, 0], P[:, 0, 2], P[:, 2, 0], P[:, 2, 2] = r[:, 0, 0], r[:, 0, 1], r[:, 1, 0], r[:, 1, 1]
     P[:, 1, 1] = P[:, 3, 3] = velocity_std**2
     return x, P
 

@@ -21,7 +21,7 @@ from pedenv.config import Config
 from pedenv.egomotion import yaw_change, yaw_shift_pixels
 from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, pixel_rays
-from pedenv.position import estimate_positions, keypoints_on_plane, pixel_heights
+from pedenv.locator import FrameGeometry, create_locator
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.tracker import Tracker, carry_rows
@@ -44,19 +44,15 @@ class StageTimer:
 
 
 @dataclass
-class _TrackMemory:
-    """Per-track world state, row-aligned with the tracker's table."""
+class _FilterMemory:
+    """Kalman state per track, row-aligned with the tracker's table."""
 
-    rays: np.ndarray = field(default_factory=lambda: np.zeros((0, 18, 3)))
-    confidences: np.ndarray = field(default_factory=lambda: np.zeros((0, 17)))
-    origins: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
-    seen: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
     x: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     P: np.ndarray = field(default_factory=lambda: np.zeros((0, 4, 4)))
 
     def carry(self, previous_rows: np.ndarray) -> None:
-        for name in ("rays", "confidences", "origins", "seen", "x", "P"):
-            setattr(self, name, carry_rows(getattr(self, name), previous_rows))
+        self.x = carry_rows(self.x, previous_rows)
+        self.P = carry_rows(self.P, previous_rows)
 
 
 class PedestrianEnvironmentModel:
@@ -65,13 +61,16 @@ class PedestrianEnvironmentModel:
     def __init__(self, config: Config | None = None) -> None:
         self.config = config or Config()
         self.tracker = Tracker(self.config.tracking)
+        self.locator = create_locator(self.config)
         self.timer = StageTimer()
         self.reset()
 
     def reset(self) -> None:
         """Forget all tracks (start of a new scene); the stage timer keeps counting."""
         self.tracker.reset()
-        self._memory = _TrackMemory()
+        self.locator.reset()
+        self._filter = _FilterMemory()
+        self._transitions: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._last: Frame | None = None
 
     def update(self, frame: Frame) -> EnvironmentState:
@@ -87,8 +86,8 @@ class PedestrianEnvironmentModel:
         if self._last is not None and self.config.tracking.yaw_compensation:
             shift = yaw_shift_pixels(yaw_change(self._last.ego.yaw, frame.ego.yaw), frame.camera.hfov, frame.camera.width)
         step = self.tracker.update(det.boxes, det.keypoints, shift)
-        mem = self._memory
-        mem.carry(step.previous_rows)
+        self._filter.carry(step.previous_rows)
+        self.locator.carry(step.previous_rows)
         t1 = time.perf_counter()
 
         peds = self._locate(frame, det, step.detection_rows, dt)
@@ -112,51 +111,45 @@ class PedestrianEnvironmentModel:
         return frame.detections
 
     def _locate(self, frame: Frame, det, rows: np.ndarray, dt: float) -> Pedestrians:
-        cfg, mem = self.config, self._memory
-        cam_to_world = frame.cam_to_world
-        origin = cam_to_world[:3, 3]
-        world_to_cam = invert_transform(cam_to_world)
-        k = frame.camera.intrinsics
-        ground_z = float(frame.ego.translation[2])
-
+        cfg, mem = self.config, self._filter
         if dt > 0 and len(mem.x):
-            F, Q = kalman.transition(dt, cfg.kalman.acceleration_std_mps2)
-            mem.x, mem.P = kalman.predict(mem.x, mem.P, F, Q)
+            mem.x, mem.P = kalman.predict(mem.x, mem.P, *self._transition(dt))
         if len(det) == 0:
             return Pedestrians.empty()
-
+        cam_to_world = frame.cam_to_world
+        origin = cam_to_world[:3, 3]
         centre = 0.5 * (det.boxes[:, :2] + det.boxes[:, 2:])
-        rays = pixel_rays(np.concatenate([det.keypoints, centre[:, None]], axis=1), k, cam_to_world)
-        has_prev = mem.seen[rows]
-        est = estimate_positions(rays, det.confidences, pixel_heights(det.keypoints, det.confidences > 0), origin,
-                                 mem.rays[rows], mem.confidences[rows], mem.origins[rows], has_prev,
-                                 k, world_to_cam, ground_z, cfg.position)
+        rays = pixel_rays(np.concatenate([det.keypoints, centre[:, None]], axis=1), frame.camera.intrinsics,
+                          cam_to_world)
+        geo = FrameGeometry(frame, det, rays, origin, cam_to_world, invert_transform(cam_to_world))
+        meas = self.locator.locate(geo, rows)
 
-        z = est.positions[:, :2]
-        var = (cfg.kalman.measurement_std_m + cfg.kalman.measurement_std_rel * est.distances) ** 2
-        fresh = ~has_prev | ~np.isfinite(mem.x[rows]).all(axis=1) | (mem.P[rows, 0, 0] == 0)
+        z = meas.positions[:, :2]
         x, P = mem.x[rows], mem.P[rows]
+        fresh = P[:, 0, 0] == 0
         if fresh.any():
-            x[fresh], P[fresh] = kalman.initial_state(z[fresh], var[fresh], cfg.kalman.initial_velocity_std_mps)
+            x[fresh], P[fresh] = kalman.initial_state(z[fresh], meas.covariances[fresh],
+                                                      cfg.kalman.initial_velocity_std_mps)
         if (~fresh).any():
-            x[~fresh], P[~fresh] = kalman.update(x[~fresh], P[~fresh], z[~fresh], var[~fresh])
+            x[~fresh], P[~fresh] = kalman.update(x[~fresh], P[~fresh], z[~fresh], meas.covariances[~fresh])
         mem.x[rows], mem.P[rows] = x, P
-        mem.rays[rows], mem.confidences[rows], mem.origins[rows], mem.seen[rows] = rays, det.confidences, origin, True
 
         if cfg.kalman.enabled:
-            positions = np.column_stack([x[:, 0], x[:, 2], est.positions[:, 2]])
+            positions = np.column_stack([x[:, 0], x[:, 2], meas.positions[:, 2]])
             velocities = np.column_stack([x[:, 1], x[:, 3], np.zeros(len(x))])
             cov = P[:, [0, 2]][:, :, [0, 2]]
+            skeleton = meas.keypoints_3d + (positions - meas.positions)[:, None, :]
         else:
-            positions = est.positions
-            velocities = np.zeros_like(positions)
-            cov = var[:, None, None] * np.eye(2)
-        flat = np.linalg.norm(positions[:, :2] - origin[:2], axis=1)
-        ratio = flat / np.maximum(np.linalg.norm(est.positions[:, :2] - origin[:2], axis=1), 1e-6)
-        skeleton = keypoints_on_plane(rays[:, :17], origin, est.directions, est.distances * ratio)
+            positions, velocities, cov, skeleton = meas.positions, np.zeros_like(meas.positions), meas.covariances, meas.keypoints_3d
         return Pedestrians(
             track_ids=self.tracker.ids[rows], ages=self.tracker.hits[rows], positions=positions,
             velocities=velocities, covariances=cov, keypoints=det.keypoints, confidences=det.confidences,
             boxes=det.boxes, keypoints_3d=skeleton, distances=np.linalg.norm(positions - origin, axis=1),
-            sources=est.sources,
+            sources=meas.sources,
         )
+
+    def _transition(self, dt: float):
+        key = round(dt, 6)
+        if key not in self._transitions:
+            self._transitions[key] = kalman.transition(dt, self.config.kalman.acceleration_std_mps2)
+        return self._transitions[key]
