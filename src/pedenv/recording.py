@@ -1,0 +1,373 @@
+"""The user's own recordings: calibration YAML + ego poses CSV + images or a video -> Frames.
+
+Calibration (YAML; the rotation maps optical camera axes, x right / y down / z forward,
+to the vehicle frame, x forward / y left / z up; translation in metres)::
+
+    width: 1600
+    height: 900
+    intrinsics: [[1266.4, 0, 816.3], [0, 1266.4, 491.5], [0, 0, 1]]   # or fx, fy, cx, cy
+    cam_to_vehicle:
+      rotation: [0.5, -0.5, 0.5, -0.5]     # quaternion [w, x, y, z] or a 3x3 matrix
+      translation: [1.70, 0.0, 1.51]
+
+Ego poses (CSV, vehicle -> world, timestamps in seconds, rows sorted by time), either
+``timestamp,x,y,z,qw,qx,qy,qz`` or ``timestamp,x,y,yaw`` (yaw in radians, z = 0).
+Each frame gets the pose interpolated at its timestamp (linear position, slerp rotation).
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+import yaml
+
+from pedenv.errors import InputError
+from pedenv.geometry import quaternion_to_rotation, rotation_to_quaternion, rotation_z
+from pedenv.pose.postprocess import read_image_rgb
+from pedenv.records import Camera, EgoPose, Frame
+
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
+POSE_HEADERS = (("timestamp", "x", "y", "z", "qw", "qx", "qy", "qz"), ("timestamp", "x", "y", "yaw"))
+
+
+def _field(data: dict, key: str, path: Path):
+    node = data
+    for part in key.split("."):
+        if not isinstance(node, dict) or part not in node:
+            raise InputError(f"{path}: calibration field {key!r} is missing")
+        node = node[part]
+    return node
+
+
+def _numbers(value, key: str, path: Path, shape: tuple) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(f"{path}: calibration field {key!r} must be numbers, got {value!r}") from None
+    if array.shape != shape or not np.all(np.isfinite(array)):
+        raise InputError(f"{path}: calibration field {key!r} must be finite numbers of shape {shape}, got {value!r}")
+    return array
+
+
+def load_calibration(path: str | Path) -> Camera:
+    """The :class:`Camera` described by a calibration YAML file (format in the module doc)."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the calibration: {exc.strerror}") from None
+    except yaml.YAMLError as exc:
+        raise InputError(f"{path}: not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: calibration must be a YAML mapping of fields")
+    if "intrinsics" in data:
+        k = _numbers(data["intrinsics"], "intrinsics", path, (3, 3))
+    else:
+        fx, fy, cx, cy = (float(_numbers(_field(data, f, path), f, path, ())) for f in ("fx", "fy", "cx", "cy"))
+        k = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+    width, height = (_numbers(_field(data, f, path), f, path, ()) for f in ("width", "height"))
+    rot = np.asarray(_field(data, "cam_to_vehicle.rotation", path), dtype=object)
+    if rot.shape == (4,):
+        q = _numbers(rot.tolist(), "cam_to_vehicle.rotation", path, (4,))
+        if np.linalg.norm(q) < 1e-9:
+            raise InputError(f"{path}: calibration field 'cam_to_vehicle.rotation' is a zero quaternion")
+        r = quaternion_to_rotation(q)
+    else:
+        r = _numbers(rot.tolist(), "cam_to_vehicle.rotation", path, (3, 3))
+        if abs(np.linalg.det(r)) < 1e-9:
+            raise InputError(f"{path}: calibration field 'cam_to_vehicle.rotation' is a singular matrix")
+    t = np.eye(4)
+    t[:3, :3] = r
+    t[:3, 3] = _numbers(_field(data, "cam_to_vehicle.translation", path), "cam_to_vehicle.translation", path, (3,))
+    if width != int(width) or height != int(height):
+        raise InputError(f"{path}: calibration fields 'width' and 'height' must be whole pixels, got {width}, {height}")
+    try:
+        return Camera(k, int(width), int(height), t)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, fraction: float) -> np.ndarray:
+    """Spherical interpolation between unit quaternions ``[w, x, y, z]`` (shortest arc)."""
+    dot = float(np.dot(q0, q1))
+    if dot < 0.0:
+        q1, dot = -q1, -dot
+    if dot > 0.9995:  # nearly equal: linear interpolation is exact enough
+        q = q0 + fraction * (q1 - q0)
+        return q / np.linalg.norm(q)
+    theta = np.arccos(dot)
+    return (np.sin((1.0 - fraction) * theta) * q0 + np.sin(fraction * theta) * q1) / np.sin(theta)
+
+
+@dataclass(frozen=True)
+class EgoTrajectory:
+    """Time-stamped ego poses of a recording.
+
+    timestamps: (T,) seconds, strictly increasing. translations: (T, 3) world frame, metres.
+    quaternions: (T, 4) unit ``[w, x, y, z]``, vehicle -> world. source: the file they came from.
+    """
+
+    timestamps: np.ndarray
+    translations: np.ndarray
+    quaternions: np.ndarray
+    source: str = ""
+
+    def at(self, timestamp: float) -> EgoPose | None:
+        """The pose interpolated at ``timestamp`` seconds; None outside the recorded span."""
+        ts = self.timestamps
+        if not ts[0] <= timestamp <= ts[-1]:
+            return None
+        i = int(np.clip(np.searchsorted(ts, timestamp, side="right") - 1, 0, len(ts) - 2)) if len(ts) > 1 else 0
+        if len(ts) == 1:
+            return EgoPose(self.translations[0], quaternion_to_rotation(self.quaternions[0]))
+        f = (timestamp - ts[i]) / (ts[i + 1] - ts[i])
+        pos = (1.0 - f) * self.translations[i] + f * self.translations[i + 1]
+        return EgoPose(pos, quaternion_to_rotation(slerp(self.quaternions[i], self.quaternions[i + 1], f)))
+
+
+def load_ego_poses(path: str | Path) -> EgoTrajectory:
+    """The ego poses of a CSV file (format in the module doc); rows must be sorted by time."""
+    path = Path(path)
+    try:
+        with path.open(newline="") as f:
+            rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the ego poses: {exc.strerror}") from None
+    header = tuple(c.strip().lower() for c in rows[0]) if rows else ()
+    if header not in POSE_HEADERS:
+        raise InputError(f"{path}: ego poses header must be {' or '.join(','.join(h) for h in POSE_HEADERS)}, "
+                         f"got {','.join(header) or 'an empty file'}")
+    if len(rows) < 2:
+        raise InputError(f"{path}: no ego pose rows after the header")
+    values = np.empty((len(rows) - 1, len(header)))
+    for n, row in enumerate(rows[1:]):
+        try:
+            if len(row) != len(header):
+                raise ValueError
+            values[n] = [float(c) for c in row]
+        except ValueError:
+            raise InputError(f"{path}: row {n + 1} (line {n + 2}) must hold {len(header)} numbers "
+                             f"({','.join(header)}), got {','.join(row)}") from None
+        if not np.all(np.isfinite(values[n])):
+            raise InputError(f"{path}: row {n + 1} (line {n + 2}) contains NaN or inf")
+        if n and values[n, 0] <= values[n - 1, 0]:
+            raise InputError(f"{path}: rows must be sorted by time: row {n + 1} (line {n + 2}, timestamp "
+                             f"{values[n, 0]:.6f} s) is not after row {n} ({values[n - 1, 0]:.6f} s)")
+    ts = values[:, 0]
+    if header == POSE_HEADERS[0]:
+        trans, quats = values[:, 1:4], values[:, 4:8]
+        norms = np.linalg.norm(quats, axis=1)
+        if np.any(norms < 1e-9):
+            raise InputError(f"{path}: row {int(np.argmax(norms < 1e-9)) + 1} has a zero quaternion")
+        quats = quats / norms[:, None]
+    else:
+        trans = np.column_stack([values[:, 1:3], np.zeros(len(values))])
+        quats = np.array([rotation_to_quaternion(rotation_z(yaw)) for yaw in values[:, 3]])
+    return EgoTrajectory(ts, trans, quats, str(path))
+
+
+def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[tuple[Path, float]]:
+    images = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    if not images:
+        raise InputError(f"{folder}: no images ({', '.join(IMAGE_SUFFIXES)}) in the folder")
+    table = folder / "timestamps.csv"
+    if fps is not None:
+        return [(p, start_time + i / fps) for i, p in enumerate(images)]
+    if not table.is_file():
+        raise InputError(f"{folder}: no timestamps.csv (filename,timestamp) in the folder; give --fps instead")
+    with table.open(newline="") as f:
+        rows = [r for r in csv.reader(f) if r]
+    if not rows or [c.strip().lower() for c in rows[0]] != ["filename", "timestamp"]:
+        raise InputError(f"{table}: header must be filename,timestamp")
+    stamps = {}
+    for n, row in enumerate(rows[1:], start=1):
+        try:
+            stamps[row[0].strip()] = float(row[1])
+        except (IndexError, ValueError):
+            raise InputError(f"{table}: row {n} must be filename,timestamp (seconds), got {','.join(row)}") from None
+    missing = [p.name for p in images if p.name not in stamps]
+    if missing:
+        raise InputError(f"{table}: no timestamp for image {missing[0]}")
+    return [(p, stamps[p.name]) for p in images]
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One recording: camera, ego trajectory and either an image folder or a video file.
+
+    images: (path, timestamp in seconds) per frame in order, or empty for a video.
+    video: the video file, or None. start_time: seconds of a video's first frame.
+    """
+
+    name: str
+    camera: Camera
+    trajectory: EgoTrajectory
+    images: tuple[tuple[Path, float], ...] = ()
+    video: Path | None = None
+    fps: float | None = None
+    start_time: float = 0.0
+
+    def frames(self) -> Iterator[Frame]:
+        """The frames in order, images loaded (RGB) and ego poses interpolated.
+
+        Raises :class:`InputError` at the first frame without an ego pose or with an image
+        that is unreadable or not the calibrated size; the frames before it were yielded.
+        """
+        source = _video_frames(self.video, self.fps, self.start_time) if self.video else (
+            (i, t, p, read_image_rgb(p)) for i, (p, t) in enumerate(self.images))
+        for index, timestamp, path, image in source:
+            ego = self.trajectory.at(timestamp)
+            if ego is None:
+                span = self.trajectory.timestamps
+                raise InputError(f"{path}: frame {index} at {timestamp:.6f} s has no ego pose: "
+                                 f"{self.trajectory.source} covers {span[0]:.6f} s to {span[-1]:.6f} s")
+            if image.shape[:2] != (self.camera.height, self.camera.width):
+                raise InputError(f"{path}: frame {index} is {image.shape[1]}x{image.shape[0]} pixels, "
+                                 f"the calibration says {self.camera.width}x{self.camera.height}")
+            yield Frame(index, timestamp, self.camera, ego, image=image,
+                        image_path=None if self.video else path, scene=self.name)
+
+    def __len__(self) -> int:
+        if self.video is None:
+            return len(self.images)
+        import cv2
+
+        cap = cv2.VideoCapture(str(self.video))
+        count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+        cap.release()
+        return max(count, 0)
+
+
+def _video_frames(video: Path, fps: float | None, start_time: float):
+    import cv2
+
+    cap = cv2.VideoCapture(str(video))
+    if not cap.isOpened():
+        raise InputError(f"{video}: cannot open the video")
+    rate = fps or cap.get(cv2.CAP_PROP_FPS)
+    index = 0
+    try:
+        while True:
+            ok, bgr = cap.read()
+            if not ok:
+                break
+            offset = index / rate if rate and rate > 0 else cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
+            yield index, start_time + offset, f"{video}#{index}", cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+            index += 1
+    finally:
+        cap.release()
+    if index == 0:
+        raise InputError(f"{video}: the video holds no readable frame")
+
+
+def load_recording(*, calibration: str | Path, ego_poses: str | Path, images: str | Path | None = None,
+                   video: str | Path | None = None, fps: float | None = None, start_time: float | None = None,
+                   name: str | None = None) -> Recording:
+    """Read a recording: exactly one of ``images`` (a folder) or ``video`` (a file).
+
+    Frame timestamps: ``images/timestamps.csv`` (filename,timestamp), else ``fps``; a
+    video's come from ``fps`` or its own frame rate. With ``fps`` (and for a video) the first
+    frame is at ``start_time``, by default the first ego pose's timestamp.
+    """
+    if (images is None) == (video is None):
+        raise InputError("give exactly one of an image folder (--images) or a video (--video)")
+    if fps is not None and not fps > 0:
+        raise ValueError(f"fps must be > 0, got {fps}")
+    camera = load_calibration(calibration)
+    trajectory = load_ego_poses(ego_poses)
+    start = float(trajectory.timestamps[0] if start_time is None else start_time)
+    if video is not None:
+        video = Path(video)
+        if not video.is_file():
+            raise InputError(f"{video}: video file not found")
+        return Recording(name or video.stem, camera, trajectory, video=video, fps=fps, start_time=start)
+    folder = Path(images)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: image folder not found")
+    return Recording(name or folder.resolve().name, camera, trajectory, tuple(_folder_frames(folder, fps, start)))
+
+
+def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
+                  pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
+                  video_out: bool = False, progress=None) -> dict:
+    """Run the environment model over a recording and write everything into ``output``.
+
+    Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
+    ``run.json`` (pose backend, recording, frames done), ``overlays/<index>.png`` or
+    ``overlay.mp4`` (``video_out``) with skeletons, track ids and distances, and
+    ``birds_eye.png`` of the last frame. A bad frame stops the run with an InputError; what
+    was computed before it stays on disk. ``progress(done, total)`` is called per frame.
+    ``pose_input_size`` (``onnx``): None picks 384x640 for wide cameras, else 640.
+    Returns the summary also saved as ``run.json``.
+    """
+    import dataclasses
+    import json
+
+    from pedenv.config import Config
+    from pedenv.io.jsonl import EnvironmentWriter
+    from pedenv.model import PedestrianEnvironmentModel
+    from pedenv.plots import plot_birds_eye
+    from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.models import choose_input_size
+    from pedenv.visualize.overlay import draw_environment, write_image
+
+    cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
+    rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
+                         start_time=start_time)
+    options = {}
+    if pose_backend == "onnx":
+        options = {"model_path": pose_model,
+                   "input_size": pose_input_size or (None if pose_model else choose_input_size(rec.camera.width, rec.camera.height))}
+    elif pose_backend == "ultralytics":
+        options = {"weights": pose_model, "input_size": pose_input_size or 640}
+    backend = create_pose_backend(pose_backend, **options)
+    out = Path(output)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg.save(out / "config.json")
+    describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
+    summary = {"recording": rec.name, "pose_backend": describe, "frames_total": len(rec), "frames_done": 0,
+               "environment": str(out / "environment.jsonl")}
+    model = PedestrianEnvironmentModel(cfg)
+    writer_video, last = None, None
+    try:
+        with EnvironmentWriter(out / "environment.jsonl") as writer:
+            for frame in rec.frames():
+                frame = dataclasses.replace(frame, detections=backend(frame))
+                state = model.update(frame)
+                writer.write(state)
+                drawn = draw_environment(frame.image, state)
+                if video_out:
+                    writer_video = writer_video or _open_video(out / "overlay.mp4", rec, drawn.shape)
+                    writer_video.write(drawn[..., ::-1].copy())
+                else:
+                    write_image(out / "overlays" / f"{frame.index:06d}.png", drawn)
+                last = (state, frame)
+                summary["frames_done"] += 1
+                if progress is not None:
+                    progress(summary["frames_done"], summary["frames_total"])
+    finally:
+        if writer_video is not None:
+            writer_video.release()
+        if last is not None:
+            summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
+        (out / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+def _open_video(path: Path, rec: Recording, shape):
+    import cv2
+
+    stamps = np.array([t for _, t in rec.images]) if rec.images else None
+    rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
+    if rec.video is not None and not rec.fps:
+        cap = cv2.VideoCapture(str(rec.video))
+        rate = cap.get(cv2.CAP_PROP_FPS) or rate
+        cap.release()
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), rate, (shape[1], shape[0]))
+    if not writer.isOpened():
+        raise InputError(f"{path}: cannot write the overlay video")
+    return writer

@@ -1,0 +1,137 @@
+"""Drawing on camera images: skeletons, boxes, track ids and distance labels.
+
+All images are (H, W, 3) uint8 RGB; drawing returns a new image. Pixel arrays are in
+the image's own pixels (u right, v down).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from pedenv.errors import InputError
+from pedenv.pose.postprocess import read_image_rgb
+from pedenv.records import Detections
+from pedenv.skeleton import COCO_BONES, KEYPOINT_NAMES
+
+#: Keypoints at or below this confidence are not drawn.
+MIN_DRAW_CONFIDENCE = 0.3
+_PALETTE = np.array([[230, 25, 75], [60, 180, 75], [0, 130, 200], [245, 130, 48], [145, 30, 180],
+                     [70, 240, 240], [240, 50, 230], [210, 245, 60], [250, 190, 212], [0, 128, 128],
+                     [220, 190, 255], [170, 110, 40], [128, 0, 0], [170, 255, 195], [128, 128, 0]])
+
+
+def color_for(key: int) -> tuple[int, int, int]:
+    """A stable RGB colour per track id (or detection index)."""
+    return tuple(int(c) for c in _PALETTE[int(key) % len(_PALETTE)])
+
+
+def _scale(image: np.ndarray) -> float:
+    return max(image.shape[0], image.shape[1]) / 1000.0
+
+
+def draw_skeleton(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndarray, color,
+                  min_confidence: float = MIN_DRAW_CONFIDENCE) -> None:
+    """Draw one skeleton in place. keypoints: (17, 2) pixels; confidences: (17,)."""
+    thick = max(1, round(2 * _scale(image)))
+    seen = confidences > min_confidence
+    pts = np.round(keypoints).astype(int)
+    for a, b in COCO_BONES:
+        if seen[a] and seen[b]:
+            cv2.line(image, tuple(pts[a]), tuple(pts[b]), color, thick, cv2.LINE_AA)
+    for p in pts[seen]:
+        cv2.circle(image, tuple(p), thick + 2, color, -1, cv2.LINE_AA)
+
+
+def draw_label(image: np.ndarray, text: str, anchor, color) -> None:
+    """Draw ``text`` in place on a filled box whose bottom-left corner is ``anchor`` (u, v) pixels."""
+    scale = 0.5 * _scale(image) + 0.2
+    thick = max(1, round(_scale(image)))
+    (w, h), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thick)
+    u = int(np.clip(anchor[0], 0, max(image.shape[1] - w - 2, 0)))
+    v = int(np.clip(anchor[1], h + base + 2, image.shape[0]))
+    cv2.rectangle(image, (u, v - h - base - 2), (u + w + 2, v), color, -1)
+    text_color = (0, 0, 0) if sum(color) > 380 else (255, 255, 255)
+    cv2.putText(image, text, (u + 1, v - base - 1), cv2.FONT_HERSHEY_SIMPLEX, scale, text_color, thick, cv2.LINE_AA)
+
+
+def draw_persons(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndarray, boxes: np.ndarray,
+                 labels: list[str], keys=None) -> np.ndarray:
+    """A copy of ``image`` with skeletons, boxes and one label per person.
+
+    keypoints: (N, 17, 2) pixels; confidences: (N, 17); boxes: (N, 4) pixels
+    ``[u_min, v_min, u_max, v_max]``; labels: N strings; keys: (N,) ints choosing colours
+    (track ids), by default the row numbers.
+    """
+    out = np.ascontiguousarray(image).copy()
+    keys = range(len(keypoints)) if keys is None else keys
+    thick = max(1, round(_scale(out)))
+    for kp, conf, box, label, key in zip(keypoints, confidences, boxes, labels, keys):
+        color = color_for(key)
+        b = np.round(box).astype(int)
+        cv2.rectangle(out, (b[0], b[1]), (b[2], b[3]), color, thick)
+        draw_skeleton(out, kp, conf, color)
+        draw_label(out, label, (b[0], b[1]), color)
+    return out
+
+
+def draw_detections(image: np.ndarray, detections: Detections) -> np.ndarray:
+    """A copy of ``image`` with every detected skeleton and its score."""
+    labels = [f"{s:.2f}" for s in detections.scores]
+    return draw_persons(image, detections.keypoints, detections.confidences, detections.boxes, labels)
+
+
+def draw_environment(image: np.ndarray, state) -> np.ndarray:
+    """A copy of ``image`` with the tracked pedestrians of an ``EnvironmentState``:
+    skeleton, box, track id and distance from the camera in metres."""
+    peds = state.pedestrians
+    labels = [f"id {int(i)}" + (f"  {d:.1f} m" if np.isfinite(d) else "")
+              for i, d in zip(peds.track_ids, peds.distances)]
+    return draw_persons(image, peds.keypoints, peds.confidences, peds.boxes, labels, keys=peds.track_ids)
+
+
+def write_image(path: Path, image_rgb: np.ndarray) -> Path:
+    """Write an RGB image (format from the suffix), creating the folder."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not cv2.imwrite(str(path), cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR)):
+        raise InputError(f"{path}: cannot write the image")
+    return path
+
+
+def detections_to_dict(detections: Detections, decimals: int = 2) -> list[dict]:
+    """JSON-ready persons: box, score and the 17 named keypoints (u, v pixels, confidence)."""
+    persons = []
+    for kp, conf, box, score in zip(detections.keypoints, detections.confidences, detections.boxes, detections.scores):
+        persons.append({
+            "box": [round(float(x), decimals) for x in box],
+            "score": round(float(score), 4),
+            "keypoints": [{"name": n, "u": round(float(p[0]), decimals), "v": round(float(p[1]), decimals),
+                           "confidence": round(float(c), 4)} for n, p, c in zip(KEYPOINT_NAMES, kp, conf)],
+        })
+    return persons
+
+
+def annotate_images(images, output: str | Path, backend) -> Path:
+    """Run a pose ``backend`` on image files; write ``output/detections.json`` and the drawn images.
+
+    images: image paths. Each drawn image is ``output/<stem>_pose.png``. Returns the JSON path.
+    The JSON holds per image: file, width, height, backend and persons (see
+    :func:`detections_to_dict`).
+    """
+    output = Path(output)
+    paths = [Path(p) for p in images]
+    if not paths:
+        raise InputError("no images given")
+    records = []
+    for path in paths:
+        image = read_image_rgb(path)
+        det = backend.detect(image)
+        write_image(output / f"{path.stem}_pose.png", draw_detections(image, det))
+        records.append({"file": str(path), "width": image.shape[1], "height": image.shape[0],
+                        "backend": backend.name, "persons": detections_to_dict(det)})
+    target = output / "detections.json"
+    target.write_text(json.dumps({"images": records}, indent=1))
+    return target
