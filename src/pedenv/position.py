@@ -104,15 +104,31 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
     pixel_heights: (N,) the skeletons' heights in pixels. ``lambdas``: the step
     divisors, by default ``r + c`` for ``r = 1..refinement_steps``.
     Returns the refined (N,) distances; a step whose re-projection fails leaves it.
+
+    Same as calling :func:`reprojected_height` each step, but the bottom and top points
+    are linear in the distance ``d`` (``a + d b`` in the camera frame), so each step is a
+    handful of operations on precomputed (4, N) arrays.
     """
     if lambdas is None:
         lambdas = np.arange(1, config.refinement_steps + 1) + config.refinement_lambda_offset
+    r, t = world_to_cam[:3, :3], world_to_cam[:3, 3]
+    base = np.array([origin[0], origin[1], ground_z])
+    slope = np.column_stack([directions[:, 0], directions[:, 1], np.zeros(len(directions))])
+    a = np.broadcast_to(intrinsics @ (r @ base + t), (len(directions), 3))  # bottom at d = 0, homogeneous px
+    b = (slope @ r.T) @ intrinsics.T             # (N, 3) its change per metre
+    up = intrinsics @ (r @ np.array([0.0, 0.0, config.person_height_m]))  # (3,) bottom -> top
+    num0 = np.stack([a[:, 0], a[:, 1], a[:, 0] + up[0], a[:, 1] + up[1]])
+    num1 = np.stack([b[:, 0], b[:, 1], b[:, 0], b[:, 1]])
+    den0 = np.stack([a[:, 2], a[:, 2], a[:, 2] + up[2], a[:, 2] + up[2]])
+    den1 = np.stack([b[:, 2], b[:, 2], b[:, 2], b[:, 2]])
     d = distances.copy()
     for lam in lambdas:
-        h_est = reprojected_height(origin + d[:, None] * directions, ground_z, config.person_height_m,
-                                   intrinsics, world_to_cam)
+        den = den0 + d * den1
+        px = (num0 + d * num1) / np.where(np.abs(den) < 1e-9, 1e-9, den)
+        h_est = np.hypot(px[2] - px[0], px[3] - px[1])
         factor = 1.0 + (h_est / pixel_heights - 1.0) / lam
-        d = np.where(np.isfinite(factor) & (factor > 0), d * factor, d)
+        ok = (den > 0).all(axis=0) & (factor > 0) & np.isfinite(factor)
+        d = np.where(ok, d * factor, d)
     return np.clip(d, 0.1, config.max_distance_m)
 
 

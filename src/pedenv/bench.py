@@ -1,0 +1,82 @@
+"""``pedenv bench``: stage timings next to the paper's (Sec. IV-D, RTX 3090 + Threadripper).
+
+Tracking per frame and position per pedestrian are measured on frames with a fixed
+number of walking pedestrians in front of a driving ego, through the real model.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from pedenv.config import Config
+from pedenv.geometry import invert_transform, project
+from pedenv.model import PedestrianEnvironmentModel
+from pedenv.records import Camera, Detections, EgoPose, Frame
+
+PAPER_MS = {"tracking_per_frame": 0.35, "position_per_pedestrian": 0.29, "pose_network": 39.94, "total": 40.54}
+
+#: Height fractions and lateral offsets (metres, for 1 m of height) of a standing COCO-17 person.
+_HEIGHT_FRACTION = np.array([.92, .94, .94, .93, .93, .82, .82, .62, .62, .48, .48, .53, .53, .29, .29, .05, .05])
+_LATERAL = np.array([0, .03, -.03, .07, -.07, .2, -.2, .24, -.24, .25, -.25, .1, -.1, .1, -.1, .1, -.1])
+
+
+def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera: Camera | None = None) -> list[Frame]:
+    """Frames at 10 Hz of an ego at 30 km/h with ``n_pedestrians`` walking 5-60 m ahead."""
+    rng = np.random.default_rng(seed)
+    camera = camera or Camera.from_fov()
+    start = np.column_stack([rng.uniform(8, 60, n_pedestrians), rng.uniform(-12, 12, n_pedestrians)])
+    vel = rng.normal(0, 1.0, (n_pedestrians, 2))
+    heights = rng.normal(1.72, 0.09, n_pedestrians)
+    frames = []
+    for i in range(n_frames):
+        t = 0.1 * i
+        ego = EgoPose.from_xy_yaw(8.33 * t, 0.0, 0.0)
+        xy = start + vel * t + np.array([8.33 * t, 0.0])
+        pts = np.stack([np.broadcast_to(xy[:, :1], (n_pedestrians, 17)),
+                        xy[:, 1:2] + _LATERAL * heights[:, None], _HEIGHT_FRACTION * heights[:, None]], axis=-1)
+        frame = Frame(i, t, camera, ego)
+        uv, _ = project(pts, camera.intrinsics, invert_transform(frame.cam_to_world))
+        uv += rng.normal(0, 1.0, uv.shape)
+        frames.append(replace(frame, detections=Detections(uv, np.full((n_pedestrians, 17), 0.9))))
+    return frames
+
+
+def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config | None = None) -> list[dict]:
+    """Tracking ms/frame and position ms/pedestrian of the model for each pedestrian count."""
+    rows = []
+    for n in pedestrian_counts:
+        frames = bench_frames(n, n_frames)
+        model = PedestrianEnvironmentModel(config or Config())
+        for f in frames[:5]:  # warm-up: imports and caches
+            model.update(f)
+        model = PedestrianEnvironmentModel(config or Config())
+        t0 = time.perf_counter()
+        for f in frames:
+            model.update(f)
+        wall = time.perf_counter() - t0
+        ms = model.timer.per_stage_ms()
+        rows.append({"pedestrians": n, **ms, "update_per_frame": 1e3 * wall / len(frames)})
+    return rows
+
+
+def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
+    """A rich table of the rows, with the paper's figures and the speed-up over them."""
+    from rich.table import Table
+
+    table = Table(title="pedenv bench (this CPU) vs. the paper (RTX 3090 + Threadripper 3960X)")
+    for col in ("stage", "pedestrians", "pedenv [ms]", "paper [ms]", "paper / pedenv"):
+        table.add_column(col, justify="left" if col == "stage" else "right")
+    for r in rows:
+        for key, label in (("tracking_per_frame", "tracking per frame"),
+                           ("position_per_pedestrian", "position per pedestrian")):
+            table.add_row(label, str(r["pedestrians"]), f"{r[key]:.4f}", f"{PAPER_MS[key]:.2f}",
+                          f"{PAPER_MS[key] / r[key]:.1f}x")
+        table.add_row("model.update per frame", str(r["pedestrians"]), f"{r['update_per_frame']:.3f}", "", "")
+    for r in pose_rows or []:
+        paper = PAPER_MS.get(r.get("paper_key", ""), None)
+        table.add_row(r["stage"], str(r.get("pedestrians", "")), f"{r['ms']:.2f}",
+                      "" if paper is None else f"{paper:.2f}", "" if paper is None else f"{paper / r['ms']:.2f}x")
+    return table

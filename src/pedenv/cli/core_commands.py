@@ -1,0 +1,131 @@
+"""``pedenv demo | simulate | evaluate | bench``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from pedenv.cli.app import app, console
+from pedenv.config import Config
+
+_out = console.__class__()  # stdout console for tables and results
+
+
+def _config(path: Optional[Path], **position) -> Config:
+    config = Config.load(path) if path else Config()
+    changes = {k: v for k, v in position.items() if v is not None}
+    return config.replace(position=changes) if changes else config
+
+
+def _print_result(metrics, title: str = "") -> None:
+    from pedenv.evaluation.report import results_table, summary_lines
+
+    _out.print(results_table(metrics, title))
+    for line in summary_lines(metrics):
+        _out.print(line, highlight=False)
+
+
+@app.command()
+def demo(
+    output: Path = typer.Option(Path("output/demo"), "--output", help="Folder for metrics, JSON Lines and plots."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the built-in scenes and the detector model."),
+    terrain: bool = typer.Option(False, "--terrain/--flat", help="Rolling terrain and vehicle pitch, or a flat world."),
+    pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
+    config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+) -> None:
+    """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
+    from pedenv.demo import run_demo
+
+    result = run_demo(output, seed=seed, config=_config(config), terrain=terrain, pose_backend=pose_backend)
+    _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
+    for name, path in result.extras["paths"].items():
+        _out.print(f"{name}: {path}", highlight=False)
+    _out.print(f"environment: {output / 'environment.jsonl'}", highlight=False)
+
+
+@app.command()
+def simulate(
+    output: Path = typer.Option(..., "--output", help="Folder to write the scenes to."),
+    scenes: Optional[int] = typer.Option(None, "--scenes", help="Number of scenes (default: every scenario once)."),
+    seed: int = typer.Option(0, "--seed"),
+    fmt: str = typer.Option("synthetic", "--format", help="synthetic, nuscenes or carla."),
+    terrain: bool = typer.Option(False, "--terrain/--flat"),
+    frame_rate: Optional[float] = typer.Option(None, "--frame-rate", help="Hz; default 10 (12 for nuscenes)."),
+) -> None:
+    """Write the built-in synthetic scenes to disk in one of the supported formats."""
+    from pedenv.datasets import scene_writer
+    from pedenv.demo import builtin_scenes, scenes_summary
+
+    write = scene_writer(fmt)
+    rate = frame_rate or (12.0 if fmt == "nuscenes" else 10.0)
+    data = builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
+    write(data, output)
+    _out.print(f"wrote {scenes_summary(data)} as {fmt} to {output}", highlight=False)
+
+
+@app.command()
+def evaluate(
+    dataset: str = typer.Option(..., "--dataset", help="synthetic, nuscenes or carla."),
+    data_root: Path = typer.Option(..., "--data-root", help="The dataset's root folder."),
+    output: Path = typer.Option(..., "--output", help="Folder for metrics, JSON Lines and plots."),
+    scenes: Optional[str] = typer.Option(None, "--scenes", help="Comma-separated scene names (default: all)."),
+    version: str = typer.Option("v1.0-mini", "--version", help="nuScenes version folder."),
+    pose_backend: Optional[str] = typer.Option(None, "--pose-backend", help="Default: the dataset's own."),
+    config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+    no_refinement: bool = typer.Option(False, "--no-refinement", help="Ablation: skip the height refinement."),
+    initial_estimate: Optional[str] = typer.Option(None, "--initial-estimate", help="all-keypoints or midpoint."),
+    ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
+    method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
+    cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
+) -> None:
+    """Evaluate the environment model on a dataset with the paper's protocol."""
+    from pedenv.datasets import open_dataset
+    from pedenv.evaluation import evaluate_dataset
+
+    options = {"version": version} if dataset == "nuscenes" else {}
+    data = open_dataset(dataset, data_root, **options)
+    names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
+    cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
+    if cues:
+        cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
+    if method == "both":
+        from pedenv.evaluation.compare import compare_methods, comparison_table_for
+
+        results = compare_methods(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
+                                  progress=True)
+        for name, res in results.items():
+            _print_result(res.metrics, f"{dataset}: method {name}")
+        _out.print(comparison_table_for(results))
+        return
+    if method:
+        cfg = cfg.replace(position={"method": method})
+    metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
+                               progress=True)
+    _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
+    if ablation:
+        from pedenv.evaluation.ablation import run_ablation
+
+        _out.print(run_ablation(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output))
+    _out.print(f"outputs: {output}", highlight=False)
+
+
+@app.command()
+def bench(
+    frames: int = typer.Option(100, "--frames", help="Frames per measurement."),
+    pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
+) -> None:
+    """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
+    from pedenv.bench import bench_core, format_bench
+
+    rows = bench_core(n_frames=frames)
+    pose_rows = []
+    if pose:
+        try:
+            from pedenv.pose.timing import bench_rows
+
+            pose_rows = bench_rows()
+        except (ImportError, FileNotFoundError, ValueError) as exc:
+            console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
+    _out.print(format_bench(rows, pose_rows))
