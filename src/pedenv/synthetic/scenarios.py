@@ -1,0 +1,163 @@
+"""The built-in scenarios: the ego's motion and the pedestrians of each, like the paper's CARLA set.
+
+Every recipe takes a seeded generator and the scene duration and returns a
+:class:`ScenarioPlan`. The ego drives along world +x in the right-hand lane (y = -1.75 m)
+unless the recipe says otherwise; pedestrian numbers grow with the stretch of street
+the ego sees during the scene, so longer scenes stay as busy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from pedenv.synthetic.ego_motion import Profile, integrate_track, smooth_step
+from pedenv.synthetic.population import Pedestrians, concat
+from pedenv.synthetic.streets import Road, crossers, plaza_walkers, sidewalk_walkers, standing_group
+
+LANE_Y_M = -1.75
+#: How far ahead the scenes place pedestrians (the camera sees them up to ~150 m).
+VIEW_RANGE_M = 170.0
+TURN_YAW_RATE_RAD_S = np.radians(20.0)
+
+
+@dataclass(frozen=True)
+class ScenarioPlan:
+    """What a scenario does: ego speed and yaw-rate profiles (functions of time in s,
+    in m/s and rad/s), its start pose (world x-y metres, yaw radians) and the pedestrians."""
+
+    description: str
+    speed: Profile
+    yaw_rate: Profile
+    pedestrians: Pedestrians
+    start_xy: tuple[float, float] = (0.0, LANE_Y_M)
+    start_yaw: float = 0.0
+
+
+def _constant(value: float) -> Profile:
+    return lambda t: np.full(np.shape(t), float(value))
+
+
+def _travel(speed: Profile, duration_s: float) -> float:
+    t = np.linspace(0.0, duration_s, 400)
+    return float(np.trapz(speed(t), t))
+
+
+def _count(density_per_m: float, length_m: float) -> int:
+    return max(int(round(density_per_m * length_m)), 1)
+
+
+def red_light_crossing(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    main = Road(half_width_m=7.0, sidewalk_m=4.0)
+    cross = Road(origin=(25.0, 0.0), yaw=np.pi / 2, half_width_m=7.0)
+    peds = concat(
+        crossers(rng, main, _count(0.7, duration_s), (10.0, 13.0), (-8.0, duration_s - 8.0)),
+        crossers(rng, main, 6, (33.0, 36.0), (-10.0, duration_s - 5.0)),
+        sidewalk_walkers(rng, main, 14, (6.0, VIEW_RANGE_M)),
+        sidewalk_walkers(rng, cross, 6, (-60.0, 60.0)),
+    )
+    return ScenarioPlan("the ego waits at a red light; pedestrians cross on the crosswalk in front",
+                        _constant(0.0), _constant(0.0), peds)
+
+
+def _drive_past(speed_mps: float, density: float) -> Callable[[np.random.Generator, float], ScenarioPlan]:
+    def recipe(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+        road = Road(half_width_m=5.0, sidewalk_m=4.0)
+        reach = speed_mps * duration_s + VIEW_RANGE_M
+        peds = concat(
+            sidewalk_walkers(rng, road, _count(density, reach), (0.0, reach)),
+            crossers(rng, road, 3, (60.0, reach), (-5.0, duration_s)),
+        )
+        return ScenarioPlan(f"the ego drives at {speed_mps * 3.6:.0f} km/h past pedestrians on the sidewalks",
+                            _constant(speed_mps), _constant(0.0), peds)
+    return recipe
+
+
+def turn_intersection(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    sign = rng.choice([-1.0, 1.0])  # +1 turns left
+    turn_start, turn_s = 6.0, 4.5  # 4.5 s at 20 deg/s (plus ramps) = 90 deg
+    speed = lambda t: 8.0 - 3.0 * smooth_step(t, 2.0, 3.0) + 3.0 * smooth_step(t, 12.0, 3.0)  # noqa: E731
+    yaw_rate = lambda t: sign * TURN_YAW_RATE_RAD_S * (  # noqa: E731
+        smooth_step(t, turn_start, 0.5) - smooth_step(t, turn_start + turn_s, 0.5))
+    end_of_turn = turn_start + turn_s + 0.5
+    track = integrate_track(np.array([0.0, end_of_turn]), speed, yaw_rate, start_xy=(0.0, LANE_Y_M))
+    x_c = float(track.xy[-1, 0]) + sign * LANE_Y_M  # the cross street's centre line
+    main = Road(half_width_m=5.0)
+    cross = Road(origin=(x_c, 0.0), yaw=np.pi / 2, half_width_m=5.0)
+    after = _travel(speed, duration_s) - _travel(speed, end_of_turn)
+    y_end = float(track.xy[-1, 1])
+    far = y_end + sign * (after + VIEW_RANGE_M)  # the farthest the ego sees along the cross street
+    ahead = (min(-30.0 * sign, far), max(-30.0 * sign, far))
+    peds = concat(
+        sidewalk_walkers(rng, main, 24, (0.0, x_c + 60.0)),
+        sidewalk_walkers(rng, cross, _count(0.12, ahead[1] - ahead[0]), ahead),
+        crossers(rng, cross, 8, (sign * 8.0, sign * 11.0), (-6.0, duration_s - 6.0)),
+        crossers(rng, main, 6, (x_c + 8.0, x_c + 11.0), (-6.0, duration_s - 6.0)),
+        standing_group(rng, [[x_c + dx, dy] for dx in (-7.0, 7.0) for dy in (-7.0, 7.0)], rng.integers(1, 4, 4)),
+    )
+    side = "left" if sign > 0 else "right"
+    return ScenarioPlan(f"the ego turns {side} at an intersection (yaw rate 20 deg/s for {turn_s} s)",
+                        speed, yaw_rate, peds)
+
+
+def start_from_standstill(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    road = Road(half_width_m=5.0)
+    speed = lambda t: 11.0 * smooth_step(t, 4.0, 7.0)  # noqa: E731
+    reach = _travel(speed, duration_s) + VIEW_RANGE_M
+    peds = concat(
+        crossers(rng, road, 6, (7.0, 10.0), (-6.0, 1.0)),
+        sidewalk_walkers(rng, road, _count(0.17, reach), (3.0, reach)),
+    )
+    return ScenarioPlan("the ego waits, then accelerates to 40 km/h (up to 2.5 m/s^2)",
+                        speed, _constant(0.0), peds)
+
+
+def crowd(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    road = Road(half_width_m=4.0, sidewalk_m=7.0)
+    speed_mps = 2.5
+    reach = speed_mps * duration_s + 90.0
+    peds = concat(
+        sidewalk_walkers(rng, road, _count(0.45, reach), (0.0, reach), standing_share=0.15),
+        crossers(rng, road, _count(1.2, duration_s), (12.0, reach), (-8.0, duration_s - 4.0)),
+        plaza_walkers(rng, 15, (70.0, 110.0), (-12.0, 12.0)),
+    )
+    return ScenarioPlan("the ego creeps at 9 km/h through a busy shopping street with crowds",
+                        _constant(speed_mps), _constant(0.0), peds)
+
+
+def standing_pedestrians(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    road = Road(half_width_m=5.0)
+    singles = sidewalk_walkers(rng, road, 12, (6.0, 150.0), standing_share=1.0)
+    centres = road.point(rng.uniform(10.0, 120.0, 4), road.sidewalk_offsets(rng, 4))
+    peds = concat(singles, standing_group(rng, centres, rng.integers(2, 5, 4)))
+    return ScenarioPlan("the ego stands still; pedestrians stand alone or in groups on the sidewalks",
+                        _constant(0.0), _constant(0.0), peds)
+
+
+#: Scenario name -> (recipe, default duration in seconds).
+_RECIPES: dict[str, tuple[Callable[[np.random.Generator, float], ScenarioPlan], float]] = {
+    "red-light-crossing": (red_light_crossing, 20.0),
+    "drive-30kmh-sidewalk": (_drive_past(30.0 / 3.6, 0.15), 20.0),
+    "drive-50kmh-sidewalk": (_drive_past(50.0 / 3.6, 0.15), 15.0),
+    "turn-intersection": (turn_intersection, 20.0),
+    "start-from-standstill": (start_from_standstill, 20.0),
+    "crowd": (crowd, 15.0),
+    "standing-pedestrians": (standing_pedestrians, 15.0),
+}
+
+#: Names of the built-in scenarios, in their default order.
+SCENARIOS: tuple[str, ...] = tuple(_RECIPES)
+
+
+def default_duration(name: str) -> float:
+    """Default length of scenario ``name`` in seconds."""
+    return _RECIPES[name][1]
+
+
+def build_scenario(name: str, rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    """The plan of scenario ``name``; raises ValueError listing the valid names."""
+    if name not in _RECIPES:
+        raise ValueError(f"unknown scenario {name!r}; valid: {', '.join(SCENARIOS)}")
+    return _RECIPES[name][0](rng, duration_s)

@@ -1,0 +1,120 @@
+"""Articulated COCO-17 walking skeletons in 3D, vectorized over pedestrians.
+
+A person of height ``H`` is built in a body frame (x forward along the heading, y to
+the person's left, z up, origin on the ground between the feet) from anthropometric
+proportions of ``H`` (segment lengths after the classic Drillis & Contini table):
+shoulders at 0.818 H, hip joints at 0.530 H, knees at 0.285 H, ankles at 0.046 H
+(about 0.08 m), eyes at 0.933 H, nose at 0.920 H; the top of the head is H.
+
+Walking is a gait cycle of phase ``phi`` (radians) advancing by ``2 pi`` per stride,
+so it is phase-locked to the distance walked: the legs swing in anti-phase (thigh
+about +-22 deg, the knee flexing in the swing phase), the arms swing against the legs
+and the pelvis rides on the stance leg. ``gait`` scales the motion (0 = standing, 1 =
+normal walk at 1.4 m/s); a standing person only sways slightly about the ankles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+
+# Heights above the ground and half widths, as fractions of the body height H.
+EYE, NOSE, EAR, SHOULDER, HIP, KNEE, ANKLE = 0.933, 0.920, 0.915, 0.818, 0.530, 0.285, 0.046
+SHOULDER_HALF_WIDTH, HIP_HALF_WIDTH = 0.110, 0.058
+UPPER_ARM, FOREARM = 0.186, 0.146
+THIGH, SHANK = HIP - KNEE, KNEE - ANKLE
+# Face offsets (forward, lateral) as fractions of H.
+NOSE_FORWARD, EYE_FORWARD, EYE_HALF_WIDTH, EAR_FORWARD, EAR_HALF_WIDTH = 0.052, 0.040, 0.019, -0.004, 0.044
+
+#: Walking speed (m/s) at which ``gait`` = 1.
+NORMAL_WALKING_SPEED = 1.4
+THIGH_SWING_RAD = 0.38
+KNEE_SWING_FLEX_RAD = 0.75
+KNEE_STANCE_FLEX_RAD = 0.10
+KNEE_PEAK_LEAD_RAD = 0.5  # the knee flexes most early in the swing, before the thigh passes vertical
+ARM_SWING_RAD = 0.30
+ELBOW_FLEX_RAD = 0.25
+FORWARD_LEAN_RAD = 0.05
+
+
+def stride_length(height: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    """Length of one gait cycle (two steps): height (N,) m, speed (N,) m/s -> (N,) m.
+
+    About 0.83 H at 1.4 m/s, longer when walking faster (cadence rises less than speed).
+    """
+    return np.asarray(height, float) * (0.55 + 0.2 * np.asarray(speed, float))
+
+
+def gait_amplitude(speed: np.ndarray) -> np.ndarray:
+    """Scale of the gait motion: speed (N,) m/s -> (N,) in [0, 1.3]."""
+    return np.clip(np.asarray(speed, float) / NORMAL_WALKING_SPEED, 0.0, 1.3)
+
+
+def body_keypoints(height: np.ndarray, phase: np.ndarray, gait: np.ndarray, sway: np.ndarray) -> np.ndarray:
+    """Skeletons in their body frames.
+
+    height: (N,) metres. phase: (N,) radians, gait phase of the left leg.
+    gait: (N,) amplitude, 0 standing .. ~1.3 fast walk. sway: (N, 2) radians, lean of the
+    whole body about the ankles (forward, to the left), for a standing person's sway.
+    Returns (N, 17, 3) float, body frame (x forward, y left, z up), metres.
+    """
+    h = np.asarray(height, float)[:, None]
+    a = np.asarray(gait, float)[:, None]
+    phase = np.asarray(phase, float)[:, None]
+    n = h.shape[0]
+    side = np.array([1.0, -1.0])  # left, right: +y is the person's left
+    leg_phase = phase + np.array([0.0, np.pi])  # (N, 2)
+    thigh = a * THIGH_SWING_RAD * np.sin(leg_phase)
+    knee_flex = a * (KNEE_STANCE_FLEX_RAD + KNEE_SWING_FLEX_RAD * np.maximum(np.cos(leg_phase + KNEE_PEAK_LEAD_RAD), 0.0) ** 2)
+    shank = thigh - knee_flex
+    leg_drop = THIGH * np.cos(thigh) + SHANK * np.cos(shank)  # (N, 2), in units of H
+    hip_z = (ANKLE + leg_drop.max(axis=1, keepdims=True)) * h  # pelvis rides on the stance leg
+
+    kp = np.zeros((n, NUM_KEYPOINTS, 3))
+    hips = np.stack([np.zeros((n, 2)), side * HIP_HALF_WIDTH * h, np.broadcast_to(hip_z, (n, 2))], axis=-1)
+    knees = hips + np.stack([THIGH * np.sin(thigh), np.zeros_like(thigh), -THIGH * np.cos(thigh)], -1) * h[..., None]
+    ankles = knees + np.stack([SHANK * np.sin(shank), np.zeros_like(shank), -SHANK * np.cos(shank)], -1) * h[..., None]
+    kp[:, [K.LEFT_HIP, K.RIGHT_HIP]] = hips
+    kp[:, [K.LEFT_KNEE, K.RIGHT_KNEE]] = knees
+    kp[:, [K.LEFT_ANKLE, K.RIGHT_ANKLE]] = ankles
+
+    torso_z = hip_z + (SHOULDER - HIP) * h  # (N, 1)
+    shoulders = np.stack([np.zeros((n, 2)), side * SHOULDER_HALF_WIDTH * h, np.broadcast_to(torso_z, (n, 2))], -1)
+    arm = -a * ARM_SWING_RAD * np.sin(leg_phase)  # each arm swings against its own leg
+    forearm = arm + ELBOW_FLEX_RAD * (0.6 + 0.4 * a) * (1.0 + 0.5 * np.sin(-leg_phase))
+    elbows = shoulders + np.stack([UPPER_ARM * np.sin(arm), np.broadcast_to(side * 0.015, arm.shape), -UPPER_ARM * np.cos(arm)], -1) * h[..., None]
+    wrists = elbows + np.stack([FOREARM * np.sin(forearm), np.broadcast_to(side * 0.008, arm.shape), -FOREARM * np.cos(forearm)], -1) * h[..., None]
+    kp[:, [K.LEFT_SHOULDER, K.RIGHT_SHOULDER]] = shoulders
+    kp[:, [K.LEFT_ELBOW, K.RIGHT_ELBOW]] = elbows
+    kp[:, [K.LEFT_WRIST, K.RIGHT_WRIST]] = wrists
+
+    head_base = torso_z - SHOULDER * h  # the head follows the torso's bob
+    face = np.array([
+        [NOSE_FORWARD, 0.0, NOSE], [EYE_FORWARD, EYE_HALF_WIDTH, EYE], [EYE_FORWARD, -EYE_HALF_WIDTH, EYE],
+        [EAR_FORWARD, EAR_HALF_WIDTH, EAR], [EAR_FORWARD, -EAR_HALF_WIDTH, EAR],
+    ])
+    kp[:, [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR]] = face * h[..., None]
+    kp[:, [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR], 2] += head_base
+
+    # Upper body leans forward with speed, pivoting at the hips.
+    upper = [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR, K.LEFT_SHOULDER, K.RIGHT_SHOULDER,
+             K.LEFT_ELBOW, K.RIGHT_ELBOW, K.LEFT_WRIST, K.RIGHT_WRIST]
+    kp[:, upper, 0] += FORWARD_LEAN_RAD * a * (kp[:, upper, 2] - hip_z)
+    # Sway: small lean of the whole body about the ankles (inverted pendulum).
+    sway = np.asarray(sway, float)
+    kp[:, :, 0] += sway[:, 0:1] * kp[:, :, 2]
+    kp[:, :, 1] += sway[:, 1:2] * kp[:, :, 2]
+    return kp
+
+
+def world_keypoints(ground: np.ndarray, heading: np.ndarray, body: np.ndarray) -> np.ndarray:
+    """Place body-frame skeletons in the world (upright, turned to their heading).
+
+    ground: (N, 3) world frame, metres: the ground point under each person.
+    heading: (N,) radians, counter-clockwise from world +x. body: (N, 17, 3) body frame.
+    Returns (N, 17, 3) world frame, metres.
+    """
+    c, s = np.cos(heading)[:, None], np.sin(heading)[:, None]
+    x, y, z = body[..., 0], body[..., 1], body[..., 2]
+    return np.stack([c * x - s * y, s * x + c * y, z], axis=-1) + np.asarray(ground, float)[:, None, :]
