@@ -1,0 +1,81 @@
+"""How fast the pose backends are on one 1600x900 frame (nuScenes' camera size).
+
+The paper reports 39.94 ms for its network and 40.54 ms for the whole model per frame
+(GPU). Times here are end to end: letterbox, network, decoding and NMS.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+FRAME_SIZE = (900, 1600)  # (height, width)
+
+
+def benchmark_image() -> np.ndarray:
+    """(900, 1600, 3) uint8 RGB: ultralytics' street photo ``bus.jpg`` resized, else seeded noise."""
+    try:
+        import importlib.util
+
+        spec = importlib.util.find_spec("ultralytics")
+        path = Path(list(spec.submodule_search_locations)[0]) / "assets" / "bus.jpg" if spec else None
+    except (ImportError, ValueError):
+        path = None
+    if path is not None and path.is_file():
+        from pedenv.pose.postprocess import read_image_rgb
+
+        return cv2.resize(read_image_rgb(path), (FRAME_SIZE[1], FRAME_SIZE[0]), interpolation=cv2.INTER_LINEAR)
+    return np.random.default_rng(0).integers(0, 256, (*FRAME_SIZE, 3), dtype=np.uint8)
+
+
+def time_detect(backend, image: np.ndarray, repeats: int = 10, warmup: int = 2) -> dict:
+    """Milliseconds per ``backend.detect(image)``: mean, median and min over ``repeats`` runs."""
+    for _ in range(warmup):
+        backend.detect(image)
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        backend.detect(image)
+        times.append(1e3 * (time.perf_counter() - start))
+    return {"ms_per_frame": float(np.mean(times)), "ms_median": float(np.median(times)),
+            "ms_min": float(np.min(times)), "repeats": repeats}
+
+
+def benchmark_pose(repeats: int = 10, threads: int = 2) -> list[dict]:
+    """Time the pose backends on a 1600x900 frame, pre- and post-processing included.
+
+    Rows (one per backend and input size): ``backend``, ``input_size`` ("HxW"),
+    ``ms_per_frame`` (mean), ``ms_median``, ``ms_min``, ``repeats``, ``persons`` found;
+    a backend that cannot run here (no prepared model, no ultralytics) gets ``ms_per_frame``
+    None and the reason in ``skipped``.
+    """
+    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
+        raise ValueError(f"repeats must be an integer >= 1, got {repeats!r}")
+    os.environ["YOLO_OFFLINE"] = "1"
+    from pedenv.errors import InputError
+    from pedenv.pose.onnx_backend import OnnxPose
+
+    image = benchmark_image()
+    runs = [("onnx", (640, 640), lambda: OnnxPose(input_size=(640, 640), threads=threads)),
+            ("onnx", (384, 640), lambda: OnnxPose(input_size=(384, 640), threads=threads)),
+            ("ultralytics", (640, 640), _ultralytics)]
+    rows = []
+    for name, size, make in runs:
+        row = {"backend": name, "input_size": f"{size[0]}x{size[1]}"}
+        try:
+            backend = make()
+        except (InputError, ImportError) as exc:
+            rows.append({**row, "ms_per_frame": None, "skipped": str(exc)})
+            continue
+        rows.append({**row, **time_detect(backend, image, repeats), "persons": len(backend.detect(image))})
+    return rows
+
+
+def _ultralytics():
+    from pedenv.pose.ultralytics_backend import UltralyticsPose
+
+    return UltralyticsPose(input_size=640)
