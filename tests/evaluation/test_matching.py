@@ -1,0 +1,28 @@
+import numpy as np
+import pytest
+
+from pedenv.evaluation.matching import iou_matrix, match_to_ground_truth, position_errors
+from pedenv.evaluation.metrics import calibration, error_by_distance
+
+
+def test_match_takes_nearest_in_world_among_overlapping_boxes():
+    pred_boxes = np.array([[0, 0, 10, 10], [100, 0, 110, 10], [500, 0, 510, 10]], float)
+    pred_xy = np.array([[10.0, 0.0], [30.0, 1.0], [5.0, 5.0]])
+    gt_boxes = np.array([[5, 0, 15, 10], [2, 0, 12, 10], [105, 0, 115, 10]], float)
+    gt_xy = np.array([[20.0, 0.0], [11.0, 0.0], [31.0, 1.0]])
+    # first overlaps gt 0 and 1 (nearest: 1), second overlaps gt 2, third overlaps nothing
+    assert match_to_ground_truth(pred_boxes, pred_xy, gt_boxes, gt_xy).tolist() == [1, 2, -1]
+
+
+def test_errors_hand_checked():
+    abs_err, rel, dist = position_errors(np.array([[13.0, 4.0]]), np.array([[10.0, 0.0]]), np.array([0.0, 0.0]))
+    assert abs_err[0] == pytest.approx(5.0) and dist[0] == pytest.approx(10.0) and rel[0] == pytest.approx(50.0)
+    assert iou_matrix(np.array([[0, 0, 2, 2.0]]), np.array([[1, 1, 3, 3.0]]))[0, 0] == pytest.approx(1 / 7)
+
+
+def test_error_by_distance_bins_and_calibration():
+    rows = error_by_distance(np.array([1.2, 1.8, 5.5]), np.array([1.0, 3.0, 2.0]), np.array([10.0, 20.0, 5.0]))
+    assert rows == [{"distance_m": 1.0, "abs_error_m": 2.0, "rel_error_pct": 15.0, "count": 2},
+                    {"distance_m": 5.0, "abs_error_m": 2.0, "rel_error_pct": 5.0, "count": 1}]
+    c = calibration(np.array([0.5, 1.5, 2.5, 0.9]))
+    assert c == {"within_1sigma": 0.5, "within_2sigma": 0.75}

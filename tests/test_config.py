@@ -1,0 +1,32 @@
+import pytest
+
+from pedenv.config import Config, PositionConfig, TrackingConfig
+
+
+def test_defaults_are_the_papers():
+    c = Config()
+    assert c.tracking.giou_threshold == -0.3 and c.tracking.max_misses == 3
+    p = c.position
+    assert (p.low_confidence_fraction, p.person_height_m, p.refinement_steps, p.refinement_lambda_offset) == (0.3, 1.7, 15, 5.0)
+
+
+@pytest.mark.parametrize("kind, field, value, message", [
+    (TrackingConfig, "giou_threshold", 1.0, r"tracking.giou_threshold must be in \[-1.0, 1.0\)"),
+    (TrackingConfig, "max_misses", 0, "tracking.max_misses must be an integer >= 1"),
+    (PositionConfig, "low_confidence_fraction", 1.0, "position.low_confidence_fraction"),
+    (PositionConfig, "person_height_m", 3.0, "position.person_height_m"),
+    (PositionConfig, "refinement_steps", -1, "position.refinement_steps"),
+    (PositionConfig, "initial_estimate", "centroid", "position.initial_estimate must be one of"),
+    (PositionConfig, "method", "magic", "position.method must be one of"),
+])
+def test_out_of_range_values_are_refused(kind, field, value, message):
+    with pytest.raises(ValueError, match=message):
+        kind(**{field: value})
+
+
+def test_round_trip_and_replace(tmp_path):
+    c = Config().replace(position={"refine": False}, tracking={"max_misses": 5})
+    c.save(tmp_path / "config.json")
+    assert Config.load(tmp_path / "config.json") == c
+    with pytest.raises(ValueError, match="unknown field"):
+        Config.from_dict({"tracking": {"giou": 0.1}})

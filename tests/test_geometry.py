@@ -1,0 +1,50 @@
+import numpy as np
+import pytest
+
+from pedenv.geometry import (closest_points, invert_transform, pixel_rays, project, quaternion_to_rotation,
+                             rotation_from_ypr, rotation_to_quaternion)
+from pedenv.records import Camera, EgoPose, Frame
+
+
+def test_closest_points_of_skew_rays_hand_checked():
+    # ray 1 along x; ray 2 from (0, 2, 1) heading (1, -1, 0)/sqrt2: closest at x = 2, one metre apart in z
+    d2 = np.array([1.0, -1.0, 0.0]) / np.sqrt(2)
+    s, t, mid, parallel = closest_points(np.zeros(3), np.array([1.0, 0, 0]), np.array([0.0, 2, 1]), d2)
+    assert s == pytest.approx(2.0) and t == pytest.approx(2 * np.sqrt(2))
+    np.testing.assert_allclose(mid, [2.0, 0.0, 0.5], atol=1e-12)
+    assert not parallel
+
+
+def test_parallel_rays_are_flagged_not_nan_propagating():
+    d = np.array([[1.0, 0, 0], [0.6, 0.8, 0]])
+    s, t, mid, parallel = closest_points(np.zeros((2, 3)), d, np.array([[0, 1.0, 0], [1, 0, 0]]), d)
+    assert parallel.tolist() == [True, True]
+    assert np.isnan(s).all()
+
+
+def test_rays_and_projection_are_inverse(camera):
+    frame = Frame(0, 0.0, camera, EgoPose.from_xy_yaw(3.0, -2.0, 0.4))
+    pts = np.array([[20.0, 5.0, 0.0], [40.0, 10.0, 1.7], [10.0, 2.0, 1.0]])
+    uv, depth = project(pts, camera.intrinsics, invert_transform(frame.cam_to_world))
+    assert (depth > 0).all()
+    rays = pixel_rays(uv, camera.intrinsics, frame.cam_to_world)
+    want = pts - frame.cam_to_world[:3, 3]
+    np.testing.assert_allclose(rays, want / np.linalg.norm(want, axis=1, keepdims=True), atol=1e-12)
+
+
+def test_forward_camera_sees_straight_ahead_at_principal_point(camera):
+    frame = Frame(0, 0.0, camera, EgoPose.from_xy_yaw(0, 0, 0))
+    uv, depth = project(np.array([[30.0, 0.0, 1.5]]), camera.intrinsics, invert_transform(frame.cam_to_world))
+    np.testing.assert_allclose(uv[0], [800, 450])
+    assert depth[0] == pytest.approx(30.0)
+    # a point to the left (y > 0) appears left of the centre (u < 800)
+    uv, _ = project(np.array([[30.0, 3.0, 1.5]]), camera.intrinsics, invert_transform(frame.cam_to_world))
+    assert uv[0, 0] < 800
+
+
+def test_quaternion_round_trip_and_nuscenes_front_camera():
+    r = rotation_from_ypr(0.3, -0.05, 0.02)
+    np.testing.assert_allclose(quaternion_to_rotation(rotation_to_quaternion(r)), r, atol=1e-12)
+    # FORMATS.md: a front camera looking straight ahead has rotation [0.5, -0.5, 0.5, -0.5]
+    from pedenv.records import OPTICAL_TO_VEHICLE
+    np.testing.assert_allclose(quaternion_to_rotation([0.5, -0.5, 0.5, -0.5]), OPTICAL_TO_VEHICLE, atol=1e-12)

@@ -1,0 +1,28 @@
+import numpy as np
+import pytest
+
+from pedenv import kalman
+
+
+@pytest.mark.parametrize("dt, std", [(0.1, 1.0), (1 / 12, 0.3), (0.5, 2.0)])
+def test_q_symmetric_positive_semidefinite(dt, std):
+    F, Q = kalman.transition(dt, std)
+    np.testing.assert_allclose(Q, Q.T)
+    assert np.linalg.eigvalsh(Q).min() >= -1e-12
+    # white-noise acceleration: var(x) = dt^4/4 * sigma^2, cov(x, vx) = dt^3/2 * sigma^2
+    assert Q[0, 0] == pytest.approx(dt**4 / 4 * std**2)
+    assert Q[0, 1] == pytest.approx(dt**3 / 2 * std**2)
+    assert F[0, 1] == dt and F[2, 3] == dt and F[0, 2] == 0
+
+
+def test_filter_learns_a_constant_velocity():
+    rng = np.random.default_rng(0)
+    x, P = kalman.initial_state(np.array([[0.0, 0.0]]), np.array([np.eye(2) * 0.25]), 2.0)
+    F, Q = kalman.transition(0.1, 0.5)
+    for i in range(1, 80):
+        x, P = kalman.predict(x, P, F, Q)
+        z = np.array([[1.2 * 0.1 * i, -0.5 * 0.1 * i]]) + rng.normal(0, 0.5, (1, 2))
+        x, P = kalman.update(x, P, z, np.array([0.25]))
+    assert x[0, 1] == pytest.approx(1.2, abs=0.3) and x[0, 3] == pytest.approx(-0.5, abs=0.3)
+    np.testing.assert_allclose(P[0], P[0].T, atol=1e-12)
+    assert np.linalg.eigvalsh(P[0]).min() > 0
