@@ -1,0 +1,127 @@
+"""A stand-in for a pose network on the synthetic scenes: noisy detections from the ground truth.
+
+The model imitates a YOLO-pose style network from each frame's exact skeletons:
+
+* a person of pixel height ``h`` (keypoint extent) is detected with probability
+  ``1 / (1 + exp(-(h - half_detection_height_px) / detection_slope_px))`` (50 % at 25 px,
+  98 % above 80 px by default), so far pedestrians are missed more often;
+* keypoint positions get Gaussian noise whose standard deviation falls from
+  ``noise_px_small`` at 30 px tall to ``noise_px_large`` at 300 px (a power law in
+  ``h``), larger on wrists and ankles, and much larger on keypoints the camera does
+  not see (outside the image or hidden), which are still guessed inside the image;
+* per-keypoint confidences are high for large persons, lower for small ones, near the
+  image border and on wrists and ankles, and low for unseen keypoints;
+* a few small skeleton-shaped false positives appear (``false_positives_per_frame``).
+
+Random numbers depend only on ``(seed, scene name, frame index)``: reruns reproduce.
+"""
+
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+
+from pedenv.errors import InputError
+from pedenv.records import Detections, Frame
+from pedenv.skeleton import CocoKeypoint as K
+from pedenv.synthetic.walker import body_keypoints
+
+_EXTREMITIES = np.array([K.LEFT_WRIST, K.RIGHT_WRIST, K.LEFT_ANKLE, K.RIGHT_ANKLE])
+_FACE = np.array([K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR])
+
+
+def _check(name: str, value: float, low: float, high: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
+        raise ValueError(f"DetectorModel {name} must be a number in [{low}, {high}], got {value!r}")
+    return float(value)
+
+
+class DetectorModel:
+    """The ``detector-model`` pose backend: detections simulated from ground-truth skeletons.
+
+    seed: random seed (with the scene name and frame index it fixes every draw).
+    noise_px_large: keypoint noise standard deviation (px) for a 300 px tall person.
+    noise_px_small: the same for a 30 px tall person. Raising either makes every
+        position estimate noisier; the noise follows a power law in between and beyond.
+    extremity_noise_factor: wrists and ankles get this times more noise.
+    unseen_noise_factor: keypoints the camera does not see get this times more noise.
+    half_detection_height_px: pixel height at which half of the persons are detected.
+        Raising it misses more distant pedestrians.
+    detection_slope_px: width of the logistic detection curve in pixels; the default
+        puts 98 % detection at about 80 px.
+    false_positives_per_frame: mean number of spurious skeletons per frame (Poisson).
+    """
+
+    name = "detector-model"
+
+    def __init__(self, seed: int = 0, *, noise_px_large: float = 1.5, noise_px_small: float = 3.5,
+                 extremity_noise_factor: float = 1.3, unseen_noise_factor: float = 3.0,
+                 half_detection_height_px: float = 25.0, detection_slope_px: float = 14.0,
+                 false_positives_per_frame: float = 0.05) -> None:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+            raise ValueError(f"DetectorModel seed must be an integer, got {seed!r}")
+        self.seed = int(seed)
+        self.noise_px_large = _check("noise_px_large", noise_px_large, 0.0, 50.0)
+        self.noise_px_small = _check("noise_px_small", noise_px_small, 0.0, 50.0)
+        self.extremity_noise_factor = _check("extremity_noise_factor", extremity_noise_factor, 1.0, 10.0)
+        self.unseen_noise_factor = _check("unseen_noise_factor", unseen_noise_factor, 1.0, 20.0)
+        self.half_detection_height_px = _check("half_detection_height_px", half_detection_height_px, 0.0, 1000.0)
+        self.detection_slope_px = _check("detection_slope_px", detection_slope_px, 0.1, 500.0)
+        self.false_positives_per_frame = _check("false_positives_per_frame", false_positives_per_frame, 0.0, 20.0)
+
+    def noise_std_px(self, height_px: np.ndarray) -> np.ndarray:
+        """Keypoint noise standard deviation (px) of persons ``height_px`` (N,) pixels tall."""
+        if self.noise_px_large == 0.0 or self.noise_px_small == 0.0:
+            return np.interp(height_px, [30.0, 300.0], [self.noise_px_small, self.noise_px_large])
+        exponent = np.log(self.noise_px_small / self.noise_px_large) / np.log(30.0 / 300.0)
+        return self.noise_px_large * (np.clip(height_px, 5.0, 2000.0) / 300.0) ** exponent
+
+    def detection_probability(self, height_px: np.ndarray) -> np.ndarray:
+        """Probability (N,) that persons ``height_px`` (N,) pixels tall are detected."""
+        return 1.0 / (1.0 + np.exp(-(np.asarray(height_px, float) - self.half_detection_height_px) / self.detection_slope_px))
+
+    def __call__(self, frame: Frame) -> Detections:
+        gt = frame.ground_truth
+        if gt is None or gt.keypoints is None:
+            raise InputError(f"frame {frame.index} of {frame.scene or 'the sequence'}: the detector-model backend "
+                             "needs ground-truth skeletons")
+        rng = np.random.default_rng([self.seed & 0xFFFFFFFF, zlib.crc32(frame.scene.encode()), int(frame.index)])
+        w, h = frame.camera.width, frame.camera.height
+        kp, seen = gt.keypoints, gt.visible
+        n = kp.shape[0]
+        height = np.ptp(kp[..., 1], axis=1) if n else np.zeros(0)
+        detected = rng.random(n) < self.detection_probability(height)
+
+        sigma = np.repeat(self.noise_std_px(height)[:, None], kp.shape[1], axis=1)
+        sigma[:, _EXTREMITIES] *= self.extremity_noise_factor
+        sigma = np.where(seen, sigma, self.unseen_noise_factor * sigma + 0.03 * height[:, None])
+        noisy = kp + rng.normal(size=kp.shape) * sigma[..., None]
+        noisy = np.clip(noisy, 0.0, [w - 1.0, h - 1.0])  # networks place guesses inside the image
+
+        size = 1.0 / (1.0 + np.exp(-(height - 40.0) / 20.0))  # 0.27 at 20 px .. 1 for large persons
+        conf = 0.35 + 0.6 * size[:, None] + rng.normal(0.0, 0.05, seen.shape)
+        conf[:, _EXTREMITIES] -= 0.08
+        conf[:, _FACE] -= 0.05 * (1.0 - size[:, None])
+        margin = np.minimum.reduce([noisy[..., 0], noisy[..., 1], w - 1.0 - noisy[..., 0], h - 1.0 - noisy[..., 1]])
+        conf = np.where(margin < 0.01 * w, 0.8 * conf, conf)
+        conf = np.where(seen, np.clip(conf, 0.05, 0.99), rng.uniform(0.02, 0.25, seen.shape))
+
+        keep = np.flatnonzero(detected)
+        fp_kp, fp_conf = self._false_positives(rng, w, h)
+        keypoints = np.concatenate([noisy[keep], fp_kp])
+        confidences = np.concatenate([conf[keep], fp_conf])
+        order = rng.permutation(keypoints.shape[0])  # networks report persons in no particular order
+        return Detections(keypoints[order], confidences[order])
+
+    def _false_positives(self, rng: np.random.Generator, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+        """Small skeleton-shaped ghosts near the horizon: (F, 17, 2) pixels, (F, 17) confidences."""
+        count = rng.poisson(self.false_positives_per_frame)
+        if count == 0:
+            return np.zeros((0, 17, 2)), np.zeros((0, 17))
+        # a standing person seen from the front, in units of body height: u right, v down from the feet
+        template = -body_keypoints(np.ones(1), np.zeros(1), np.zeros(1), np.zeros((1, 2)))[0][:, [1, 2]]
+        size = rng.uniform(12.0, 40.0, count)
+        feet = np.stack([rng.uniform(0.0, width, count), rng.uniform(0.5 * height, 0.5 * height + 60.0, count)], axis=1)
+        kp = feet[:, None, :] + template[None] * size[:, None, None] + rng.normal(0.0, 0.1, (count, 17, 2)) * size[:, None, None]
+        return np.clip(kp, 0.0, [width - 1.0, height - 1.0]), rng.uniform(0.1, 0.45, (count, 17))
