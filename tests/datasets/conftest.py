@@ -61,7 +61,7 @@ def make_scene(name: str = "scene-0001", n_frames: int = 13, rate_hz: float = 12
     return Scene(name, tuple(frame_at(i, t0 + i / rate_hz, camera, scene=name, **kwargs) for i in range(n_frames)))
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def scene_factory():
     """``scene_factory(name, n_frames, rate_hz, t0)`` -> a small hand-built :class:`Scene`."""
     return make_scene
