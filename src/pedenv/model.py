@@ -49,10 +49,12 @@ class _FilterMemory:
 
     x: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
     P: np.ndarray = field(default_factory=lambda: np.zeros((0, 4, 4)))
+    started: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     def carry(self, previous_rows: np.ndarray) -> None:
         self.x = carry_rows(self.x, previous_rows)
         self.P = carry_rows(self.P, previous_rows)
+        self.started = carry_rows(self.started, previous_rows, fill=False)
 
 
 class PedestrianEnvironmentModel:
@@ -126,13 +128,13 @@ class PedestrianEnvironmentModel:
 
         z = meas.positions[:, :2]
         x, P = mem.x[rows], mem.P[rows]
-        fresh = P[:, 0, 0] == 0
+        fresh = ~mem.started[rows]
         if fresh.any():
             x[fresh], P[fresh] = kalman.initial_state(z[fresh], meas.covariances[fresh],
                                                       cfg.kalman.initial_velocity_std_mps)
         if (~fresh).any():
             x[~fresh], P[~fresh] = kalman.update(x[~fresh], P[~fresh], z[~fresh], meas.covariances[~fresh])
-        mem.x[rows], mem.P[rows] = x, P
+        mem.x[rows], mem.P[rows], mem.started[rows] = x, P, True
 
         if cfg.kalman.enabled:
             positions = np.column_stack([x[:, 0], x[:, 2], meas.positions[:, 2]])
