@@ -187,3 +187,87 @@ def test_video_frames_take_the_frame_rate(tmp_path):
     assert [f.timestamp for f in frames] == pytest.approx([100.0, 100.2, 100.4, 100.6])
     assert [f.ego.translation[0] for f in frames] == pytest.approx([0.0, 2.0, 4.0, 6.0])
     assert frames[0].scene == "clip" and frames[0].image.shape == (48, 64, 3)
+
+
+def _bus_recording(folder: Path, photo: Path, frames: int = 6, last_stamp: float | None = None) -> dict:
+    """A 640x480 recording cut from ultralytics' bus.jpg: the crop narrows 2 % per frame, as if
+    the camera (fx 500 px, 1.5 m high) drove 0.07 m towards the people at 3-4 m per 0.1 s."""
+    bus = cv2.imread(str(photo))
+    (folder / "images").mkdir(parents=True)
+    stamps = [50.0 + 0.1 * i for i in range(frames)]
+    if last_stamp is not None:
+        stamps[-1] = last_stamp
+    for i in range(frames):
+        w = 800 - 16 * i
+        h, cx, cy = w * 3 // 4, 405 + 4 * i, 650
+        crop = bus[cy - h // 2:cy + h // 2, cx - w // 2:cx + w // 2]
+        cv2.imwrite(str(folder / "images" / f"frame_{i:03d}.jpg"), cv2.resize(crop, (640, 480)))
+    _write(folder / "images" / "timestamps.csv",
+           "filename,timestamp\n" + "".join(f"frame_{i:03d}.jpg,{t:.3f}\n" for i, t in enumerate(stamps)))
+    calib = _write_yaml(folder / "calib.yaml", {
+        "width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0, "cy": 240.0,
+        "cam_to_vehicle": {"rotation": [0.5, -0.5, 0.5, -0.5], "translation": [1.0, 0.0, 1.5]}})
+    poses = _write(folder / "poses.csv", "timestamp,x,y,z,qw,qx,qy,qz\n49.9,-0.07,0,0,1,0,0,0\n50.7,0.49,0,0,1,0,0,0\n")
+    return {"images": folder / "images", "calibration": calib, "ego_poses": poses}
+
+
+@pytest.fixture(scope="module")
+def pose_env(tmp_path_factory):
+    """``$PEDENV_CACHE`` with the ONNX models prepared once, and the path of bus.jpg."""
+    import importlib.util
+    import os
+
+    from pedenv.pose.models import prepare_models
+
+    os.environ["YOLO_OFFLINE"] = "1"
+    cache = tmp_path_factory.mktemp("pedenv-cache")
+    prepare_models(cache=cache)
+    bus = Path(list(importlib.util.find_spec("ultralytics").submodule_search_locations)[0]) / "assets" / "bus.jpg"
+    return {"PEDENV_CACHE": str(cache), "bus": bus}
+
+
+@pytest.mark.ultralytics
+@pytest.mark.onnx_model
+@pytest.mark.slow
+def test_run_on_real_images_keeps_track_ids(tmp_path, pose_env, monkeypatch):
+    from pedenv.io.jsonl import read_environment
+    from pedenv.recording import run_recording
+
+    monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
+    summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out")
+    assert summary["frames_done"] == 6 and summary["pose_backend"]["backend"] == "onnx"
+    lines = read_environment(tmp_path / "out" / "environment.jsonl")
+    assert len(lines) == 6
+    tracks = [{p["track_id"]: np.array(p["position"]) for p in line["pedestrians"]} for line in lines]
+    # the three people in full view are found in every frame under the ids of the first frame
+    steady = [i for i in tracks[0] if all(i in t for t in tracks)]
+    assert len(steady) >= 3 and len(tracks[0]) >= 3
+    for track_id in steady:  # they stand still: once triangulated, their world positions stay put
+        positions = np.array([t[track_id] for t in tracks[1:]])
+        assert np.ptp(positions[:, :2], axis=0).max() < 0.5
+        assert 2.0 < positions[-1, 0] < 6.0  # metres ahead of the vehicle origin
+    assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(6)]
+    for name in ("birds_eye.png", "config.json", "run.json"):
+        assert (tmp_path / "out" / name).is_file()
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["pose_backend"]["input_size"] == [640, 640]
+
+
+@pytest.mark.ultralytics
+@pytest.mark.onnx_model
+@pytest.mark.slow
+def test_run_cli_stops_at_a_frame_without_pose_and_keeps_earlier_output(tmp_path, pose_env):
+    import os
+    import subprocess
+    import sys
+
+    rec = _bus_recording(tmp_path / "rec", pose_env["bus"], frames=4, last_stamp=51.0)
+    args = ["run", "--images", rec["images"], "--calibration", rec["calibration"], "--ego-poses", rec["ego_poses"],
+            "--output", tmp_path / "out"]
+    done = subprocess.run([sys.executable, "-c", "from pedenv.cli import main; main()", *map(str, args)],
+                          capture_output=True, text=True, env={**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"], "COLUMNS": "1000"})
+    assert done.returncode == 2
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and "frame_003.jpg: frame 3 at 51.000000 s has no ego pose" in errors[0]
+    assert "Traceback" not in done.stderr
+    assert len((tmp_path / "out" / "environment.jsonl").read_text().splitlines()) == 3
+    assert (tmp_path / "out" / "birds_eye.png").is_file()
