@@ -28,6 +28,11 @@ def scenario_rng(seed: int, name: str, purpose: str = "scene") -> np.random.Gene
     return np.random.default_rng([int(seed) & 0xFFFFFFFF, zlib.crc32(name.encode()), zlib.crc32(purpose.encode())])
 
 
+def scene_terrain(seed: int, name: str, terrain: bool = True) -> Terrain:
+    """The ground of scene ``name`` generated with ``seed`` (flat unless ``terrain``)."""
+    return random_terrain(scenario_rng(seed, name, "terrain")) if terrain else Terrain.flat()
+
+
 def default_camera() -> Camera:
     """The paper's camera: 1600x900 pixels, 64.5 deg horizontal field of view, 1.5 m above the road."""
     return Camera.from_fov(1600, 900, 64.5, height_m=1.5)
@@ -63,7 +68,7 @@ def generate_scene(seed: int, name: str, *, frame_rate_hz: float, duration_s: fl
     """One scene of scenario ``name`` (see :func:`generate_scenes` for the arguments)."""
     rng = scenario_rng(seed, name)
     plan = build_scenario(name, rng, duration_s)
-    ground = random_terrain(scenario_rng(seed, name, "terrain")) if terrain else Terrain.flat()
+    ground = scene_terrain(seed, name, terrain)
     times = np.arange(int(np.floor(duration_s * frame_rate_hz + 1e-9))) / frame_rate_hz
     track = integrate_track(times, plan.speed, plan.yaw_rate, start_xy=plan.start_xy, start_yaw=plan.start_yaw)
     camera = default_camera()

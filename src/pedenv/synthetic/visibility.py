@@ -16,7 +16,7 @@ import numpy as np
 from pedenv.geometry import invert_transform, project
 from pedenv.records import Camera
 
-_GRID = (np.arange(6) + 0.5) / 6.0  # sample points across a box, per axis
+_GRID = (np.arange(8) + 0.5) / 8.0  # sample points across a box, per axis
 
 
 @dataclass(frozen=True)
@@ -72,13 +72,13 @@ def box_coverage(boxes: np.ndarray, occluders: np.ndarray, nearer: np.ndarray) -
     """Share of each box covered by the union of the boxes in front of it.
 
     boxes: (N, 4) pixels. occluders: (M, 4) pixels. nearer: (N, M) bool, occluder j is
-    in front of person i. Returns (N,) covered fraction in [0, 1], estimated on a 6x6
+    in front of person i. Returns (N,) covered fraction in [0, 1], estimated on an 8x8
     grid of points per box.
     """
-    u = boxes[:, 0:1] + _GRID * (boxes[:, 2:3] - boxes[:, 0:1])  # (N, 6)
+    u = boxes[:, 0:1] + _GRID * (boxes[:, 2:3] - boxes[:, 0:1])  # (N, 8)
     v = boxes[:, 1:2] + _GRID * (boxes[:, 3:4] - boxes[:, 1:2])
-    pu = np.repeat(u, 6, axis=1)[:, :, None]  # (N, 36, 1)
-    pv = np.tile(v, (1, 6))[:, :, None]
+    pu = np.repeat(u, _GRID.size, axis=1)[:, :, None]  # (N, 64, 1)
+    pv = np.tile(v, (1, _GRID.size))[:, :, None]
     inside = ((pu >= occluders[:, 0]) & (pu <= occluders[:, 2]) & (pv >= occluders[:, 1]) & (pv <= occluders[:, 3]))
     covered = (inside & nearer[:, None, :]).any(axis=2)
     return covered.mean(axis=1)

@@ -36,6 +36,7 @@ KNEE_PEAK_LEAD_RAD = 0.5  # the knee flexes most early in the swing, before the 
 ARM_SWING_RAD = 0.30
 ELBOW_FLEX_RAD = 0.25
 FORWARD_LEAN_RAD = 0.05
+ARM_ABDUCTION_RAD = 0.08
 
 
 def stride_length(height: np.ndarray, speed: np.ndarray) -> np.ndarray:
@@ -83,8 +84,8 @@ def body_keypoints(height: np.ndarray, phase: np.ndarray, gait: np.ndarray, sway
     shoulders = np.stack([np.zeros((n, 2)), side * SHOULDER_HALF_WIDTH * h, np.broadcast_to(torso_z, (n, 2))], -1)
     arm = -a * ARM_SWING_RAD * np.sin(leg_phase)  # each arm swings against its own leg
     forearm = arm + ELBOW_FLEX_RAD * (0.6 + 0.4 * a) * (1.0 + 0.5 * np.sin(-leg_phase))
-    elbows = shoulders + np.stack([UPPER_ARM * np.sin(arm), np.broadcast_to(side * 0.015, arm.shape), -UPPER_ARM * np.cos(arm)], -1) * h[..., None]
-    wrists = elbows + np.stack([FOREARM * np.sin(forearm), np.broadcast_to(side * 0.008, arm.shape), -FOREARM * np.cos(forearm)], -1) * h[..., None]
+    elbows = shoulders + _limb(arm, side * ARM_ABDUCTION_RAD, UPPER_ARM * h)
+    wrists = elbows + _limb(forearm, side * ARM_ABDUCTION_RAD / 2, FOREARM * h)
     kp[:, [K.LEFT_SHOULDER, K.RIGHT_SHOULDER]] = shoulders
     kp[:, [K.LEFT_ELBOW, K.RIGHT_ELBOW]] = elbows
     kp[:, [K.LEFT_WRIST, K.RIGHT_WRIST]] = wrists
@@ -100,11 +101,33 @@ def body_keypoints(height: np.ndarray, phase: np.ndarray, gait: np.ndarray, sway
     # Upper body leans forward with speed, pivoting at the hips.
     upper = [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR, K.LEFT_SHOULDER, K.RIGHT_SHOULDER,
              K.LEFT_ELBOW, K.RIGHT_ELBOW, K.LEFT_WRIST, K.RIGHT_WRIST]
-    kp[:, upper, 0] += FORWARD_LEAN_RAD * a * (kp[:, upper, 2] - hip_z)
-    # Sway: small lean of the whole body about the ankles (inverted pendulum).
+    kp[:, upper] = _tilt(kp[:, upper], FORWARD_LEAN_RAD * a[:, 0], hip_z, axis=0)
+    # Sway: a small lean of the whole body about the ankles (inverted pendulum).
     sway = np.asarray(sway, float)
-    kp[:, :, 0] += sway[:, 0:1] * kp[:, :, 2]
-    kp[:, :, 1] += sway[:, 1:2] * kp[:, :, 2]
+    kp = _tilt(kp, sway[:, 0], np.zeros((n, 1)), axis=0)
+    return _tilt(kp, sway[:, 1], np.zeros((n, 1)), axis=1)
+
+
+def _limb(pitch: np.ndarray, abduction: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """Vector of a limb hanging down, swung forward by ``pitch`` and outward by ``abduction``.
+
+    pitch: (N, 2) radians. abduction: (2,) radians, signed (+ towards +y). length: (N, 1) m.
+    Returns (N, 2, 3) body frame, metres.
+    """
+    ca = np.cos(abduction)
+    unit = np.stack([np.sin(pitch) * ca, np.broadcast_to(np.sin(abduction), pitch.shape), -np.cos(pitch) * ca], -1)
+    return unit * length[..., None]
+
+
+def _tilt(points: np.ndarray, angle: np.ndarray, pivot_z: np.ndarray, axis: int) -> np.ndarray:
+    """Rotate points (N, P, 3) so that up leans towards body ``axis`` (0 forward, 1 left)
+    by ``angle`` (N,) radians about the horizontal line at height ``pivot_z`` (N, 1)."""
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    out = points.copy()
+    dz = points[..., 2] - pivot_z
+    out[..., axis] = points[..., axis] * c + dz * s
+    out[..., 2] = pivot_z + dz * c - points[..., axis] * s
+    return out
     return kp
 
 
