@@ -122,11 +122,17 @@ def export_onnx(weights: Path, input_size, target: Path) -> Path:
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
         local = Path(tmp) / weights.name  # ultralytics writes the export next to the weights
         shutil.copyfile(weights, local)
+        from ultralytics.utils import LOGGER
+
+        level = LOGGER.level
+        LOGGER.setLevel("WARNING")  # ultralytics' export banner would drown the paths we print
         try:
-            out = YOLO(str(local), task="pose").export(format="onnx", imgsz=(h, w), simplify=False, dynamic=False,
-                                                        half=False, nms=False, device="cpu", verbose=False)
+            out = YOLO(str(local), task="pose").export(format="onnx", imgsz=(h, w), simplify=False, dynamic=False, nms=False,
+                                                        device="cpu", verbose=False)
         except Exception as exc:  # ultralytics raises many kinds
             raise InputError(f"{weights}: ONNX export failed: {exc}") from None
+        finally:
+            LOGGER.setLevel(level)
         check_onnx_file(Path(out))
         os.replace(out, target)
     return target
