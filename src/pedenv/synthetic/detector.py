@@ -83,12 +83,15 @@ class DetectorModel:
 
     def __call__(self, frame: Frame) -> Detections:
         gt = frame.ground_truth
-        if gt is None or gt.keypoints is None:
+        if gt is None or (gt.keypoints is None and len(gt) > 0):
             raise InputError(f"frame {frame.index} of {frame.scene or 'the sequence'}: the detector-model backend "
                              "needs ground-truth skeletons")
         rng = np.random.default_rng([self.seed & 0xFFFFFFFF, zlib.crc32(frame.scene.encode()), int(frame.index)])
         w, h = frame.camera.width, frame.camera.height
-        kp, seen = gt.keypoints, gt.visible
+        if gt.keypoints is None:  # a frame with nobody in it
+            kp, seen = np.zeros((0, 17, 2)), np.zeros((0, 17), bool)
+        else:
+            kp, seen = gt.keypoints, gt.visible
         n = kp.shape[0]
         height = np.ptp(kp[..., 1], axis=1) if n else np.zeros(0)
         detected = rng.random(n) < self.detection_probability(height)

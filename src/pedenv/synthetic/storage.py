@@ -6,7 +6,7 @@ One folder per scene, named after the scene::
     <output_dir>/<scene name>/frames.npz   flat arrays (numpy .npz, uncompressed)
 
 ``scene.json``: ``{"format": "pedenv-synthetic", "version": 1, "name", "description",
-"num_frames", "image_paths": [str | null per frame]}``.
+"num_frames", "image_paths": [str | null per frame], "frame_scenes": [str per frame]}``.
 
 ``frames.npz``, with T frames, P ground-truth pedestrians and D detections in all:
 
@@ -97,7 +97,8 @@ def write_scenes(scenes: Iterable[Scene], output_dir: str | Path) -> None:
         np.savez(folder / "frames.npz", **_scene_arrays(scene))
         meta = {"format": FORMAT, "version": VERSION, "name": scene.name, "description": scene.description,
                 "num_frames": len(scene.frames),
-                "image_paths": [None if f.image_path is None else str(f.image_path) for f in scene.frames]}
+                "image_paths": [None if f.image_path is None else str(f.image_path) for f in scene.frames],
+                "frame_scenes": [f.scene for f in scene.frames]}
         (folder / "scene.json").write_text(json.dumps(meta, indent=1) + "\n")
 
 
@@ -112,7 +113,7 @@ def read_metadata(folder: str | Path) -> dict:
         raise InputError(f"{path}: cannot read JSON: {exc}") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT or meta.get("version") != VERSION:
         raise InputError(f"{path}: expected format {FORMAT!r} version {VERSION}")
-    for key in ("name", "num_frames", "image_paths"):
+    for key in ("name", "num_frames", "image_paths", "frame_scenes"):
         if key not in meta:
             raise InputError(f"{path}: missing field {key!r}")
     return meta
@@ -136,7 +137,7 @@ def read_scene(folder: str | Path) -> Scene:
     missing = [k for k in needed if k not in a]
     if missing:
         raise InputError(f"{path}: missing arrays {', '.join(missing)}")
-    if a["index"].shape[0] != meta["num_frames"] or len(meta["image_paths"]) != meta["num_frames"]:
+    if not a["index"].shape[0] == len(meta["image_paths"]) == len(meta["frame_scenes"]) == meta["num_frames"]:
         raise InputError(f"{path}: holds {a['index'].shape[0]} frames, scene.json says {meta['num_frames']}")
     try:
         frames = tuple(_frame(a, i, meta) for i in range(a["index"].shape[0]))
@@ -157,4 +158,4 @@ def _frame(a: dict[str, np.ndarray], i: int, meta: dict) -> Frame:
         rows = slice(int(a["det_offsets"][i]), int(a["det_offsets"][i + 1]))
         det = Detections(*(a[f"det_{n}"][rows] for n in _DETECTIONS))
     return Frame(int(a["index"][i]), float(a["timestamp"][i]), camera, EgoPose(a["ego_translation"][i], a["ego_rotation"][i]),
-                 detections=det, ground_truth=gt, image_path=meta["image_paths"][i], scene=meta["name"])
+                 detections=det, ground_truth=gt, image_path=meta["image_paths"][i], scene=meta["frame_scenes"][i])
