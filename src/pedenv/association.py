@@ -12,23 +12,17 @@ def giou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Generalized IoU (Rezatofighi et al. 2019) between every box of ``a`` and of ``b``.
 
     a: (N, 4), b: (M, 4) float, pixels ``[u_min, v_min, u_max, v_max]``.
-    Returns (N, M) in [-1, 1]: IoU minus the share of the enclosing box that neither covers.
-    Degenerate (zero-area) boxes are handled: two identical points give 1.
+    Returns (N, M) in [-1, 1]: IoU minus the share of the enclosing box that neither
+    covers. Zero-area boxes are guarded against division by zero (they give 0 with
+    themselves).
     """
-    a = a[:, None, :]
-    b = b[None, :, :]
-    area_a = (a[..., 2] - a[..., 0]) * (a[..., 3] - a[..., 1])
-    area_b = (b[..., 2] - b[..., 0]) * (b[..., 3] - b[..., 1])
-    iw = np.clip(np.minimum(a[..., 2], b[..., 2]) - np.maximum(a[..., 0], b[..., 0]), 0.0, None)
-    ih = np.clip(np.minimum(a[..., 3], b[..., 3]) - np.maximum(a[..., 1], b[..., 1]), 0.0, None)
-    inter = iw * ih
-    union = area_a + area_b - inter
-    hull = (np.maximum(a[..., 2], b[..., 2]) - np.minimum(a[..., 0], b[..., 0])) * (
-        np.maximum(a[..., 3], b[..., 3]) - np.minimum(a[..., 1], b[..., 1]))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        iou = np.where(union > 0, inter / union, 1.0)
-        giou = iou - np.where(hull > 0, (hull - union) / hull, 0.0)
-    return giou
+    ax0, ay0, ax1, ay1 = (c[:, None] for c in a.T)
+    bx0, by0, bx1, by1 = b.T
+    inter = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0.0, None) * np.clip(
+        np.minimum(ay1, by1) - np.maximum(ay0, by0), 0.0, None)
+    union = (ax1 - ax0) * (ay1 - ay0) + (bx1 - bx0) * (by1 - by0) - inter
+    hull = (np.maximum(ax1, bx1) - np.minimum(ax0, bx0)) * (np.maximum(ay1, by1) - np.minimum(ay0, by0))
+    return inter / np.maximum(union, 1e-12) - (hull - union) / np.maximum(hull, 1e-12)
 
 
 def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3):
@@ -48,14 +42,11 @@ def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: f
         return np.zeros((0, 2), np.int64), np.arange(t, dtype=np.int64), np.arange(n, dtype=np.int64)
     giou = giou_matrix(detection_boxes, track_boxes)
     overlap = giou > threshold
-    det_in = np.flatnonzero(overlap.any(axis=1))
-    trk_in = np.flatnonzero(overlap.any(axis=0))
-    if len(det_in) == 0:
-        return np.zeros((0, 2), np.int64), np.arange(t, dtype=np.int64), np.arange(n, dtype=np.int64)
-    sub = giou[np.ix_(det_in, trk_in)]
-    rows, cols = linear_sum_assignment(-sub)
-    good = sub[rows, cols] > threshold
-    matches = np.stack([det_in[rows[good]], trk_in[cols[good]]], axis=1).astype(np.int64)
+    # Pairs that do not overlap cost more than any overlapping pair, so the assignment
+    # among overlapping rows and columns is the paper's; such pairs are split below.
+    rows, cols = linear_sum_assignment(np.where(overlap, -giou, 10.0))
+    good = overlap[rows, cols]
+    matches = np.column_stack([rows[good], cols[good]]).astype(np.int64)
     det_free = np.ones(n, bool)
     det_free[matches[:, 0]] = False
     trk_free = np.ones(t, bool)

@@ -52,11 +52,8 @@ class TrackerStep:
 
 def carry_rows(array: np.ndarray, previous_rows: np.ndarray, fill=0) -> np.ndarray:
     """Re-order per-track ``array`` (T_old, ...) to the new table; new rows get ``fill``."""
-    out = np.empty((len(previous_rows),) + array.shape[1:], dtype=array.dtype)
-    new = previous_rows < 0
-    out[~new] = array[previous_rows[~new]]
-    out[new] = fill
-    return out
+    padded = np.concatenate([array, np.full((1,) + array.shape[1:], fill, dtype=array.dtype)])
+    return padded[previous_rows]  # row -1 is the fill row
 
 
 class Tracker:
