@@ -58,7 +58,9 @@ INITIAL_ESTIMATES = ("all-keypoints", "midpoint")
 class PositionConfig:
     """World position of each pedestrian (Sec. III-C, Algorithm 1).
 
-    method: ``paper`` (two-frame ray intersection and height refinement).
+    method: ``paper`` (two-frame ray intersection and height refinement) or ``fused``
+        (ground contact, multi-frame triangulation and a height prior fused with their
+        variances; its constants are in :class:`FusedConfig`).
     low_confidence_fraction: share of keypoints with the lowest confidence left out of
         the initial estimate (the paper: 0.3). Raising it trusts fewer, surer keypoints.
     initial_estimate: ``all-keypoints`` (the paper) or ``midpoint`` (ablation of
@@ -98,7 +100,7 @@ class PositionConfig:
         _check_range("position.max_distance_m", self.max_distance_m, 1.0)
 
 
-POSITION_METHODS = ("paper",)
+POSITION_METHODS = ("paper", "fused")
 
 
 @dataclass(frozen=True)
@@ -130,6 +132,102 @@ class KalmanConfig:
         _check_range("kalman.initial_velocity_std_mps", self.initial_velocity_std_mps, 0.0, low_open=True)
 
 
+FUSED_CUES = ("ground", "triangulation", "height")
+
+
+def _check_count(name: str, value, low: int) -> None:
+    if not isinstance(value, int) or isinstance(value, bool) or value < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class FusedConfig:
+    """The ``fused`` position method (``pedenv.fused``): three cues fused with their variances.
+
+    Not in the paper; defaults are anthropometric tables, the synthetic scenes' ranges
+    and values tuned on the built-in scenes. Every variance below is a 1-sigma spread.
+
+    cues: which cues run, any of ``ground``, ``triangulation``, ``height``. Leaving one
+        out is an ablation; the others carry the estimate.
+    person_height_mean_m, person_height_std_m: prior of adult body height (1.72 m, 0.09 m,
+        about 5 %). Raising the mean moves every height-based estimate farther away;
+        raising the spread makes the height cue count less against the others.
+    keypoint_pixel_std: pixel noise of one keypoint (u and v). Raising it widens every
+        cue's variance and the covariance across the ray.
+    min_keypoint_confidence: keypoints below this confidence are not used by any cue
+        (pose networks still guess unseen keypoints, with low confidence). Raising it
+        uses fewer, surer keypoints.
+    ankle_height_std_m: how far an ankle may sit above its resting height (feet lifting
+        in the swing phase). Raising it widens the ground cue.
+    road_height_std_m: the road under a pedestrian may lie this far off the vehicle's
+        plane even nearby (kerbs, camber, suspension). Raising it widens the ground cue.
+    road_curvature_std_per_m: spread of the road's curvature (1/m); the road under a
+        pedestrian ``r`` metres away lies about ``0.5 * curvature * r^2`` off the
+        vehicle's plane. Raising it makes the ground cue fade sooner with distance.
+    ground_max_distance_m: the ground cue declines beyond this horizontal distance.
+    history_length: past observations of a track kept for triangulation. Raising it
+        gives more baseline when driving slowly, at more cost per pedestrian.
+    min_baseline_m: a past camera centre closer than this to the current one gives no
+        ray for triangulation (the ego stands still).
+    min_parallax_rad: rays closer to parallel than this are left out of triangulation;
+        if none is left the cue declines.
+    pedestrian_speed_std_mps: how fast a pedestrian may have moved since a past
+        observation; widens old rays so a walker does not bias triangulation.
+    outlier_sigma: a ray whose normalized miss distance exceeds this is dropped from
+        triangulation. Raising it keeps more rays.
+    gate_probability: a cue whose disagreement with the other cues exceeds this
+        chi-square quantile (2 dof) is dropped before fusion. Raising it keeps more cues.
+    lateral_std_m: spread of the ground point across the ray beyond pixel noise (body
+        lean, feet apart). Raising it widens the covariance across the ray.
+    variance_scale: every fused covariance is multiplied by this before the Kalman
+        filter (covers the errors that repeat from frame to frame, e.g. a person's height,
+        which the filter would otherwise average down). Raising it widens the filter's
+        uncertainty.
+    """
+
+    cues: tuple[str, ...] = FUSED_CUES
+    person_height_mean_m: float = 1.72
+    person_height_std_m: float = 0.09
+    keypoint_pixel_std: float = 3.0
+    min_keypoint_confidence: float = 0.3
+    ankle_height_std_m: float = 0.04
+    road_height_std_m: float = 0.05
+    road_curvature_std_per_m: float = 0.002
+    ground_max_distance_m: float = 60.0
+    history_length: int = 10
+    min_baseline_m: float = 0.3
+    min_parallax_rad: float = 0.01
+    pedestrian_speed_std_mps: float = 0.8
+    outlier_sigma: float = 3.0
+    gate_probability: float = 0.999
+    lateral_std_m: float = 0.1
+    variance_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        cues = tuple(self.cues) if not isinstance(self.cues, str) else tuple(c for c in self.cues.split(",") if c)
+        if not cues:
+            raise ValueError(f"fused.cues must name at least one of {', '.join(FUSED_CUES)}")
+        for cue in cues:
+            _check_choice("fused.cues entry", cue, FUSED_CUES)
+        object.__setattr__(self, "cues", cues)
+        _check_range("fused.person_height_mean_m", self.person_height_mean_m, 0.5, 2.5)
+        _check_range("fused.person_height_std_m", self.person_height_std_m, 0.0, 0.5, low_open=True)
+        _check_range("fused.keypoint_pixel_std", self.keypoint_pixel_std, 0.0, 100.0, low_open=True)
+        _check_range("fused.min_keypoint_confidence", self.min_keypoint_confidence, 0.0, 1.0, high_open=True)
+        _check_range("fused.ankle_height_std_m", self.ankle_height_std_m, 0.0, 1.0)
+        _check_range("fused.road_height_std_m", self.road_height_std_m, 0.0, 2.0)
+        _check_range("fused.road_curvature_std_per_m", self.road_curvature_std_per_m, 0.0, 0.1)
+        _check_range("fused.ground_max_distance_m", self.ground_max_distance_m, 1.0, 1000.0)
+        _check_count("fused.history_length", self.history_length, 1)
+        _check_range("fused.min_baseline_m", self.min_baseline_m, 0.0, 100.0)
+        _check_range("fused.min_parallax_rad", self.min_parallax_rad, 0.0, 0.5)
+        _check_range("fused.pedestrian_speed_std_mps", self.pedestrian_speed_std_mps, 0.0, 10.0)
+        _check_range("fused.outlier_sigma", self.outlier_sigma, 0.0, low_open=True)
+        _check_range("fused.gate_probability", self.gate_probability, 0.0, 1.0, low_open=True, high_open=True)
+        _check_range("fused.lateral_std_m", self.lateral_std_m, 0.0, 5.0)
+        _check_range("fused.variance_scale", self.variance_scale, 0.0, 100.0, low_open=True)
+
+
 @dataclass(frozen=True)
 class Config:
     """Everything the environment model needs besides the data."""
@@ -137,13 +235,15 @@ class Config:
     tracking: TrackingConfig = field(default_factory=TrackingConfig)
     position: PositionConfig = field(default_factory=PositionConfig)
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
+    fused: FusedConfig = field(default_factory=FusedConfig)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
 
     @classmethod
     def from_dict(cls, data: dict) -> "Config":
-        parts = {"tracking": TrackingConfig, "position": PositionConfig, "kalman": KalmanConfig}
+        parts = {"tracking": TrackingConfig, "position": PositionConfig, "kalman": KalmanConfig,
+                 "fused": FusedConfig}
         unknown = set(data) - set(parts)
         if unknown:
             raise ValueError(f"unknown config section(s): {', '.join(sorted(unknown))}; valid: {', '.join(parts)}")

@@ -1,0 +1,99 @@
+"""What every cue returns, and the geometry the cues share.
+
+A cue estimates the horizontal position of each pedestrian's ground point (world x-y)
+with a 2x2 covariance, or declines for that pedestrian with a short reason.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pedenv.errors import check_array
+
+
+@dataclass(frozen=True)
+class CueEstimate:
+    """One cue's estimate for the N pedestrians of a frame.
+
+    name: the cue (``ground``, ``triangulation``, ``height``).
+    positions: (N, 2) float, world x-y, metres; 0 where the cue declined.
+    covariances: (N, 2, 2) float, m^2; identity where the cue declined.
+    valid: (N,) bool, the cue has an estimate.
+    reasons: (N,) str, why the cue declined (empty where valid), e.g. ``no-ankles``.
+    """
+
+    name: str
+    positions: np.ndarray
+    covariances: np.ndarray
+    valid: np.ndarray
+    reasons: np.ndarray
+
+    def __post_init__(self) -> None:
+        pos = check_array(f"{self.name} positions", self.positions, (None, 2), finite=False)
+        n = pos.shape[0]
+        cov = check_array(f"{self.name} covariances", self.covariances, (n, 2, 2), finite=False)
+        valid = check_array(f"{self.name} valid", self.valid, (n,), dtype=bool)
+        # a cue whose numbers are not finite declines: no NaN or inf reaches the fusion
+        finite = np.isfinite(pos).all(axis=1) & np.isfinite(cov).all(axis=(1, 2)) & (np.linalg.det(
+            np.where(np.isfinite(cov), cov, 1.0)) > 0)
+        reasons = np.asarray(self.reasons, dtype=object).astype(str)
+        reasons = np.where(valid & ~finite, "degenerate", reasons)
+        valid = valid & finite
+        object.__setattr__(self, "positions", np.where(valid[:, None], pos, 0.0))
+        object.__setattr__(self, "covariances", np.where(valid[:, None, None], cov, np.eye(2)))
+        object.__setattr__(self, "valid", valid)
+        object.__setattr__(self, "reasons", np.where(valid, "", reasons))
+
+    def __len__(self) -> int:
+        return self.positions.shape[0]
+
+    @classmethod
+    def declined(cls, name: str, n: int, reason: str) -> "CueEstimate":
+        """The cue declines for all N pedestrians with one reason."""
+        return cls(name, np.zeros((n, 2)), np.tile(np.eye(2), (n, 1, 1)), np.zeros(n, bool), np.full(n, reason, object))
+
+
+def first_reason(conditions: list[tuple[np.ndarray, str]], n: int) -> np.ndarray:
+    """(N,) str: the reason of the first condition (in list order) that holds; empty if none.
+
+    conditions: ``[(mask (N,) bool, reason), ...]``.
+    """
+    out = np.full(n, "", dtype=object)
+    for mask, reason in reversed(conditions):
+        out = np.where(mask, reason, out)
+    return out
+
+
+def horizontal_bearing(rays: np.ndarray) -> np.ndarray:
+    """Unit horizontal direction (..., 2) of world rays (..., 3); +x where a ray is vertical."""
+    xy = rays[..., :2]
+    norm = np.linalg.norm(xy, axis=-1, keepdims=True)
+    return np.where(norm > 1e-12, xy / np.maximum(norm, 1e-12), np.array([1.0, 0.0]))
+
+
+def range_bearing_covariance(bearing: np.ndarray, range_var: np.ndarray, across_var: np.ndarray) -> np.ndarray:
+    """Covariance (N, 2, 2) m^2 with ``range_var`` (N,) along ``bearing`` (N, 2) and
+    ``across_var`` (N,) across it: wide along the viewing ray, tight across it."""
+    b = bearing
+    perp = np.stack([-b[:, 1], b[:, 0]], axis=1)
+    return (range_var[:, None, None] * np.einsum("ni,nj->nij", b, b)
+            + across_var[:, None, None] * np.einsum("ni,nj->nij", perp, perp))
+
+
+def across_variance(ranges: np.ndarray, focal_px: float, pixel_std: float, lateral_std_m: float) -> np.ndarray:
+    """Variance (N,) m^2 across the ray at horizontal ``ranges`` (N,) metres: the pixel noise
+    seen at that range plus the body's own spread ``lateral_std_m``."""
+    return (ranges * pixel_std / focal_px) ** 2 + lateral_std_m**2
+
+
+def keypoint_usable(keypoints: np.ndarray, confidences: np.ndarray, width: int, height: int,
+                    min_confidence: float = 0.0) -> np.ndarray:
+    """(N, 17) bool: keypoints seen (confidence > 0 and >= ``min_confidence``), finite and
+    inside the image. keypoints: (N, 17, 2) pixels; confidences: (N, 17).
+    """
+    u, v = keypoints[..., 0], keypoints[..., 1]
+    with np.errstate(invalid="ignore"):
+        inside = (u >= 0) & (u <= width - 1) & (v >= 0) & (v <= height - 1)
+    return (confidences > 0) & (confidences >= min_confidence) & np.isfinite(keypoints).all(axis=-1) & inside

@@ -1,0 +1,108 @@
+"""Height cue: keypoints whose height above the ground is a known share of body height.
+
+An upright person of height ``H`` at horizontal range ``r`` puts keypoint ``k`` (height
+``f_k H`` above its own ground, ``c`` below the camera) on a ray of elevation ``beta_k``:
+
+    r tan(beta_k) - c = f_k H        (one row per seen keypoint of the table below)
+
+Weighted least squares over the rows gives ``(r, c)`` without assuming where the ground
+is (so rolling terrain does not bias it); the rows' noise is the pixel noise seen at the
+range plus the spread of the fraction (head tilt, pelvis bob, lifted feet). The spread
+of human heights (``person_height_std_m``, about 5 %) scales the range as a whole.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pedenv.config import FusedConfig
+from pedenv.fused.cue import CueEstimate, across_variance, first_reason, horizontal_bearing, range_bearing_covariance
+from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+
+NAME = "height"
+
+#: Height above the ground of an upright adult's keypoints, as a share of body height
+#: (segment proportions after Drillis & Contini); NaN: no fixed height (knees, arms).
+KEYPOINT_HEIGHT_FRACTION = np.full(NUM_KEYPOINTS, np.nan)
+#: Spread of each fraction (head tilt, shoulders and pelvis riding on the gait, a foot
+#: lifted in the swing phase), as a share of body height.
+KEYPOINT_FRACTION_STD = np.full(NUM_KEYPOINTS, np.nan)
+for _k, _f, _s in ((K.NOSE, 0.920, 0.012), (K.LEFT_EYE, 0.933, 0.012), (K.RIGHT_EYE, 0.933, 0.012),
+                   (K.LEFT_EAR, 0.915, 0.012), (K.RIGHT_EAR, 0.915, 0.012), (K.LEFT_SHOULDER, 0.818, 0.012),
+                   (K.RIGHT_SHOULDER, 0.818, 0.012), (K.LEFT_HIP, 0.530, 0.015), (K.RIGHT_HIP, 0.530, 0.015),
+                   (K.LEFT_ANKLE, 0.046, 0.025), (K.RIGHT_ANKLE, 0.046, 0.025)):
+    KEYPOINT_HEIGHT_FRACTION[_k], KEYPOINT_FRACTION_STD[_k] = _f, _s
+#: Keypoints the height cue can use.
+HEIGHT_KEYPOINTS = np.flatnonzero(np.isfinite(KEYPOINT_HEIGHT_FRACTION))
+#: The used keypoints must span at least this share of body height (e.g. head to hips).
+MIN_FRACTION_SPAN = 0.25
+#: Reweighting passes of the least squares (the row noise depends on the range).
+PASSES = 2
+
+
+def elevation_tangents(rays: np.ndarray) -> np.ndarray:
+    """tan of each ray's elevation above the world horizontal: (..., 3) unit -> (...,)."""
+    return rays[..., 2] / np.maximum(np.linalg.norm(rays[..., :2], axis=-1), 1e-9)
+
+
+def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.ndarray, used: np.ndarray,
+                height_m: np.ndarray, angle_std: float):
+    """Weighted least squares of ``r tan_k - c = f_k H`` for N people.
+
+    tangents, fractions, fraction_std: (N, K). used: (N, K) bool. height_m: (N,) metres.
+    angle_std: noise of ``tan`` per keypoint (pixel noise / focal length).
+    Returns ``(r (N,), var_r (N,))``: horizontal range in metres and its variance from the
+    rows' noise (not yet the spread of heights); NaN where the rows do not determine it.
+    """
+    y = fractions * height_m[:, None]
+    w = np.where(used, 1.0 / np.maximum(fraction_std * height_m[:, None], 1e-6) ** 2, 0.0)
+    r = np.full(len(tangents), np.nan)
+    var = r.copy()
+    for _ in range(PASSES):
+        sw, st, stt = w.sum(1), (w * tangents).sum(1), (w * tangents**2).sum(1)
+        sy, sty = (w * y).sum(1), (w * tangents * y).sum(1)
+        # normal equations of [t, -1] (r, c) = y:  [[stt, -st], [-st, sw]]
+        det = stt * sw - st * st
+        ok = det > 1e-12 * np.maximum(stt * sw, 1e-300)
+        safe = np.where(ok, det, 1.0)
+        r = np.where(ok, (sw * sty - st * sy) / safe, np.nan)
+        var = np.where(ok, sw / safe, np.nan)
+        noise = (np.nan_to_num(r)[:, None] * angle_std) ** 2 + (fraction_std * height_m[:, None]) ** 2
+        w = np.where(used, 1.0 / np.maximum(noise, 1e-12), 0.0)
+    return r, var
+
+
+def height_cue(keypoints_usable: np.ndarray, rays: np.ndarray, origin: np.ndarray, focal_px: float,
+               config: FusedConfig, height_mean: np.ndarray | None = None,
+               height_std: np.ndarray | None = None) -> CueEstimate:
+    """Ground point of N pedestrians from the known body-height shares of their keypoints.
+
+    keypoints_usable: (N, 17) bool. rays: (N, 17, 3) unit, world. origin: (3,) world, m.
+    focal_px: focal length, pixels. height_mean, height_std: (N,) metres, each person's
+    height belief (default: the population prior of ``config``).
+    Declines with ``no-keypoints`` (fewer than two usable levels), ``short-extent``
+    (they span too little of the body) or ``inconsistent`` (no positive range fits).
+    """
+    n = len(rays)
+    hm = np.full(n, config.person_height_mean_m) if height_mean is None else np.asarray(height_mean, float)
+    hs = np.full(n, config.person_height_std_m) if height_std is None else np.asarray(height_std, float)
+    idx = HEIGHT_KEYPOINTS
+    used = keypoints_usable[:, idx]
+    frac = np.broadcast_to(KEYPOINT_HEIGHT_FRACTION[idx], used.shape)
+    span = np.where(used, frac, -np.inf).max(1) - np.where(used, frac, np.inf).min(1)
+    levels = used.sum(axis=1)
+    enough = (levels >= 2) & (span >= MIN_FRACTION_SPAN)
+    angle_std = config.keypoint_pixel_std / focal_px
+    r, var = solve_range(elevation_tangents(rays[:, idx]), frac, np.broadcast_to(KEYPOINT_FRACTION_STD[idx], used.shape),
+                         used & enough[:, None], hm, angle_std)
+    with np.errstate(invalid="ignore"):
+        good = enough & np.isfinite(r) & (r > 0.3) & np.isfinite(var)
+    reasons = first_reason([(levels < 2, "no-keypoints"), (~enough, "short-extent"), (~good, "inconsistent")], n)
+    r = np.where(good, r, 1.0)
+    range_var = np.where(good, var, 1.0) + (r * hs / hm) ** 2
+    mean_ray = np.where(used[..., None], rays[:, idx], 0.0).sum(axis=1)
+    bearing = horizontal_bearing(mean_ray)
+    xy = origin[:2] + r[:, None] * bearing
+    cov = range_bearing_covariance(bearing, range_var, across_variance(r, focal_px, config.keypoint_pixel_std,
+                                                                       config.lateral_std_m))
+    return CueEstimate(NAME, xy, cov, good, reasons)
