@@ -149,7 +149,7 @@ def test_scene_statistics(default_scenes):
     counts = {s.name: np.mean([len(f.ground_truth) for f in s.frames]) for s in default_scenes}
     frames = all_frames(default_scenes)
     total = sum(len(f.ground_truth) for f in frames)
-    assert 1000 <= len(frames) <= 2000 and 15_000 <= total <= 27_000
+    assert 1000 <= len(frames) <= 2000 and 15_000 <= total <= 26_000
     assert all(10.0 <= c <= 30.0 for name, c in counts.items() if name != "crowd")
     assert counts["crowd"] > max(c for name, c in counts.items() if name != "crowd")
     distance = np.concatenate([np.linalg.norm(f.ground_truth.positions[:, :2] - f.ego.translation[:2], axis=1)

@@ -53,7 +53,7 @@ def red_light_crossing(rng: np.random.Generator, duration_s: float) -> ScenarioP
     main = Road(half_width_m=7.0, sidewalk_m=4.0)
     cross = Road(origin=(25.0, 0.0), yaw=np.pi / 2, half_width_m=7.0)
     peds = concat(
-        crossers(rng, main, _count(0.7, duration_s), (10.0, 13.0), (-8.0, duration_s - 8.0)),
+        crossers(rng, main, _count(0.55, duration_s), (10.0, 13.0), (-8.0, duration_s - 8.0)),
         crossers(rng, main, 6, (33.0, 36.0), (-10.0, duration_s - 5.0)),
         sidewalk_walkers(rng, main, 14, (6.0, VIEW_RANGE_M)),
         sidewalk_walkers(rng, cross, 6, (-60.0, 60.0)),
@@ -108,7 +108,7 @@ def start_from_standstill(rng: np.random.Generator, duration_s: float) -> Scenar
     reach = _travel(speed, duration_s) + VIEW_RANGE_M
     peds = concat(
         crossers(rng, road, 6, (7.0, 10.0), (-6.0, 1.0)),
-        sidewalk_walkers(rng, road, _count(0.17, reach), (3.0, reach)),
+        sidewalk_walkers(rng, road, _count(0.15, reach), (3.0, reach)),
     )
     return ScenarioPlan("the ego waits, then accelerates to 40 km/h (up to 2.5 m/s^2)",
                         speed, _constant(0.0), peds)
@@ -119,8 +119,8 @@ def crowd(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
     speed_mps = 2.5
     reach = speed_mps * duration_s + 90.0
     peds = concat(
-        sidewalk_walkers(rng, road, _count(0.45, reach), (0.0, reach), standing_share=0.15),
-        crossers(rng, road, _count(1.2, duration_s), (12.0, reach), (-8.0, duration_s - 4.0)),
+        sidewalk_walkers(rng, road, _count(0.3, reach), (0.0, reach), standing_share=0.15),
+        crossers(rng, road, _count(0.8, duration_s), (12.0, reach), (-8.0, duration_s - 4.0)),
         plaza_walkers(rng, 15, (70.0, 110.0), (-12.0, 12.0)),
     )
     return ScenarioPlan("the ego creeps at 9 km/h through a busy shopping street with crowds",
@@ -139,8 +139,8 @@ def standing_pedestrians(rng: np.random.Generator, duration_s: float) -> Scenari
 #: Scenario name -> (recipe, default duration in seconds).
 _RECIPES: dict[str, tuple[Callable[[np.random.Generator, float], ScenarioPlan], float]] = {
     "red-light-crossing": (red_light_crossing, 20.0),
-    "drive-30kmh-sidewalk": (_drive_past(30.0 / 3.6, 0.15), 20.0),
-    "drive-50kmh-sidewalk": (_drive_past(50.0 / 3.6, 0.15), 15.0),
+    "drive-30kmh-sidewalk": (_drive_past(30.0 / 3.6, 0.13), 20.0),
+    "drive-50kmh-sidewalk": (_drive_past(50.0 / 3.6, 0.13), 15.0),
     "turn-intersection": (turn_intersection, 20.0),
     "start-from-standstill": (start_from_standstill, 20.0),
     "crowd": (crowd, 15.0),
