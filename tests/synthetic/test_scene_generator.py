@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import assert_scenes_equal
+from scene_checks import assert_scenes_equal
 from pedenv.geometry import invert_transform, project
 from pedenv.skeleton import CocoKeypoint as K
 from pedenv.synthetic import SCENARIOS, generate_scenes

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from conftest import assert_scenes_equal
+from scene_checks import assert_scenes_equal
 from pedenv.errors import InputError
 from pedenv.records import GroundTruth, Scene
 from pedenv.synthetic import generate_scenes

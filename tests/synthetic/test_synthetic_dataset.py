@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from conftest import assert_scenes_equal
+from scene_checks import assert_scenes_equal
 from pedenv.datasets import open_dataset
 from pedenv.errors import InputError
 from pedenv.records import Scene
