@@ -28,10 +28,11 @@ def test_required_scenarios_exist_in_default_order(default_scenes):
     ({"names": ["highway"]}, "valid: red-light-crossing"),
     ({"frame_rate_hz": 0.0}, "frame_rate_hz"),
     ({"duration_s": -3.0}, "duration_s"),
+    ({"seed": 1.5}, "seed must be an integer"),
 ])
 def test_bad_options_raise_value_error(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        generate_scenes(0, **kwargs)
+        generate_scenes(**{"seed": 0, **kwargs})
 
 
 def test_frames_are_numbered_timed_and_labelled(default_scenes):

@@ -48,6 +48,8 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
     terrain: rolling terrain with grades up to 5 % instead of the flat plane z = 0.
     Raises ValueError for an unknown name or an out-of-range option.
     """
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+        raise ValueError(f"seed must be an integer, got {seed!r}")
     if isinstance(names, str):
         names = [names]
     names = list(SCENARIOS if names is None else names)

@@ -57,7 +57,8 @@ class Visibility:
     """What one camera sees of N pedestrians.
 
     keep: (N,) bool, the pedestrian belongs to the ground truth.
-    keypoints: (N, 17, 2) float, pixels: exact projections (unclipped).
+    keypoints: (N, 17, 2) float, pixels: exact projections (unclipped; NaN for people with
+        a keypoint behind the camera, who are never kept).
     visible: (N, 17) bool, keypoint inside the image and not behind a nearer person.
     boxes: (N, 4) float, pixels: box around the 17 projections, clipped to the image.
     """
