@@ -24,7 +24,7 @@ def _geometry(camera, target):
 def test_keep_most_confident_drops_thirty_percent():
     conf = np.linspace(0.1, 0.9, 17)[None]
     keep = keep_most_confident(np.ones((1, 17), bool), conf, 0.3)
-    assert keep.sum() == 12  # ceil(0.7 * 17)
+    assert keep.sum() == 12  # 17 - floor(0.3 * 17)
     assert not keep[0, :5].any() and keep[0, 5:].all()
 
 

@@ -80,3 +80,31 @@ def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
         table.add_row(r["stage"], str(r.get("pedestrians", "")), f"{r['ms']:.2f}",
                       "" if paper is None else f"{paper:.2f}", "" if paper is None else f"{paper / r['ms']:.2f}x")
     return table
+
+
+def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
+    """Pose network + model per 1600x900 frame, and the networks alone (onnx square/rect, ultralytics).
+
+    Rows for :func:`format_bench`: ``stage``, ``ms`` and the paper figure they compare to.
+    """
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.timing import benchmark_image, benchmark_pose
+
+    rows = []
+    for r in benchmark_pose(repeats=repeats, threads=threads):
+        if r.get("ms_per_frame") is not None:
+            rows.append({"stage": f"pose network {r['backend']} {r['input_size']}", "ms": r["ms_per_frame"],
+                         "pedestrians": r.get("persons", ""), "paper_key": "pose_network"})
+    image = benchmark_image()
+    pose = OnnxPose(input_size=(384, 640), threads=threads)
+    model = PedestrianEnvironmentModel()
+    camera = Camera.from_fov()
+    times = []
+    for i in range(repeats + 2):
+        start = time.perf_counter()
+        frame = Frame(i, 0.1 * i, camera, EgoPose.from_xy_yaw(0.8 * i, 0.0, 0.0), image=image)
+        state = model.update(replace(frame, detections=pose(frame)))
+        times.append(1e3 * (time.perf_counter() - start))
+    rows.append({"stage": "end to end (onnx 384x640 + model)", "ms": float(np.mean(times[2:])),
+                 "pedestrians": len(state.pedestrians), "paper_key": "total"})
+    return rows

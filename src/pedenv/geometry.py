@@ -11,11 +11,30 @@ def pixel_rays(pixels: np.ndarray, intrinsics: np.ndarray, cam_to_world: np.ndar
     pixels: (..., 2) float, pixels. intrinsics: (3, 3). cam_to_world: (4, 4) or (3, 3) rotation.
     Returns (..., 3) unit vectors, world frame.
     """
-    k_inv = np.linalg.inv(intrinsics)
+    k_inv = inverse_intrinsics(intrinsics)
     rot = cam_to_world[:3, :3]
     m = rot @ k_inv
     d = pixels[..., 0:1] * m[:, 0] + pixels[..., 1:2] * m[:, 1] + m[:, 2]
     return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def inverse_intrinsics(k: np.ndarray) -> np.ndarray:
+    """Inverse of an upper-triangular (3, 3) camera matrix, in closed form.
+
+    ``np.linalg.inv`` goes through LAPACK, which costs far more than these few
+    multiplications for a 3x3 matrix.
+    """
+    fx, s, cx, fy, cy = k[0, 0], k[0, 1], k[0, 2], k[1, 1], k[1, 2]
+    return np.array([[1.0 / fx, -s / (fx * fy), (s * cy - cx * fy) / (fx * fy)],
+                     [0.0, 1.0 / fy, -cy / fy],
+                     [0.0, 0.0, 1.0]]) / k[2, 2] if k[2, 0] == 0 and k[2, 1] == 0 and k[1, 0] == 0 else np.linalg.inv(k)
+
+
+def inverse_2x2(m: np.ndarray) -> np.ndarray:
+    """Inverse of a batch of (..., 2, 2) matrices in closed form."""
+    a, b, c, d = m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1]
+    det = a * d - b * c
+    return np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
 
 
 def closest_points(o1: np.ndarray, d1: np.ndarray, o2: np.ndarray, d2: np.ndarray, min_sin: float = 1e-9):

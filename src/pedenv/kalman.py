@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
 
+from pedenv.geometry import inverse_2x2
+
 #: Measurement matrix: the filter observes x and y.
 H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
 
@@ -52,7 +54,7 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarray) -> tuple[
     R = r[:, None, None] * np.eye(2) if r.ndim == 1 else r
     S = H @ P @ H.T + R
     PHt = P @ H.T
-    K = PHt @ np.linalg.inv(S)
+    K = PHt @ inverse_2x2(S)
     innovation = z - x @ H.T
     x = x + np.einsum("nij,nj->ni", K, innovation)
     I_KH = np.eye(4) - K @ H

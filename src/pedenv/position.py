@@ -49,14 +49,15 @@ def keep_most_confident(valid: np.ndarray, confidences: np.ndarray, drop_fractio
     """Mask of the valid keypoints left after dropping the least confident share.
 
     valid: (N, 17) bool, confidences: (N, 17). Of ``n`` valid keypoints of a person the
-    ``ceil((1 - drop_fraction) * n)`` most confident are kept (at least one if any).
+    ``floor(drop_fraction * n)`` least confident are dropped; among equal confidences
+    (exact skeletons all have 1) the lowest COCO indices go first, as an ascending
+    stable sort does.
     """
     score = np.where(valid, confidences, -np.inf)
-    order = np.argsort(-score, axis=1, kind="stable")
-    rank = np.empty_like(order)
-    np.put_along_axis(rank, order, np.arange(valid.shape[1])[None, :], axis=1)
-    n_keep = np.ceil((1.0 - drop_fraction) * valid.sum(axis=1) - 1e-9)
-    return valid & (rank < n_keep[:, None])
+    rank = np.argsort(np.argsort(score, axis=1, kind="stable"), axis=1, kind="stable")
+    n_valid = valid.sum(axis=1)
+    first_kept = (valid.shape[1] - n_valid) + np.floor(drop_fraction * n_valid + 1e-9)
+    return valid & (rank >= first_kept[:, None])
 
 
 def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarray, prev_origins: np.ndarray,
@@ -103,7 +104,7 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
     distances: (N,) metres along ``directions`` (N, 3) from ``origin`` (3,).
     pixel_heights: (N,) the skeletons' heights in pixels. ``lambdas``: the step
     divisors, by default ``r + c`` for ``r = 1..refinement_steps``.
-    Returns the refined (N,) distances; a step whose re-projection fails leaves it.
+    Returns the refined (N,) distances, kept within [0.1 m, ``max_distance_m``].
 
     Same as calling :func:`reprojected_height` each step, but the bottom and top points
     are linear in the distance ``d`` (``a + d b`` in the camera frame), so each step is a
@@ -121,14 +122,15 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
     num1 = np.stack([b[:, 0], b[:, 1], b[:, 0], b[:, 1]])
     den0 = np.stack([a[:, 2], a[:, 2], a[:, 2] + up[2], a[:, 2] + up[2]])
     den1 = np.stack([b[:, 2], b[:, 2], b[:, 2], b[:, 2]])
-    d = distances.copy()
+    d = np.clip(distances, 0.1, config.max_distance_m)
+    inv_h = 1.0 / pixel_heights
     for lam in lambdas:
         den = den0 + d * den1
-        px = (num0 + d * num1) / np.where(np.abs(den) < 1e-9, 1e-9, den)
+        px = (num0 + d * num1) / den
         h_est = np.hypot(px[2] - px[0], px[3] - px[1])
-        factor = 1.0 + (h_est / pixel_heights - 1.0) / lam
-        ok = (den > 0).all(axis=0) & (factor > 0) & np.isfinite(factor)
-        d = np.where(ok, d * factor, d)
+        # d * (1 + (h_est / h_orig - 1) / lam), written with fewer array operations
+        d = d * (h_est * (inv_h / lam) + (1.0 - 1.0 / lam))
+        np.clip(d, 0.1, config.max_distance_m, out=d)
     return np.clip(d, 0.1, config.max_distance_m)
 
 

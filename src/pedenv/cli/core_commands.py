@@ -119,13 +119,15 @@ def bench(
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.bench import bench_core, format_bench
 
+    from pedenv.errors import InputError
+
     rows = bench_core(n_frames=frames)
     pose_rows = []
     if pose:
-        try:
-            from pedenv.pose.timing import bench_rows
+        from pedenv.bench import bench_end_to_end
 
-            pose_rows = bench_rows()
-        except (ImportError, FileNotFoundError, ValueError) as exc:
+        try:
+            pose_rows = bench_end_to_end()
+        except (ImportError, InputError) as exc:
             console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
     _out.print(format_bench(rows, pose_rows))

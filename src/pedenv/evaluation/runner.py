@@ -11,6 +11,7 @@ import numpy as np
 from pedenv.config import Config
 from pedenv.datasets import Dataset
 from pedenv.errors import InputError
+from pedenv.geometry import inverse_2x2
 from pedenv.evaluation.matching import match_to_ground_truth, position_errors
 from pedenv.evaluation.metrics import ErrorSamples, Metrics
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
@@ -105,7 +106,7 @@ def _score(frame: Frame, state: EnvironmentState, samples: ErrorSamples, trackin
         abs_err, rel_err, dist = position_errors(pred, truth, frame.ego.translation[:2])
         e = pred - truth
         cov = peds.covariances[sel] + 1e-9 * np.eye(2)
-        maha = np.sqrt(np.einsum("ni,nij,nj->n", e, np.linalg.inv(cov), e))
+        maha = np.sqrt(np.einsum("ni,nij,nj->n", e, inverse_2x2(cov), e))
         samples.add(abs_err, rel_err, dist, maha)
     return int(sel.sum())
 
