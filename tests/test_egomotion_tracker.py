@@ -10,7 +10,7 @@ from pedenv.config import Config
 from pedenv.records import EgoPose
 from pedenv.tracker import Tracker, carry_rows
 
-from conftest import frame_with_people
+from standing_people import frame_with_people
 
 
 def test_yaw_shift_hand_checked():

@@ -9,7 +9,7 @@ from pedenv.errors import InputError
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.records import Camera, Detections, EgoPose, Frame
 
-from conftest import frame_with_people
+from standing_people import frame_with_people
 
 
 @pytest.mark.parametrize("build, message", [

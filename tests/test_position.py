@@ -9,7 +9,7 @@ from pedenv.model import PedestrianEnvironmentModel
 from pedenv.position import HEIGHT_FIRST, HEIGHT_PARALLEL, TRIANGULATION, height_distance, keep_most_confident, refine_distance
 from pedenv.records import EgoPose, Frame
 
-from conftest import frame_with_people
+from standing_people import frame_with_people
 
 
 def _geometry(camera, target):
