@@ -23,7 +23,7 @@ import zlib
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.records import Detections, Frame
+from pedenv.records import Detections, Frame, boxes_from_keypoints
 from pedenv.skeleton import CocoKeypoint as K
 from pedenv.synthetic.walker import body_keypoints
 
@@ -51,6 +51,9 @@ class DetectorModel:
     detection_slope_px: width of the logistic detection curve in pixels; the default
         puts 98 % detection at about 80 px.
     false_positives_per_frame: mean number of spurious skeletons per frame (Poisson).
+    box_min_confidence: the person box spans the keypoints at least this confident (a
+        network's box covers the person it sees, not its guesses of hidden joints).
+        Raising it shrinks boxes to the surest keypoints.
     """
 
     name = "detector-model"
@@ -58,7 +61,7 @@ class DetectorModel:
     def __init__(self, seed: int = 0, *, noise_px_large: float = 1.5, noise_px_small: float = 3.5,
                  extremity_noise_factor: float = 1.3, unseen_noise_factor: float = 3.0,
                  half_detection_height_px: float = 25.0, detection_slope_px: float = 14.0,
-                 false_positives_per_frame: float = 0.05) -> None:
+                 false_positives_per_frame: float = 0.05, box_min_confidence: float = 0.3) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise ValueError(f"DetectorModel seed must be an integer, got {seed!r}")
         self.seed = int(seed)
@@ -69,6 +72,7 @@ class DetectorModel:
         self.half_detection_height_px = _check("half_detection_height_px", half_detection_height_px, 0.0, 1000.0)
         self.detection_slope_px = _check("detection_slope_px", detection_slope_px, 0.1, 500.0)
         self.false_positives_per_frame = _check("false_positives_per_frame", false_positives_per_frame, 0.0, 20.0)
+        self.box_min_confidence = _check("box_min_confidence", box_min_confidence, 0.0, 1.0)
 
     def noise_std_px(self, height_px: np.ndarray) -> np.ndarray:
         """Keypoint noise standard deviation (px) of persons ``height_px`` (N,) pixels tall."""
@@ -115,7 +119,10 @@ class DetectorModel:
         keypoints = np.concatenate([noisy[keep], fp_kp])
         confidences = np.concatenate([conf[keep], fp_conf])
         order = rng.permutation(keypoints.shape[0])  # networks report persons in no particular order
-        return Detections(keypoints[order], confidences[order])
+        keypoints, confidences = keypoints[order], confidences[order]
+        # the box around the keypoints the network is sure of, not around its guesses
+        boxes = boxes_from_keypoints(keypoints, confidences >= self.box_min_confidence)
+        return Detections(keypoints, confidences, boxes)
 
     def _false_positives(self, rng: np.random.Generator, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
         """Small skeleton-shaped ghosts near the horizon: (F, 17, 2) pixels, (F, 17) confidences."""
