@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 
 import numpy as np
 import pytest
@@ -104,12 +103,3 @@ def test_frame_without_ground_truth_skeletons_is_an_input_error():
     frame = Frame(3, 0.3, CAMERA, EgoPose.from_xy_yaw(0, 0, 0), scene="bare")
     with pytest.raises(InputError, match="frame 3 of bare"):
         DetectorModel()(frame)
-
-
-def test_fast_on_a_crowded_scene(default_scenes):
-    frames = [f for s in default_scenes if s.name == "crowd" for f in s.frames]
-    model = DetectorModel()
-    start = time.perf_counter()
-    for frame in frames:
-        model(frame)
-    assert (time.perf_counter() - start) / len(frames) < 0.005  # measured ~0.4 ms; generous for shared CPUs
