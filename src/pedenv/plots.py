@@ -60,6 +60,8 @@ def plot_birds_eye(state: EnvironmentState, path: str | Path, frame: Frame | Non
     ax3.set_ylabel("y left [m]")
     ax3.set_zlabel("z [m]")
     ax3.view_init(elev=22, azim=-150)
+    spans = [np.ptp(np.r_[0.0, pos[:, k]]) + 2.0 for k in (0, 1)] if len(pos) else [20.0, 20.0]
+    ax3.set_box_aspect((spans[0], spans[1], 2.5 * 4))  # heights drawn 4x to show the skeletons
     ax2.set_xlim(-2, reach)
     ax2.set_ylim(-reach * 0.55, reach * 0.55)
     ax2.set_aspect("equal")
