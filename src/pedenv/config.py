@@ -191,9 +191,9 @@ class FusedConfig:
     keypoint_pixel_std: float = 3.0
     min_keypoint_confidence: float = 0.3
     ankle_height_std_m: float = 0.04
-    road_height_std_m: float = 0.05
-    road_curvature_std_per_m: float = 0.002
-    ground_max_distance_m: float = 60.0
+    road_height_std_m: float = 0.08
+    road_curvature_std_per_m: float = 0.008
+    ground_max_distance_m: float = 20.0
     history_length: int = 10
     min_baseline_m: float = 0.3
     min_parallax_rad: float = 0.01

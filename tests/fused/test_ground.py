@@ -10,7 +10,10 @@ from pedenv.skeleton import ANKLE_KEYPOINTS
 from fused_frames import make_frame
 
 
-def run_ground(frame, config=FusedConfig()):
+FAR = FusedConfig(ground_max_distance_m=60.0)
+
+
+def run_ground(frame, config=FAR):
     det = frame.detections
     rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
     usable = keypoint_usable(det.keypoints, det.confidences, frame.camera.width, frame.camera.height)
@@ -40,7 +43,7 @@ def test_ground_variance_grows_fast_with_distance():
 
 
 def test_pixel_jacobian_matches_finite_differences():
-    config = FusedConfig(road_height_std_m=0.0, road_curvature_std_per_m=0.0, ankle_height_std_m=0.0,
+    config = FusedConfig(ground_max_distance_m=60.0, road_height_std_m=0.0, road_curvature_std_per_m=0.0, ankle_height_std_m=0.0,
                          lateral_std_m=0.0, keypoint_pixel_std=1.0)
     frame = make_frame(np.array([[15.0, 2.0, 0.0]]), pitch=0.02, roll=0.01)
     cue = run_ground(frame, config)
@@ -78,7 +81,7 @@ def test_ground_declines_with_a_reason(case, reason):
         frame = replace(frame, ego=ego, camera=frame.camera)
         frame = replace(frame, camera=type(frame.camera).from_fov(1600, 900, 64.5, height_m=-1.0))
     else:
-        frame = make_frame(np.array([[100.0, 0.0, 0.0]]))
+        frame = make_frame(np.array([[70.0, 0.0, 0.0]]))
     cue = run_ground(frame)
     assert not cue.valid[0]
     assert cue.reasons[0] == reason

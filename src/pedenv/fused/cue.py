@@ -36,9 +36,10 @@ class CueEstimate:
         cov = check_array(f"{self.name} covariances", self.covariances, (n, 2, 2), finite=False)
         valid = check_array(f"{self.name} valid", self.valid, (n,), dtype=bool)
         # a cue whose numbers are not finite declines: no NaN or inf reaches the fusion
-        finite = np.isfinite(pos).all(axis=1) & np.isfinite(cov).all(axis=(1, 2)) & (np.linalg.det(
-            np.where(np.isfinite(cov), cov, 1.0)) > 0)
-        reasons = np.asarray(self.reasons, dtype=object).astype(str)
+        with np.errstate(invalid="ignore"):
+            det = cov[:, 0, 0] * cov[:, 1, 1] - cov[:, 0, 1] * cov[:, 1, 0]
+            finite = np.isfinite(pos).all(axis=1) & np.isfinite(cov).all(axis=(1, 2)) & (det > 0) & (cov[:, 0, 0] > 0)
+        reasons = np.asarray(self.reasons, dtype=object)
         reasons = np.where(valid & ~finite, "degenerate", reasons)
         valid = valid & finite
         object.__setattr__(self, "positions", np.where(valid[:, None], pos, 0.0))
@@ -97,3 +98,23 @@ def keypoint_usable(keypoints: np.ndarray, confidences: np.ndarray, width: int, 
     with np.errstate(invalid="ignore"):
         inside = (u >= 0) & (u <= width - 1) & (v >= 0) & (v <= height - 1)
     return (confidences > 0) & (confidences >= min_confidence) & np.isfinite(keypoints).all(axis=-1) & inside
+
+
+def inverse_2x2(a: np.ndarray) -> np.ndarray:
+    """Closed-form inverse of (..., 2, 2) matrices (cheaper than ``np.linalg.inv`` on small batches)."""
+    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    adj = np.stack([np.stack([a[..., 1, 1], -a[..., 0, 1]], -1), np.stack([-a[..., 1, 0], a[..., 0, 0]], -1)], -2)
+    return adj / det[..., None, None]
+
+
+def inverse_3x3_symmetric(a: np.ndarray):
+    """Closed-form inverse of symmetric (..., 3, 3) matrices and their determinants."""
+    c00 = a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] ** 2
+    c01 = a[..., 0, 2] * a[..., 1, 2] - a[..., 0, 1] * a[..., 2, 2]
+    c02 = a[..., 0, 1] * a[..., 1, 2] - a[..., 0, 2] * a[..., 1, 1]
+    c11 = a[..., 0, 0] * a[..., 2, 2] - a[..., 0, 2] ** 2
+    c12 = a[..., 0, 2] * a[..., 0, 1] - a[..., 0, 0] * a[..., 1, 2]
+    c22 = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] ** 2
+    det = a[..., 0, 0] * c00 + a[..., 0, 1] * c01 + a[..., 0, 2] * c02
+    adj = np.stack([np.stack([c00, c01, c02], -1), np.stack([c01, c11, c12], -1), np.stack([c02, c12, c22], -1)], -2)
+    return adj / np.where(det == 0, 1.0, det)[..., None, None], det

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.fused.cue import CueEstimate
+from pedenv.fused.cue import CueEstimate, inverse_2x2
 
 #: Which cue to keep when only two disagree: earlier in this tuple wins.
 TRUST_ORDER = ("height", "triangulation", "ground")
@@ -43,7 +43,7 @@ class Fused:
 
 def _information(cov: np.ndarray, use: np.ndarray) -> np.ndarray:
     """(N, C, 2, 2) inverse covariances, 0 for cues not in use."""
-    return np.where(use[..., None, None], np.linalg.inv(cov), 0.0)
+    return np.where(use[..., None, None], inverse_2x2(cov), 0.0)
 
 
 def _combine(info: np.ndarray, means: np.ndarray):
@@ -69,11 +69,11 @@ def fuse_cues(cues: list[CueEstimate], gate_probability: float) -> Fused:
         others = use.sum(axis=1, keepdims=True) - use > 0
         testable = use & others
         rest_info = np.where(testable[..., None, None], rest_info, np.eye(2))
-        rest_cov = np.linalg.inv(rest_info)
+        rest_cov = inverse_2x2(rest_info)
         rest_mean = np.einsum("ncab,ncb->nca", rest_cov, vec[:, None] - np.einsum("ncab,ncb->nca", info, means))
         diff = means - rest_mean
         joint = np.where(testable[..., None, None], covs + rest_cov, np.eye(2))
-        d2 = np.where(testable, np.einsum("nca,ncab,ncb->nc", diff, np.linalg.inv(joint), diff), -np.inf)
+        d2 = np.where(testable, np.einsum("nca,ncab,ncb->nc", diff, inverse_2x2(joint), diff), -np.inf)
         # the worst cue; among equal distances (always so between two cues) the less trusted one
         score = np.where(testable, d2 * (1.0 + 1e-6 * trust[None, :]), -np.inf)
         worst = np.argmax(score, axis=1)
@@ -85,7 +85,7 @@ def fuse_cues(cues: list[CueEstimate], gate_probability: float) -> Fused:
     total, vec = _combine(info, means)
     valid = use.any(axis=1)
     total = np.where(valid[:, None, None], total, np.eye(2))
-    cov = np.linalg.inv(total)
+    cov = inverse_2x2(total)
     pos = np.einsum("nab,nb->na", cov, vec)
     cov = 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
     return Fused(np.where(valid[:, None], pos, 0.0), cov, use, has & ~use, valid)

@@ -3,7 +3,7 @@
 The road is the vehicle's own plane (z = 0 of the vehicle frame, so the vehicle's pitch
 and roll tilt it), lifted by the ankle's resting height. The range follows from the
 camera's height above that plane and the ray's angle below it; both the pixel noise
-(through the Jacobian of the intersection w.r.t. the pixel, by central differences) and
+(through the Jacobian of the intersection w.r.t. the pixel) and
 the road's unknown height under the pedestrian (which grows with distance on rolling
 terrain) make the variance, which grows fast with distance: it is tight near the car
 and fades where the ray grazes the road.
@@ -16,15 +16,12 @@ import numpy as np
 from pedenv.config import FusedConfig
 from pedenv.fused.cue import CueEstimate, first_reason
 from pedenv.fused.height import KEYPOINT_HEIGHT_FRACTION
-from pedenv.geometry import pixel_rays
 from pedenv.records import Frame
 from pedenv.skeleton import ANKLE_KEYPOINTS
 
 NAME = "ground"
 #: Below this sine of the angle between a ray and the road plane the ray never meets it.
 MIN_GRAZING_SINE = 1e-4
-#: Pixel step of the central differences for the Jacobian.
-JACOBIAN_STEP_PX = 0.5
 
 
 def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray, plane_offset: np.ndarray):
@@ -67,16 +64,16 @@ def ground_cue(frame: Frame, keypoints: np.ndarray, usable: np.ndarray, rays: np
     weight = near / np.maximum(count, 1)[:, None]
     xy = np.einsum("na,nac->nc", weight, points[..., :2])
 
-    # pixel noise through the Jacobian of the intersection (central differences per ankle)
-    cam = frame.camera
-    jac = []
-    for axis in (0, 1):
-        step = np.zeros(2)
-        step[axis] = JACOBIAN_STEP_PX
-        ends = [plane_intersection(pixel_rays(keypoints[:, ankles] + sgn * step, cam.intrinsics, frame.cam_to_world),
-                                   origin, normal, offset)[0][..., :2] for sgn in (1.0, -1.0)]
-        jac.append((ends[0] - ends[1]) / (2.0 * JACOBIAN_STEP_PX))  # (N, 2 ankles, 2)
-    jac = np.stack(jac, axis=-1)  # (N, 2 ankles, 2 xy, 2 pixel)
+    # pixel noise through the Jacobian of the intersection: with the unnormalized ray
+    # g = M (u, v, 1) (M = R K^-1) the point is o + h g / (-n.g), so
+    # dp/du = h (g (n.M_u) - M_u (n.g)) / (n.g)^2, and likewise for v.
+    m = frame.cam_to_world[:3, :3] @ np.linalg.inv(frame.camera.intrinsics)
+    pix = keypoints[:, ankles]
+    g = pix[..., 0:1] * m[:, 0] + pix[..., 1:2] * m[:, 1] + m[:, 2]  # (N, 2 ankles, 3)
+    ng = g @ normal
+    safe = np.where(np.abs(ng) > 1e-12, ng, -1e-12)
+    jac = np.stack([(g * float(normal @ m[:, a]) - m[:, a] * ng[..., None])[..., :2] for a in (0, 1)], axis=-1)
+    jac = cam_height * jac / (safe**2)[..., None, None]  # (N, 2 ankles, 2 xy, 2 pixel)
     pixel_cov = config.keypoint_pixel_std**2 * np.einsum("naij,nakj->naik", jac, jac)
     cov = np.einsum("na,naij->nij", weight**2, np.where(near[..., None, None], pixel_cov, 0.0))
 

@@ -1,13 +1,13 @@
 """Height cue: keypoints whose height above the ground is a known share of body height.
 
 An upright person of height ``H`` at horizontal range ``r`` puts keypoint ``k`` (height
-``f_k H`` above its own ground, ``c`` below the camera) on a ray of elevation ``beta_k``:
+``f_k H`` above its own ground, ``c`` below the camera) on a ray whose elevation has
 
-    r tan(beta_k) - c = f_k H        (one row per seen keypoint of the table below)
+    tan_k = c / r + (H / r) f_k        (one row per seen keypoint of the table below)
 
-Weighted least squares over the rows gives ``(r, c)`` without assuming where the ground
-is (so rolling terrain does not bias it); the rows' noise is the pixel noise seen at the
-range plus the spread of the fraction (head tilt, pelvis bob, lifted feet). The spread
+A weighted straight-line fit of ``tan_k`` over ``f_k`` gives the slope ``H / r`` without
+assuming where the ground is (so rolling terrain does not bias it); the rows' noise is
+the pixel noise plus the spread of the fraction (head tilt, pelvis bob, lifted feet). The spread
 of human heights (``person_height_std_m``, about 5 %) scales the range as a whole.
 """
 
@@ -47,28 +47,29 @@ def elevation_tangents(rays: np.ndarray) -> np.ndarray:
 
 def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.ndarray, used: np.ndarray,
                 height_m: np.ndarray, angle_std: float):
-    """Weighted least squares of ``r tan_k - c = f_k H`` for N people.
+    """Fit ``tan_k = alpha + beta f_k`` for N people; the range is ``r = H / beta``.
 
+    The elevations are the noisy side, so they are the dependent variable (fitting the
+    ranges the other way round would shrink them towards the camera as noise grows).
     tangents, fractions, fraction_std: (N, K). used: (N, K) bool. height_m: (N,) metres.
     angle_std: noise of ``tan`` per keypoint (pixel noise / focal length).
     Returns ``(r (N,), var_r (N,))``: horizontal range in metres and its variance from the
     rows' noise (not yet the spread of heights); NaN where the rows do not determine it.
     """
-    y = fractions * height_m[:, None]
-    w = np.where(used, 1.0 / np.maximum(fraction_std * height_m[:, None], 1e-6) ** 2, 0.0)
-    r = np.full(len(tangents), np.nan)
-    var = r.copy()
-    for _ in range(PASSES):
-        sw, st, stt = w.sum(1), (w * tangents).sum(1), (w * tangents**2).sum(1)
-        sy, sty = (w * y).sum(1), (w * tangents * y).sum(1)
-        # normal equations of [t, -1] (r, c) = y:  [[stt, -st], [-st, sw]]
-        det = stt * sw - st * st
-        ok = det > 1e-12 * np.maximum(stt * sw, 1e-300)
+    beta = np.zeros(len(tangents))
+    for _ in range(PASSES):  # the fraction's spread shows in tan scaled by the slope
+        noise = angle_std**2 + (fraction_std * beta[:, None]) ** 2
+        w = np.where(used, 1.0 / np.maximum(noise, 1e-18), 0.0)
+        sw, sf, sff = w.sum(1), (w * fractions).sum(1), (w * fractions**2).sum(1)
+        st, sft = (w * tangents).sum(1), (w * fractions * tangents).sum(1)
+        det = sw * sff - sf * sf
+        ok = det > 1e-12 * np.maximum(sw * sff, 1e-300)
         safe = np.where(ok, det, 1.0)
-        r = np.where(ok, (sw * sty - st * sy) / safe, np.nan)
-        var = np.where(ok, sw / safe, np.nan)
-        noise = (np.nan_to_num(r)[:, None] * angle_std) ** 2 + (fraction_std * height_m[:, None]) ** 2
-        w = np.where(used, 1.0 / np.maximum(noise, 1e-12), 0.0)
+        beta = np.where(ok, (sw * sft - sf * st) / safe, 0.0)
+    var_beta = sw / safe
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(ok & (beta > 0), height_m / beta, np.nan)
+        var = r**2 * var_beta / beta**2
     return r, var
 
 

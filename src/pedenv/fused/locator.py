@@ -25,8 +25,6 @@ from pedenv.skeleton import CocoKeypoint as K
 
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
 BOX_RELATIVE_STD = 0.5
-#: Range used to scale the triangulation's pixel noise when no other cue has one (metres).
-DEFAULT_RANGE_M = 20.0
 
 
 def box_estimate(boxes: np.ndarray, centre_rays: np.ndarray, origin: np.ndarray, focal_px: float,
@@ -87,14 +85,10 @@ class FusedLocator:
         if "height" in cfg.cues:
             cues.append(height_cue(usable, rays, origin, focal, cfg))
         if "triangulation" in cfg.cues:
-            prior = np.full(n, DEFAULT_RANGE_M)
-            for cue in cues:  # the first cue with a range scales the pixel noise
-                r = np.linalg.norm(cue.positions - origin[:2], axis=1)
-                prior = np.where(cue.valid & (prior == DEFAULT_RANGE_M), r, prior)
             h = self.history
             cues.append(triangulation_cue(rays[:, TORSO_KEYPOINTS], torso, origin, frame.timestamp,
                                           h.rays[rows], h.usable[rows], h.origins[rows], h.times[rows],
-                                          h.filled[rows], prior, cfg.keypoint_pixel_std / focal, cfg))
+                                          h.filled[rows], cfg.keypoint_pixel_std / focal, cfg))
             h.push(rows, rays[:, TORSO_KEYPOINTS], torso, origin, frame.timestamp)
         fused = fuse_cues(cues, cfg.gate_probability)
         sources = describe_sources(cues, fused.used, fused.outvoted)
