@@ -25,7 +25,7 @@ from typing import Iterator
 import numpy as np
 import yaml
 
-from pedenv.errors import InputError
+from pedenv.errors import InputError, check_array
 from pedenv.geometry import quaternion_to_rotation, rotation_to_quaternion, rotation_z
 from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame
@@ -115,6 +115,14 @@ class EgoTrajectory:
     translations: np.ndarray
     quaternions: np.ndarray
     source: str = ""
+
+    def __post_init__(self) -> None:
+        ts = check_array("ego timestamps", self.timestamps, (None,))
+        if len(ts) == 0 or np.any(np.diff(ts) <= 0):
+            raise InputError(f"{self.source or 'ego poses'}: timestamps must be non-empty and strictly increasing")
+        object.__setattr__(self, "timestamps", ts)
+        object.__setattr__(self, "translations", check_array("ego translations", self.translations, (len(ts), 3)))
+        object.__setattr__(self, "quaternions", check_array("ego quaternions", self.quaternions, (len(ts), 4)))
 
     def at(self, timestamp: float) -> EgoPose | None:
         """The pose interpolated at ``timestamp`` seconds; None outside the recorded span."""
