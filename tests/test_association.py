@@ -46,3 +46,10 @@ def test_associate_threshold_splits_far_pairs():
     dets = np.array([[2, 0, 3, 1]], float)  # GIoU -1/3
     assert len(associate(dets, tracks, threshold=-0.3)[0]) == 0
     assert len(associate(dets, tracks, threshold=-0.4)[0]) == 1
+
+
+def test_height_ratio_rule_keeps_a_small_far_box_off_a_stale_near_one():
+    near_track = np.array([[100, 100, 160, 300]], float)      # 200 px tall
+    far_detection = np.array([[120, 180, 130, 210]], float)    # 30 px tall, inside the track's box
+    assert len(associate(far_detection, near_track, -0.3)[0]) == 1          # the paper's rule joins them
+    assert len(associate(far_detection, near_track, -0.3, max_height_ratio=1.5)[0]) == 0

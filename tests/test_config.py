@@ -30,3 +30,14 @@ def test_round_trip_and_replace(tmp_path):
     assert Config.load(tmp_path / "config.json") == c
     with pytest.raises(ValueError, match="unknown field"):
         Config.from_dict({"tracking": {"giou": 0.1}})
+
+
+def test_method_presets_fill_only_defaults():
+    fused = Config().for_method("fused")
+    assert fused.position.method == "fused"
+    assert fused.tracking.max_height_ratio == 1.5 and fused.kalman.restart_gate == 25.0
+    assert Config().for_method("paper") == Config()
+    mine = Config().replace(kalman={"restart_gate": 9.0}).for_method("fused")
+    assert mine.kalman.restart_gate == 9.0
+    with pytest.raises(ValueError, match="unknown position method 'magic'"):
+        Config().for_method("magic")

@@ -72,3 +72,18 @@ def test_tracker_row_mapping_matches_detections():
     assert tr.ids[step.detection_rows].tolist() == [3, 2]
     assert step.previous_rows.tolist() == [1, 0, -1]
     np.testing.assert_array_equal(carry_rows(np.array([10, 20]), step.previous_rows), [20, 10, 0])
+
+
+def test_restart_gate_restarts_the_filter_after_an_identity_jump():
+    """A track joined to a person 25 m farther (the paper's tracker allows it): the gated
+    filter restarts there at once instead of crawling over."""
+    from pedenv.config import KalmanConfig
+
+    for gate, follows in ((0.0, False), (25.0, True)):
+        model = PedestrianEnvironmentModel(Config(kalman=KalmanConfig(restart_gate=gate)))
+        for i in range(8):
+            model.update(frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(1.0 * i, 0, 0), [(20.0, 0.0)]))
+        frame = frame_with_people(8, 0.8, EgoPose.from_xy_yaw(8.0, 0, 0), [(45.0, 0.0)])
+        state = model.update(frame)
+        assert state.pedestrians.track_ids.tolist() == [1]
+        assert bool(state.pedestrians.positions[0, 0] > 40.0) is follows

@@ -26,3 +26,12 @@ def test_filter_learns_a_constant_velocity():
     assert x[0, 1] == pytest.approx(1.2, abs=0.3) and x[0, 3] == pytest.approx(-0.5, abs=0.3)
     np.testing.assert_allclose(P[0], P[0].T, atol=1e-12)
     assert np.linalg.eigvalsh(P[0]).min() > 0
+
+
+def test_innovation_distance_hand_checked():
+    x = np.array([[1.0, 0.0, 2.0, 0.0]])
+    P = np.zeros((1, 4, 4))
+    P[0, 0, 0] = P[0, 2, 2] = 1.0
+    r = np.array([np.eye(2)])
+    # innovation (2, 2), S = 2 I: d^2 = (4 + 4) / 2
+    assert kalman.innovation_distance(x, P, np.array([[3.0, 4.0]]), r)[0] == pytest.approx(4.0)

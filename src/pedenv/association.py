@@ -25,7 +25,8 @@ def giou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return inter / np.maximum(union, 1e-12) - (hull - union) / np.maximum(hull, 1e-12)
 
 
-def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3):
+def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3,
+              max_height_ratio: float = 0.0):
     """Assign detections to tracks as the paper does.
 
     Detections overlapping no track (GIoU <= ``threshold`` with all) start new tracks and
@@ -34,6 +35,8 @@ def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: f
     pair that does not overlap is split again.
 
     detection_boxes: (N, 4), track_boxes: (T, 4) float, pixels.
+    max_height_ratio: when > 0, pairs whose box heights differ by more than this factor
+        do not overlap whatever their GIoU (beyond the paper; 0 keeps the paper's rule).
     Returns ``(matches (M, 2) [detection, track], unmatched_tracks (U,),
     unmatched_detections (V,))`` as int64 arrays; empty input gives empty outputs.
     """
@@ -42,6 +45,10 @@ def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: f
         return np.zeros((0, 2), np.int64), np.arange(t, dtype=np.int64), np.arange(n, dtype=np.int64)
     giou = giou_matrix(detection_boxes, track_boxes)
     overlap = giou > threshold
+    if max_height_ratio > 0:
+        hd = np.maximum(detection_boxes[:, 3] - detection_boxes[:, 1], 1e-6)[:, None]
+        ht = np.maximum(track_boxes[:, 3] - track_boxes[:, 1], 1e-6)[None, :]
+        overlap &= np.maximum(hd / ht, ht / hd) <= max_height_ratio
     # Pairs that do not overlap cost more than any overlapping pair, so the assignment
     # among overlapping rows and columns is the paper's; such pairs are split below.
     rows, cols = linear_sum_assignment(np.where(overlap, -giou, 10.0))

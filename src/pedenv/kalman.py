@@ -60,3 +60,11 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarray) -> tuple[
     I_KH = np.eye(4) - K @ H
     P = I_KH @ P @ np.transpose(I_KH, (0, 2, 1)) + K @ R @ np.transpose(K, (0, 2, 1))
     return x, P
+
+
+def innovation_distance(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Squared Mahalanobis distance (N,) of measurements z (N, 2), covariance r (N, 2, 2),
+    from the predicted states x (N, 4), P (N, 4, 4)."""
+    S = H @ P @ H.T + r
+    e = z - x @ H.T
+    return np.einsum("ni,nij,nj->n", e, inverse_2x2(S), e)

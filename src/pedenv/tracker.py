@@ -91,7 +91,7 @@ class Tracker:
         if u_shift and len(self.ids):
             self.boxes = shift_u(self.boxes, u_shift)
             self.keypoints = shift_u(self.keypoints, u_shift)
-        matches, lost, fresh = associate(boxes, self.boxes, self.config.giou_threshold)
+        matches, lost, fresh = associate(boxes, self.boxes, self.config.giou_threshold, self.config.max_height_ratio)
         misses = self.misses[lost] + 1
         alive = misses < self.config.max_misses
         kept = lost[alive]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Optional
 
@@ -10,7 +11,8 @@ import typer
 from pedenv.cli.app import app, console
 from pedenv.config import Config
 
-_out = console.__class__()  # stdout console for tables and results
+#: stdout console for tables and results; wide enough for the tables when piped
+_out = console.__class__(width=None if sys.stdout.isatty() else 140)
 
 
 def _config(path: Optional[Path], **position) -> Config:
@@ -34,11 +36,13 @@ def demo(
     terrain: bool = typer.Option(False, "--terrain/--flat", help="Rolling terrain and vehicle pitch, or a flat world."),
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
     config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+    method: Optional[str] = typer.Option(None, "--method", help="paper (default) or fused."),
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
     from pedenv.demo import run_demo
 
-    result = run_demo(output, seed=seed, config=_config(config), terrain=terrain, pose_backend=pose_backend)
+    cfg = _config(config).for_method(method) if method else _config(config)
+    result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend)
     _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
     for name, path in result.extras["paths"].items():
         _out.print(f"{name}: {path}", highlight=False)
@@ -91,16 +95,16 @@ def evaluate(
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
     if method == "both":
-        from pedenv.evaluation.compare import compare_methods, comparison_table_for
+        from pedenv.evaluation.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 
         results = compare_methods(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
                                   progress=True)
-        for name, res in results.items():
-            _print_result(res.metrics, f"{dataset}: method {name}")
-        _out.print(comparison_table_for(results))
+        _out.print(comparison_by_scene_table(results))
+        _out.print(comparison_summary_table(results))
+        _out.print(f"outputs: {output}", highlight=False)
         return
     if method:
-        cfg = cfg.replace(position={"method": method})
+        cfg = cfg.for_method(method)
     metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
                                progress=True)
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")

@@ -44,7 +44,7 @@ def compare_methods(dataset: Dataset, *, methods: Sequence[str] = ("paper", "fus
     out = Path(output_dir) if output_dir else None
     results: dict[str, EvaluationResult] = {}
     for method in methods:
-        cfg = config.replace(position={"method": method})
+        cfg = config.for_method(method)
         where = out / method if out else None
         results[method] = run_evaluation(dataset, scenes=scenes, config=cfg, pose_backend=backend,
                                          output_dir=where, progress=progress)
