@@ -102,7 +102,7 @@ def test_pedestrian_behind_camera_is_not_ground_truth(exported, tmp_path):
     assert anns[0]["sample_token"] == first_sample and len(gt) == len(scenes[0].frames[0].ground_truth) - 1
 
 
-def test_paper_scenes_first(exported, tmp_path):
+def test_paper_scenes_are_the_default(exported, tmp_path):
     scenes, root, _ = exported
     assert PAPER_SCENES[0] == "scene-0061" and len(PAPER_SCENES) == 7
     copy = tmp_path / "copy"
@@ -112,7 +112,9 @@ def test_paper_scenes_first(exported, tmp_path):
     recs = json.loads(path.read_text())
     recs[1]["name"] = "scene-0553"
     path.write_text(json.dumps(recs))
-    assert NuScenesDataset(copy).scene_names() == ["scene-0553"]
+    ds = NuScenesDataset(copy)
+    assert ds.default_scenes() == ["scene-0553"]
+    assert ds.scene_names() == ["scene-0001", "scene-0553"]  # every scene can still be named
 
 
 def test_bad_input(exported, tmp_path):

@@ -22,6 +22,8 @@ class Dataset(Protocol):
 
     def scene_names(self) -> list[str]: ...
 
+    # optional: ``default_scenes() -> list[str]``, the scenes run when none are named
+
     def frames(self, scene: str) -> Iterator[Frame]: ...
 
 

@@ -82,9 +82,12 @@ class NuScenesDataset:
         self.skeletons: dict[str, list[Skeleton]] = read_side_file(side) if side.is_file() else {}
 
     def scene_names(self) -> list[str]:
-        """The paper's day scenes present here; where there are none (e.g. an export), all scenes by name."""
-        paper = [s for s in PAPER_SCENES if s in self._scenes]
-        return paper or sorted(self._scenes)
+        """Every scene of this version, by name."""
+        return sorted(self._scenes)
+
+    def default_scenes(self) -> list[str]:
+        """The paper's day scenes present here; where there are none (e.g. an export), all scenes."""
+        return [s for s in PAPER_SCENES if s in self._scenes] or self.scene_names()
 
     def frames(self, scene: str) -> Iterator[Frame]:
         """Every CAM_FRONT image of ``scene`` in time order, keyframes with ground truth."""

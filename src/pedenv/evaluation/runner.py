@@ -33,10 +33,10 @@ class EvaluationResult:
 
 
 def resolve_scenes(dataset: Dataset, scenes: Sequence[str] | None) -> list[str]:
-    """The scenes to run: all of the dataset's, or the named ones (checked)."""
+    """The scenes to run: the named ones (checked), else the dataset's defaults (all by default)."""
     names = dataset.scene_names()
     if not scenes:
-        return names
+        return list(getattr(dataset, "default_scenes", dataset.scene_names)())
     unknown = [s for s in scenes if s not in names]
     if unknown:
         raise InputError(f"unknown scene(s) {', '.join(unknown)} in {dataset.name}; scenes there: {', '.join(names)}")
