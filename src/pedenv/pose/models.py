@@ -187,3 +187,16 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     """The prepared input (height, width) that suits a camera: 384x640 for wide images
     (aspect >= 16:10, e.g. nuScenes' 1600x900), else the square 640."""
     return (384, 640) if width / height >= 1.6 else (640, 640)
+
+
+def backend_options(backend: str, model=None, input_size=None) -> dict:
+    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file and input size.
+
+    ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, 640 by
+    default); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
+    """
+    if backend == "onnx":
+        return {"model_path": model, "input_size": input_size}
+    if backend == "ultralytics":
+        return {"weights": model, "input_size": input_size or 640}
+    return {}
