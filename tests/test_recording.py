@@ -231,7 +231,7 @@ def pose_env(tmp_path_factory):
 @pytest.mark.slow
 def test_run_on_real_images_keeps_track_ids(tmp_path, pose_env, monkeypatch):
     from pedenv.io.jsonl import read_environment
-    from pedenv.recording import run_recording
+    from pedenv.run import run_recording
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
     summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out")
