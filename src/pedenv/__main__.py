@@ -1,0 +1,5 @@
+"""``python -m pedenv`` runs the command line."""
+
+from pedenv.cli import main
+
+main()
