@@ -86,3 +86,14 @@ def test_ground_declines_with_a_reason(case, reason):
     assert not cue.valid[0]
     assert cue.reasons[0] == reason
     assert np.isfinite(cue.positions).all() and np.isfinite(cue.covariances).all()
+
+
+def test_ground_uses_the_stance_ankle_when_the_other_swings():
+    from dataclasses import replace
+    from pedenv.records import Detections
+    frame = make_frame(np.array([[10.0, 1.0, 0.0]]))
+    kp = frame.detections.keypoints.copy()
+    kp[0, ANKLE_KEYPOINTS[0], 1] -= 0.15 * np.ptp(kp[0, :, 1])
+    cue = run_ground(replace(frame, detections=Detections(kp, frame.detections.confidences)))
+    assert cue.positions[0, 0] == pytest.approx(10.0, abs=0.05)  # range: the stance foot on the road
+    assert cue.positions[0, 1] == pytest.approx(1.0, abs=0.12)  # across: that foot, not the midpoint

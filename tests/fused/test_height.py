@@ -60,3 +60,36 @@ def test_height_cue_declines_for_an_upside_down_skeleton():
     from pedenv.records import Detections
     cue = run_height(replace(frame, detections=Detections(kp, frame.detections.confidences)))
     assert not cue.valid[0] and cue.reasons[0] == "inconsistent"
+
+
+def lift_left_ankle(frame, share):
+    """The left ankle raised by ``share`` of the skeleton's pixel height (a swing foot)."""
+    from dataclasses import replace
+    from pedenv.records import Detections
+    kp = frame.detections.keypoints.copy()
+    kp[:, K.LEFT_ANKLE, 1] -= share * np.ptp(kp[..., 1], axis=1)
+    return replace(frame, detections=Detections(kp, frame.detections.confidences))
+
+
+@pytest.mark.parametrize("distance", [8.0, 15.0, 30.0])
+def test_a_lifted_swing_foot_is_left_out(distance):
+    ground = np.array([[distance, 1.0, 0.0]])
+    frame = lift_left_ankle(make_frame(ground), 0.15)
+    cue = run_height(frame)
+    assert np.linalg.norm(cue.positions[0] - ground[0, :2]) / distance < 0.01
+    from pedenv.fused.cue import stance_ankle
+    det = frame.detections
+    usable = keypoint_usable(det.keypoints, det.confidences, 1600, 900)
+    use, lone = stance_ankle(usable, pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world),
+                             ANKLE_KEYPOINTS, 3.0 / 1266.0)
+    assert use[0].tolist() == [False, True] and not lone[0]
+
+
+def test_noisy_standing_ankles_are_both_kept():
+    from pedenv.fused.cue import stance_ankle
+    frame = lift_left_ankle(make_frame(np.array([[40.0, 0.0, 0.0]])), 0.02)  # within pixel noise
+    det = frame.detections
+    usable = keypoint_usable(det.keypoints, det.confidences, 1600, 900)
+    rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
+    use, _ = stance_ankle(usable, rays, ANKLE_KEYPOINTS, 3.0 / 1266.0)
+    assert use[0].all()

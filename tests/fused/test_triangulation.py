@@ -51,9 +51,23 @@ def test_standing_pedestrians_from_a_driving_pitched_ego():
 
 def test_more_baseline_tightens_the_estimate():
     ground = np.array([[30.0, 5.0, 0.0]])
-    short = run(observe(ground, ego_xs=[0.0, 0.5], times=[0.0, 0.1]))
-    long = run(observe(ground, ego_xs=np.linspace(0.0, 5.0, 8), times=np.arange(8) * 0.1))
+    still = FusedConfig(pedestrian_speed_std_mps=0.0)
+    short = run(observe(ground, ego_xs=[0.0, 2.5], times=[0.0, 0.1]), still)
+    long = run(observe(ground, ego_xs=np.linspace(0.0, 5.0, 8), times=np.arange(8) * 0.1), still)
+    assert short.valid[0] and long.valid[0]
     assert np.linalg.det(long.covariances[0]) < np.linalg.det(short.covariances[0])
+
+
+def test_a_possible_walker_leaves_the_range_as_loose_as_the_drift_over_the_parallax():
+    # the drift of a walker moves all past rays together: more rays do not average it out
+    ground = np.array([[30.0, 5.0, 0.0]])
+    obs = observe(ground, ego_xs=np.linspace(0.0, 5.0, 8), times=np.arange(8) * 0.1)
+    cue = run(obs, FusedConfig(pedestrian_speed_std_mps=0.8))
+    ray_now = ground[0, :2] - [5.0, 0.0]
+    ray_then = ground[0, :2] - [0.0, 0.0]
+    sin = abs(np.cross(ray_now, ray_then)) / (np.linalg.norm(ray_now) * np.linalg.norm(ray_then))
+    sd_along = np.sqrt(np.linalg.eigvalsh(cue.covariances[0])[1])
+    assert sd_along >= 0.9 * 0.8 * 0.7 / sin
 
 
 def test_outlier_ray_is_dropped():

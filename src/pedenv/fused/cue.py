@@ -100,6 +100,57 @@ def keypoint_usable(keypoints: np.ndarray, confidences: np.ndarray, width: int, 
     return (confidences > 0) & (confidences >= min_confidence) & np.isfinite(keypoints).all(axis=-1) & inside
 
 
+#: Two seen ankles whose heights differ by more than this many pixel-noise sigmas plus
+#: :data:`LIFTED_ANKLE_EXTENT` of the skeleton's height: the higher one is the swing foot
+#: and is left out; closer, both stand (or noise decides) and both are used.
+LIFTED_ANKLE_SIGMA = 2.0
+#: Share of the skeleton's vertical extent two standing ankles may differ by (stride on a
+#: slope, a foot rolling over); a swing foot rises up to ~0.15 of body height.
+LIFTED_ANKLE_EXTENT = 0.01
+
+
+#: Left/right keypoint pairs at the same height of an upright body: their elevation
+#: difference is the keypoint noise (eyes, ears, shoulders, hips).
+LEVEL_PAIRS = np.array([[1, 2], [3, 4], [5, 6], [11, 12]])
+#: Weight (in pairs) of the configured pixel noise against the pairs' own evidence.
+NOISE_PRIOR_PAIRS = 0.1
+
+
+def observed_angle_std(usable: np.ndarray, tangents: np.ndarray, angle_std: float) -> np.ndarray:
+    """(N,) each skeleton's keypoint noise (radians) from its level pairs' elevation
+    differences, shrunk towards the configured ``angle_std`` (pixel noise / focal length).
+
+    usable: (N, 17) bool. tangents: (N, 17) tan of each keypoint ray's elevation.
+    """
+    both = usable[:, LEVEL_PAIRS[:, 0]] & usable[:, LEVEL_PAIRS[:, 1]]
+    diff = np.where(both, tangents[:, LEVEL_PAIRS[:, 0]] - tangents[:, LEVEL_PAIRS[:, 1]], 0.0)
+    return np.sqrt((0.5 * (diff**2).sum(1) + NOISE_PRIOR_PAIRS * angle_std**2) / (both.sum(1) + NOISE_PRIOR_PAIRS))
+
+
+def stance_ankle(usable: np.ndarray, rays: np.ndarray, ankles: tuple[int, int], angle_std: float):
+    """Which ankles stand on the ground. Of two seen ankles whose elevations differ by
+    more than :data:`LIFTED_ANKLE_SIGMA` times the noise of their difference plus
+    :data:`LIFTED_ANKLE_EXTENT` of the skeleton's extent, the higher is the swing foot
+    (lifted up to ~0.15 of body height) and is left out; otherwise both are used.
+
+    usable: (N, 17) bool. rays: (N, 17, 3) unit, world. ankles: the two ankle indices.
+    angle_std: pixel noise / focal length (radians), the prior of each skeleton's own
+    noise (:func:`observed_angle_std`). Returns ``(use (N, 2) bool, lone (N,) bool)``: the
+    ankles to use, and where only one ankle was seen (it may be lifted).
+    """
+    a = list(ankles)
+    tan = rays[..., 2] / np.maximum(np.linalg.norm(rays[..., :2], axis=-1), 1e-9)  # (N, 17)
+    angle_std = observed_angle_std(usable, tan, angle_std)
+    extent = np.where(usable, tan, -np.inf).max(axis=1) - np.where(usable, tan, np.inf).min(axis=1)
+    seen, z = usable[:, a], tan[:, a]
+    both = seen.all(axis=1)
+    limit = LIFTED_ANKLE_SIGMA * np.sqrt(2.0) * angle_std + LIFTED_ANKLE_EXTENT * np.where(both, extent, 0.0)
+    lifted = both & (np.abs(z[:, 0] - z[:, 1]) > limit)
+    lower_first = z[:, 0] <= z[:, 1]
+    use = np.where(lifted[:, None], np.column_stack([lower_first, ~lower_first]), seen)
+    return use, seen.any(axis=1) & ~both
+
+
 def inverse_2x2(a: np.ndarray) -> np.ndarray:
     """Closed-form inverse of (..., 2, 2) matrices (cheaper than ``np.linalg.inv`` on small batches)."""
     det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]

@@ -1,4 +1,8 @@
-"""Ground-contact cue: the ankles' viewing rays meet the road under the pedestrian.
+"""Ground-contact cue: the stance ankle's viewing ray meets the road under the pedestrian.
+
+Of two seen ankles the lower one is used (the other may be the swing foot, lifted up to
+~0.15 of body height, which at 10 m would put the point ~20 % too far); a lone ankle
+may be the lifted one and gets a wider variance.
 
 The road is the vehicle's own plane (z = 0 of the vehicle frame, so the vehicle's pitch
 and roll tilt it), lifted by the ankle's resting height. The range follows from the
@@ -14,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import FusedConfig
-from pedenv.fused.cue import CueEstimate, first_reason
-from pedenv.fused.height import KEYPOINT_HEIGHT_FRACTION
+from pedenv.fused.cue import CueEstimate, first_reason, stance_ankle
+from pedenv.fused.height import KEYPOINT_HEIGHT_FRACTION, LONE_ANKLE_FRACTION_STD
 from pedenv.records import Frame
 from pedenv.skeleton import ANKLE_KEYPOINTS
 
@@ -40,7 +44,7 @@ def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray,
 
 def ground_cue(frame: Frame, keypoints: np.ndarray, usable: np.ndarray, rays: np.ndarray, origin: np.ndarray,
                config: FusedConfig) -> CueEstimate:
-    """Ground point of N pedestrians from their ankles on the vehicle's road plane.
+    """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
 
     keypoints: (N, 17, 2) pixels. usable: (N, 17) bool, seen and inside the image.
     rays: (N, 17, 3) unit, world. origin: (3,) camera centre, world, metres.
@@ -52,7 +56,8 @@ def ground_cue(frame: Frame, keypoints: np.ndarray, usable: np.ndarray, rays: np
     rest = KEYPOINT_HEIGHT_FRACTION[ankles[0]] * config.person_height_mean_m
     offset = float(normal @ frame.ego.translation) + rest
     points, sine, cam_height = plane_intersection(rays[:, ankles], origin, normal, offset)
-    seen = usable[:, ankles]
+    seen, lone = stance_ankle(usable, rays, ANKLE_KEYPOINTS,
+                              config.keypoint_pixel_std / float(frame.camera.intrinsics[0, 0]))
     hits = seen & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
     ranges = np.linalg.norm(points[..., :2] - origin[:2], axis=-1)
     near = hits & (ranges <= config.ground_max_distance_m)
@@ -80,7 +85,8 @@ def ground_cue(frame: Frame, keypoints: np.ndarray, usable: np.ndarray, rays: np
     # the road's (and the ankle's) unknown height moves the point along the ray
     r = np.linalg.norm(xy - origin[:2], axis=1)
     road_std = config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2
-    height_var = road_std**2 + config.ankle_height_std_m**2
+    lift_std = np.where(lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m, config.ankle_height_std_m)
+    height_var = road_std**2 + lift_std**2
     along = np.einsum("na,nac->nc", weight, rays[:, ankles, :2] / np.where(hits, sine, 1.0)[..., None])
     cov = cov + height_var[:, None, None] * np.einsum("ni,nj->nij", along, along)
     cov = cov + config.lateral_std_m**2 * np.eye(2)  # feet apart, body lean

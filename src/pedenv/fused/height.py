@@ -7,7 +7,8 @@ An upright person of height ``H`` at horizontal range ``r`` puts keypoint ``k`` 
 
 A weighted straight-line fit of ``tan_k`` over ``f_k`` gives the slope ``H / r`` without
 assuming where the ground is (so rolling terrain does not bias it); the rows' noise is
-the pixel noise plus the spread of the fraction (head tilt, pelvis bob, lifted feet). The spread
+the pixel noise plus the spread of the fraction (head tilt, pelvis bob). Of two seen
+ankles only the lower (the stance foot) is used; a lone ankle may be lifted and counts less. The spread
 of human heights (``person_height_std_m``, about 5 %) scales the range as a whole.
 """
 
@@ -16,8 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import FusedConfig
-from pedenv.fused.cue import CueEstimate, across_variance, first_reason, horizontal_bearing, range_bearing_covariance
-from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+from pedenv.fused.cue import (CueEstimate, across_variance, first_reason, horizontal_bearing,
+                              range_bearing_covariance, stance_ankle)
+from pedenv.skeleton import ANKLE_KEYPOINTS, NUM_KEYPOINTS, CocoKeypoint as K
 
 NAME = "height"
 
@@ -32,6 +34,9 @@ for _k, _f, _s in ((K.NOSE, 0.920, 0.012), (K.LEFT_EYE, 0.933, 0.012), (K.RIGHT_
                    (K.RIGHT_SHOULDER, 0.818, 0.012), (K.LEFT_HIP, 0.530, 0.015), (K.RIGHT_HIP, 0.530, 0.015),
                    (K.LEFT_ANKLE, 0.046, 0.025), (K.RIGHT_ANKLE, 0.046, 0.025)):
     KEYPOINT_HEIGHT_FRACTION[_k], KEYPOINT_FRACTION_STD[_k] = _f, _s
+#: Spread of a lone ankle's fraction: with the other ankle unseen it may be the swing
+#: foot, lifted up to ~0.15 (of two seen ankles only the lower, the stance foot, is used).
+LONE_ANKLE_FRACTION_STD = 0.025
 #: Keypoints the height cue can use.
 HEIGHT_KEYPOINTS = np.flatnonzero(np.isfinite(KEYPOINT_HEIGHT_FRACTION))
 #: The used keypoints must span at least this share of body height (e.g. head to hips).
@@ -75,12 +80,16 @@ def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.nd
 
 def height_cue(keypoints_usable: np.ndarray, rays: np.ndarray, origin: np.ndarray, focal_px: float,
                config: FusedConfig, height_mean: np.ndarray | None = None,
-               height_std: np.ndarray | None = None) -> CueEstimate:
+               height_std: np.ndarray | None = None, reference_range: np.ndarray | None = None) -> CueEstimate:
     """Ground point of N pedestrians from the known body-height shares of their keypoints.
 
     keypoints_usable: (N, 17) bool. rays: (N, 17, 3) unit, world. origin: (3,) world, m.
     focal_px: focal length, pixels. height_mean, height_std: (N,) metres, each person's
-    height belief (default: the population prior of ``config``).
+    height belief (default: the population prior of ``config``). reference_range: (N,)
+    metres, the range at which to scale the variance (NaN or None: this frame's range).
+    The variance grows with the range squared; scaled at this frame's noisy range, a
+    too-near estimate would count more than a too-far one and a filter averaging them
+    would drift near, so a tracked pedestrian's variance is scaled at its last range.
     Declines with ``no-keypoints`` (fewer than two usable levels), ``short-extent``
     (they span too little of the body) or ``inconsistent`` (no positive range fits).
     """
@@ -88,22 +97,28 @@ def height_cue(keypoints_usable: np.ndarray, rays: np.ndarray, origin: np.ndarra
     hm = np.full(n, config.person_height_mean_m) if height_mean is None else np.asarray(height_mean, float)
     hs = np.full(n, config.person_height_std_m) if height_std is None else np.asarray(height_std, float)
     idx = HEIGHT_KEYPOINTS
-    used = keypoints_usable[:, idx]
+    angle_std = config.keypoint_pixel_std / focal_px
+    stance, lone = stance_ankle(keypoints_usable, rays, ANKLE_KEYPOINTS, angle_std)
+    usable = keypoints_usable.copy()
+    usable[:, list(ANKLE_KEYPOINTS)] = stance
+    used = usable[:, idx]
     frac = np.broadcast_to(KEYPOINT_HEIGHT_FRACTION[idx], used.shape)
     span = np.where(used, frac, -np.inf).max(1) - np.where(used, frac, np.inf).min(1)
     levels = used.sum(axis=1)
     enough = (levels >= 2) & (span >= MIN_FRACTION_SPAN)
-    angle_std = config.keypoint_pixel_std / focal_px
-    r, var = solve_range(elevation_tangents(rays[:, idx]), frac, np.broadcast_to(KEYPOINT_FRACTION_STD[idx], used.shape),
-                         used & enough[:, None], hm, angle_std)
+    frac_std = np.where(np.isin(idx, ANKLE_KEYPOINTS)[None] & lone[:, None], LONE_ANKLE_FRACTION_STD,
+                        KEYPOINT_FRACTION_STD[idx][None])
+    r, var = solve_range(elevation_tangents(rays[:, idx]), frac, frac_std, used & enough[:, None], hm, angle_std)
     with np.errstate(invalid="ignore"):
         good = enough & np.isfinite(r) & (r > 0.3) & np.isfinite(var)
     reasons = first_reason([(levels < 2, "no-keypoints"), (~enough, "short-extent"), (~good, "inconsistent")], n)
     r = np.where(good, r, 1.0)
-    range_var = np.where(good, var, 1.0) + (r * hs / hm) ** 2
+    rel_var = np.where(good, var / r**2, 1.0) + (hs / hm) ** 2
+    scale = r if reference_range is None else np.where(np.isfinite(reference_range), reference_range, r)
+    range_var = rel_var * scale**2
     mean_ray = np.where(used[..., None], rays[:, idx], 0.0).sum(axis=1)
     bearing = horizontal_bearing(mean_ray)
     xy = origin[:2] + r[:, None] * bearing
-    cov = range_bearing_covariance(bearing, range_var, across_variance(r, focal_px, config.keypoint_pixel_std,
+    cov = range_bearing_covariance(bearing, range_var, across_variance(scale, focal_px, config.keypoint_pixel_std,
                                                                        config.lateral_std_m))
     return CueEstimate(NAME, xy, cov, good, reasons)

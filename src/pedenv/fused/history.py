@@ -22,6 +22,8 @@ class TrackHistory:
     rays: (T, L, 4, 3) unit, world, of the torso keypoints. usable: (T, L, 4) bool.
     origins: (T, L, 3) camera centres, world, metres. times: (T, L) seconds.
     filled: (T, L) bool, slot holds an observation.
+    positions: (T, 2) the last fused ground point, world x-y, metres. placed: (T,) bool,
+    ``positions`` holds one (a cue placed the track before).
     """
 
     def __init__(self, length: int) -> None:
@@ -35,10 +37,12 @@ class TrackHistory:
         self.origins = np.zeros((0, L, 3))
         self.times = np.zeros((0, L))
         self.filled = np.zeros((0, L), bool)
+        self.positions = np.zeros((0, 2))
+        self.placed = np.zeros(0, bool)
 
     def carry(self, previous_rows: np.ndarray) -> None:
         """Follow the tracker's new table (see :func:`pedenv.tracker.carry_rows`)."""
-        for name in ("rays", "usable", "origins", "times", "filled"):
+        for name in ("rays", "usable", "origins", "times", "filled", "positions", "placed"):
             setattr(self, name, carry_rows(getattr(self, name), previous_rows))
 
     def push(self, rows: np.ndarray, rays: np.ndarray, usable: np.ndarray, origin: np.ndarray, time: float) -> None:
@@ -51,3 +55,8 @@ class TrackHistory:
             table = getattr(self, name)
             table[rows, 1:] = table[rows, :-1]
             table[rows, 0] = new
+
+    def place(self, rows: np.ndarray, positions: np.ndarray, valid: np.ndarray) -> None:
+        """Remember the fused ground points (N, 2) world x-y of the tracks at ``rows`` where ``valid`` (N,)."""
+        self.positions[rows[valid]] = positions[valid]
+        self.placed[rows[valid]] = True

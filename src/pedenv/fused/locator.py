@@ -82,15 +82,17 @@ class FusedLocator:
         cues: list[CueEstimate] = []
         if "ground" in cfg.cues:
             cues.append(ground_cue(frame, det.keypoints, usable, rays, origin, cfg))
+        h = self.history
         if "height" in cfg.cues:
-            cues.append(height_cue(usable, rays, origin, focal, cfg))
+            last = np.where(h.placed[rows], np.linalg.norm(h.positions[rows] - origin[:2], axis=1), np.nan)
+            cues.append(height_cue(usable, rays, origin, focal, cfg, reference_range=last))
         if "triangulation" in cfg.cues:
-            h = self.history
             cues.append(triangulation_cue(rays[:, TORSO_KEYPOINTS], torso, origin, frame.timestamp,
                                           h.rays[rows], h.usable[rows], h.origins[rows], h.times[rows],
                                           h.filled[rows], cfg.keypoint_pixel_std / focal, cfg))
             h.push(rows, rays[:, TORSO_KEYPOINTS], torso, origin, frame.timestamp)
         fused = fuse_cues(cues, cfg.gate_probability)
+        h.place(rows, fused.positions, fused.valid)
         sources = describe_sources(cues, fused.used, fused.outvoted)
 
         xy, cov = fused.positions, fused.covariances

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import FusedConfig
-from pedenv.fused.cue import CueEstimate, first_reason, inverse_3x3_symmetric
+from pedenv.fused.cue import CueEstimate, first_reason, horizontal_bearing, inverse_3x3_symmetric
 from pedenv.geometry import closest_points
 
 NAME = "triangulation"
@@ -95,4 +95,14 @@ def triangulation_cue(rays: np.ndarray, usable: np.ndarray, origin: np.ndarray, 
     # the keypoints share the ego's baseline, so their errors move together: mean covariance
     cov_xy = np.einsum("nk,nkab->nab", share, np.where(good_k[..., None, None], cov[..., :2, :2], 0.0))
     cov_xy = cov_xy + config.lateral_std_m**2 * np.eye(2)
+    # a walker moves every past ray the same way, so its error does not average out over
+    # the rays: a drift of ``speed_std * age`` across the widest-parallax past ray moves
+    # the point ``drift / sin(parallax)`` along the current ray
+    sin = np.sqrt(np.clip(1.0 - cos**2, 0.0, 1.0))  # (N, K, L)
+    widest = np.argmax(np.where(keep[..., 1:], sin, -1.0), axis=-1)[..., None]  # (N, K, 1)
+    drift = config.pedestrian_speed_std_mps * np.take_along_axis(age[..., 1:] + 0.0 * sin, widest, -1)[..., 0]
+    along_std = drift / np.maximum(np.take_along_axis(sin, widest, -1)[..., 0], 1e-6)  # (N, K)
+    along_var = np.einsum("nk,nk->n", share, np.where(good_k, along_std, 0.0) ** 2)
+    bearing = horizontal_bearing(np.einsum("nk,nkc->nc", share, rays))
+    cov_xy = cov_xy + along_var[:, None, None] * np.einsum("ni,nj->nij", bearing, bearing)
     return CueEstimate(NAME, xy, cov_xy, valid, reasons)
