@@ -195,7 +195,8 @@ class FusedConfig:
     variance_scale: every fused covariance is multiplied by this before the Kalman
         filter (covers the errors that repeat from frame to frame, e.g. a person's height,
         which the filter would otherwise average down). Raising it widens the filter's
-        uncertainty.
+        uncertainty; 1.3 puts the 1-sigma coverage on the built-in terrain scenes at
+        46 % (exact skeletons) and 32 % (detector model), ideal 39 %.
     """
 
     cues: tuple[str, ...] = FUSED_CUES
@@ -214,7 +215,7 @@ class FusedConfig:
     outlier_sigma: float = 3.0
     gate_probability: float = 0.999
     lateral_std_m: float = 0.1
-    variance_scale: float = 1.0
+    variance_scale: float = 1.3
 
     def __post_init__(self) -> None:
         cues = tuple(self.cues) if not isinstance(self.cues, str) else tuple(c for c in self.cues.split(",") if c)
