@@ -87,3 +87,23 @@ def test_restart_gate_restarts_the_filter_after_an_identity_jump():
         state = model.update(frame)
         assert state.pedestrians.track_ids.tolist() == [1]
         assert bool(state.pedestrians.positions[0, 0] > 40.0) is follows
+
+
+def test_bias_covariance_is_reported_but_not_filtered():
+    """A per-person bias part of the measurement covariance stays in the reported covariance."""
+    from dataclasses import replace as dc_replace
+
+    from pedenv.locator import PaperLocator
+
+    class BiasedLocator(PaperLocator):
+        def locate(self, geo, rows):
+            m = super().locate(geo, rows)
+            return dc_replace(m, bias_covariances=np.broadcast_to(4.0 * np.eye(2), m.covariances.shape).copy())
+
+    plain, biased = PedestrianEnvironmentModel(), PedestrianEnvironmentModel()
+    biased.locator = BiasedLocator(biased.config)
+    for i in range(20):
+        frame = frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(1.0 * i, 0, 0), [(40.0, 3.0)])
+        a, b = plain.update(frame).pedestrians, biased.update(frame).pedestrians
+    np.testing.assert_allclose(a.positions, b.positions)  # the filter itself is unchanged
+    np.testing.assert_allclose(b.covariances - a.covariances, [4.0 * np.eye(2)], atol=1e-9)

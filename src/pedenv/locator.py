@@ -42,6 +42,10 @@ class Measurement:
     positions: (N, 3) world frame, metres, ground point. covariances: (N, 2, 2) m^2 of x-y.
     distances: (N,) metres camera to body centre. directions: (N, 3) unit, world.
     sources: (N,) str, which cues produced the position. keypoints_3d: (N, 17, 3) world.
+    bias_covariances: optional (N, 2, 2) m^2, the part of the error that repeats from frame
+        to frame for the same person (e.g. their unknown body height). The filter cannot
+        average it away, so it is left out of the filter and added to the covariance the
+        state reports; ``covariances`` is then the frame-to-frame part alone.
     """
 
     positions: np.ndarray
@@ -50,6 +54,7 @@ class Measurement:
     directions: np.ndarray
     sources: np.ndarray
     keypoints_3d: np.ndarray
+    bias_covariances: np.ndarray | None = None
 
 
 class Locator(Protocol):

@@ -142,9 +142,13 @@ class PedestrianEnvironmentModel:
             positions = np.column_stack([x[:, 0], x[:, 2], meas.positions[:, 2]])
             velocities = np.column_stack([x[:, 1], x[:, 3], np.zeros(len(x))])
             cov = P[:, [0, 2]][:, :, [0, 2]]
+            if meas.bias_covariances is not None:
+                cov = cov + meas.bias_covariances
             skeleton = meas.keypoints_3d + (positions - meas.positions)[:, None, :]
         else:
             positions, velocities, cov, skeleton = meas.positions, np.zeros_like(meas.positions), meas.covariances, meas.keypoints_3d
+            if meas.bias_covariances is not None:
+                cov = cov + meas.bias_covariances
         return Pedestrians(
             track_ids=self.tracker.ids[rows], ages=self.tracker.hits[rows], positions=positions,
             velocities=velocities, covariances=cov, keypoints=det.keypoints, confidences=det.confidences,
