@@ -103,7 +103,7 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
 
     distances: (N,) metres along ``directions`` (N, 3) from ``origin`` (3,).
     pixel_heights: (N,) the skeletons' heights in pixels. ``lambdas``: the step
-    divisors, by default ``r + c`` for ``r = 1..refinement_steps``.
+    divisors, (S,) or per pedestrian (S, N); by default ``r + c`` for ``r = 1..steps``.
     Returns the refined (N,) distances, kept within [0.1 m, ``max_distance_m``].
 
     Same as calling :func:`reprojected_height` each step, but the bottom and top points
@@ -134,16 +134,25 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
     return np.clip(d, 0.1, config.max_distance_m)
 
 
+#: Full steps (``lambda = 1``) that take the pinhole start to the height-based distance.
+FALLBACK_STEPS = 6
+
+
+def pinhole_distance(pixel_heights: np.ndarray, intrinsics: np.ndarray, config: PositionConfig) -> np.ndarray:
+    """``f * H / h``: the distance of an upright person ``h`` pixels tall, camera level (N,)."""
+    start = intrinsics[1, 1] * config.person_height_m / np.maximum(pixel_heights, 1.0)
+    return np.clip(start, 0.5, config.max_distance_m)
+
+
 def height_distance(directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray, ground_z: float,
                     intrinsics: np.ndarray, world_to_cam: np.ndarray, config: PositionConfig) -> np.ndarray:
     """Distance (N,) at which a person of the assumed height appears ``pixel_heights`` tall.
 
-    Starts from the pinhole estimate ``f * H / h`` and iterates full steps
-    (``lambda = 1``), which converges in a few iterations.
+    Starts from :func:`pinhole_distance` and iterates full steps (``lambda = 1``), which
+    converges in a few iterations.
     """
-    start = intrinsics[1, 1] * config.person_height_m / np.maximum(pixel_heights, 1.0)
-    return refine_distance(np.clip(start, 0.5, config.max_distance_m), directions, origin, pixel_heights,
-                           ground_z, intrinsics, world_to_cam, config, lambdas=np.ones(6))
+    return refine_distance(pinhole_distance(pixel_heights, intrinsics, config), directions, origin, pixel_heights,
+                           ground_z, intrinsics, world_to_cam, config, lambdas=np.ones(FALLBACK_STEPS))
 
 
 def mean_directions(rays: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -193,13 +202,17 @@ def estimate_positions(rays: np.ndarray, confidences: np.ndarray, heights_px: np
     if not config.refine:
         # The initial estimate as it is: its own direction, no height prior.
         directions = np.where(ok[:, None], (centres - origin) / np.maximum(distances, 1e-9)[:, None], directions)
-    elif ok.any():
-        distances[ok] = refine_distance(distances[ok], directions[ok], origin, heights_px[ok], ground_z,
-                                        intrinsics, world_to_cam, config)
-    if not ok.all():
-        bad = ~ok
-        distances[bad] = height_distance(directions[bad], origin, heights_px[bad], ground_z,
-                                         intrinsics, world_to_cam, config)
+    if config.refine or not ok.all():
+        # One pass for both kinds of rows: the refinement's steps where the rays met, full
+        # height-prior steps where they did not (``inf`` leaves a row as it is).
+        steps = max(config.refinement_steps, FALLBACK_STEPS)
+        r = np.arange(1, steps + 1)[:, None]
+        refine = np.where(r <= config.refinement_steps, r + config.refinement_lambda_offset, np.inf)
+        fallback = np.where(r <= FALLBACK_STEPS, 1.0, np.inf)
+        lambdas = np.where(ok, refine if config.refine else np.inf, fallback)
+        start = np.where(ok, distances, pinhole_distance(heights_px, intrinsics, config))
+        distances = refine_distance(start, directions, origin, heights_px, ground_z, intrinsics, world_to_cam,
+                                    config, lambdas=lambdas)
     sources = np.where(ok, TRIANGULATION, np.where(has_prev, HEIGHT_PARALLEL, HEIGHT_FIRST))
     positions = origin + distances[:, None] * directions
     positions[:, 2] = ground_z
