@@ -51,9 +51,10 @@ class DetectorModel:
     detection_slope_px: width of the logistic detection curve in pixels; the default
         puts 98 % detection at about 80 px.
     false_positives_per_frame: mean number of spurious skeletons per frame (Poisson).
-    box_min_confidence: the person box spans the keypoints at least this confident (a
-        network's box covers the person it sees, not its guesses of hidden joints).
-        Raising it shrinks boxes to the surest keypoints.
+    box_noise_fraction: standard deviation of each edge of a detected person's box, as a
+        share of its height (the box comes from the network's box head, not from the noisy
+        keypoints). Raising it makes boxes, and so the association, less precise.
+    box_min_confidence: a false positive's box spans its keypoints at least this confident.
     """
 
     name = "detector-model"
@@ -61,7 +62,8 @@ class DetectorModel:
     def __init__(self, seed: int = 0, *, noise_px_large: float = 1.5, noise_px_small: float = 3.5,
                  extremity_noise_factor: float = 1.3, unseen_noise_factor: float = 3.0,
                  half_detection_height_px: float = 25.0, detection_slope_px: float = 14.0,
-                 false_positives_per_frame: float = 0.05, box_min_confidence: float = 0.3) -> None:
+                 false_positives_per_frame: float = 0.05, box_noise_fraction: float = 0.03,
+                 box_min_confidence: float = 0.3) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise ValueError(f"DetectorModel seed must be an integer, got {seed!r}")
         self.seed = int(seed)
@@ -73,6 +75,7 @@ class DetectorModel:
         self.detection_slope_px = _check("detection_slope_px", detection_slope_px, 0.1, 500.0)
         self.false_positives_per_frame = _check("false_positives_per_frame", false_positives_per_frame, 0.0, 20.0)
         self.box_min_confidence = _check("box_min_confidence", box_min_confidence, 0.0, 1.0)
+        self.box_noise_fraction = _check("box_noise_fraction", box_noise_fraction, 0.0, 1.0)
 
     def noise_std_px(self, height_px: np.ndarray) -> np.ndarray:
         """Keypoint noise standard deviation (px) of persons ``height_px`` (N,) pixels tall."""
@@ -119,10 +122,15 @@ class DetectorModel:
         keypoints = np.concatenate([noisy[keep], fp_kp])
         confidences = np.concatenate([conf[keep], fp_conf])
         order = rng.permutation(keypoints.shape[0])  # networks report persons in no particular order
-        keypoints, confidences = keypoints[order], confidences[order]
-        # the box around the keypoints the network is sure of, not around its guesses
-        boxes = boxes_from_keypoints(keypoints, confidences >= self.box_min_confidence)
-        return Detections(keypoints, confidences, boxes)
+        # A one-stage network regresses the person's box in its own head: the true box with
+        # edges off by a share of the height, not the hull of the noisy keypoints.
+        true_box = boxes_from_keypoints(kp[keep], np.ones((len(keep), kp.shape[1]), bool))
+        edge_std = self.box_noise_fraction * (true_box[:, 3] - true_box[:, 1])
+        true_box = true_box + rng.normal(size=true_box.shape) * edge_std[:, None]
+        true_box = np.column_stack([np.minimum(true_box[:, :2], true_box[:, 2:]),
+                                    np.maximum(true_box[:, :2], true_box[:, 2:])])
+        boxes = np.concatenate([true_box, boxes_from_keypoints(fp_kp, fp_conf >= self.box_min_confidence)])
+        return Detections(keypoints[order], confidences[order], np.clip(boxes[order], 0.0, [w - 1.0, h - 1.0] * 2))
 
     def _false_positives(self, rng: np.random.Generator, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
         """Small skeleton-shaped ghosts near the horizon: (F, 17, 2) pixels, (F, 17) confidences."""
