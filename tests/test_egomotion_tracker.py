@@ -107,3 +107,15 @@ def test_bias_covariance_is_reported_but_not_filtered():
         a, b = plain.update(frame).pedestrians, biased.update(frame).pedestrians
     np.testing.assert_allclose(a.positions, b.positions)  # the filter itself is unchanged
     np.testing.assert_allclose(b.covariances - a.covariances, [4.0 * np.eye(2)], atol=1e-9)
+
+
+@pytest.mark.parametrize("predict, kept", [(False, False), (True, True)])
+def test_motion_prediction_follows_a_fast_crossing_box(predict, kept):
+    """An 8 px wide box moving 9 px per frame, then 16: a 16 px step leaves its old place
+    (GIoU -1/3 < -0.3) but not the place predicted from its velocity."""
+    tr = Tracker(TrackingConfig(predict_motion=predict))
+    ids = []
+    for u in (100.0, 109.0, 118.0, 127.0, 136.0, 145.0, 161.0, 177.0, 193.0):
+        tr.update(np.array([[u, 100.0, u + 8.0, 130.0]]), np.zeros((1, 17, 2)))
+        ids.append(int(tr.ids[tr.misses == 0][0]))
+    assert (len(set(ids)) == 1) is kept

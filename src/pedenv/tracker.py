@@ -18,6 +18,10 @@ from pedenv.config import TrackingConfig
 from pedenv.egomotion import shift_u
 
 
+#: Weight of the newest displacement in a track's image velocity (exponential smoothing).
+MOTION_SMOOTHING = 0.5
+
+
 class IdCounter:
     """Hands out track ids 1, 2, 3, ... ; ``reset()`` starts again at ``start``."""
 
@@ -61,7 +65,8 @@ class Tracker:
 
     Attributes (one row per live track): ``ids (T,)``, ``boxes (T, 4)`` and
     ``keypoints (T, 17, 2)`` in pixels of the latest frame (ego-yaw compensated),
-    ``misses (T,)`` consecutive frames without a detection, ``hits (T,)`` detections so far.
+    ``misses (T,)`` consecutive frames without a detection, ``hits (T,)`` detections so far,
+    ``velocities (T, 4)`` pixels per frame of the box edges (used with ``predict_motion``).
     """
 
     def __init__(self, config: TrackingConfig | None = None, ids: IdCounter | None = None) -> None:
@@ -76,6 +81,7 @@ class Tracker:
         self.keypoints = np.zeros((0, 17, 2))
         self.misses = np.zeros(0, np.int64)
         self.hits = np.zeros(0, np.int64)
+        self.velocities = np.zeros((0, 4))
         self.id_counter.reset()
 
     def __len__(self) -> int:
@@ -91,6 +97,8 @@ class Tracker:
         if u_shift and len(self.ids):
             self.boxes = shift_u(self.boxes, u_shift)
             self.keypoints = shift_u(self.keypoints, u_shift)
+        if self.config.predict_motion and len(self.ids):
+            self.boxes = self.boxes + self.velocities  # constant velocity in the image (kept tracks too)
         matches, lost, fresh = associate(boxes, self.boxes, self.config.giou_threshold, self.config.max_height_ratio)
         misses = self.misses[lost] + 1
         alive = misses < self.config.max_misses
@@ -107,6 +115,13 @@ class Tracker:
         out_boxes = np.concatenate([boxes[matches[:, 0]], self.boxes[kept], boxes[fresh]])
         out_kp = np.concatenate([keypoints[matches[:, 0]], self.keypoints[kept], keypoints[fresh]])
         hits = np.concatenate([self.hits[matches[:, 1]] + 1, self.hits[kept], np.ones(n_new, np.int64)])
+        if self.config.predict_motion:
+            seen = self.velocities[matches[:, 1]]
+            moved = boxes[matches[:, 0]] - (self.boxes[matches[:, 1]] - seen)  # since the last frame's box
+            self.velocities = np.concatenate([
+                MOTION_SMOOTHING * moved + (1.0 - MOTION_SMOOTHING) * seen, self.velocities[kept], np.zeros((n_new, 4))])
+        else:
+            self.velocities = np.zeros((len(ids), 4))
         step = TrackerStep(detection_rows, previous_rows, self.ids[lost[~alive]])
         self.ids, self.boxes, self.keypoints, self.hits = ids, out_boxes, out_kp, hits
         self.misses = np.concatenate([np.zeros(n_match, np.int64), misses[alive], np.zeros(n_new, np.int64)])
