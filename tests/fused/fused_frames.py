@@ -42,3 +42,20 @@ def make_frame(ground: np.ndarray, heights=None, *, pitch: float = 0.0, roll: fl
     conf[:, list(hidden)] = 0.0
     return Frame(index, timestamp, camera, ego, detections=Detections(px, conf))
 
+
+
+def skeletons_of(frame: Frame, config=None, noise_px: float | None = None):
+    """The frame's :class:`~pedenv.fused.cue.FrameSkeletons` as the locator builds them;
+    ``noise_px`` sets every skeleton's keypoint noise (else observed from the skeleton)."""
+    from dataclasses import replace
+
+    from pedenv.config import FusedConfig
+    from pedenv.fused.cue import FrameSkeletons, keypoint_usable
+    from pedenv.geometry import pixel_rays
+
+    config = config or FusedConfig()
+    det, focal = frame.detections, float(frame.camera.intrinsics[0, 0])
+    rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
+    usable = keypoint_usable(det.keypoints, det.confidences, frame.camera.width, frame.camera.height)
+    skel = FrameSkeletons.of(rays, frame.cam_to_world[:3, 3], usable, config.keypoint_pixel_std / focal)
+    return skel if noise_px is None else replace(skel, noise=np.full(len(rays), noise_px / focal))

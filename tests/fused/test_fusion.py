@@ -1,13 +1,14 @@
 import numpy as np
 import pytest
 
-from pedenv.fused.cue import CueEstimate
-from pedenv.fused.fusion import chi2_quantile_2dof, fuse_cues
+from pedenv.fused.cue import REASON_CODE, CueEstimate
+from pedenv.fused.fusion import chi2_quantile_2dof, describe_sources, fuse_cues
 
 
-def cue(name, pos, cov, valid=True):
-    return CueEstimate(name, np.array([pos], float), np.array([cov], float), np.array([valid]),
-                       np.array(["" if valid else "declined"], object))
+def cue(name, pos, cov, valid=True, bias=None):
+    bias = np.zeros((2, 2)) if bias is None else bias
+    return CueEstimate(name, np.array([pos], float), np.array([cov], float), np.array([bias], float),
+                       np.array([valid]), np.array([0 if valid else REASON_CODE["no-keypoints"]]))
 
 
 def test_two_independent_gaussians_by_hand():
@@ -58,5 +59,28 @@ def test_chi2_quantile():
 
 
 def test_cue_with_nan_declines_as_degenerate():
-    c = CueEstimate("ground", np.array([[np.nan, 1.0]]), np.array([np.eye(2)]), np.array([True]), np.array([""], object))
-    assert not c.valid[0] and c.reasons[0] == "degenerate" and np.isfinite(c.positions).all()
+    bad = cue("ground", [np.nan, 1.0], np.eye(2))
+    fused = fuse_cues([bad, cue("height", [5.0, 1.0], np.eye(2))], 0.999)
+    assert fused.degenerate[0].tolist() == [True, False] and not fused.used[0, 0]
+    assert np.isfinite(fused.positions).all()
+    assert describe_sources([bad, cue("height", [5.0, 1.0], np.eye(2))], fused, {}, ~fused.valid)[0] == \
+        "height;ground:degenerate"
+
+
+def test_the_fused_covariance_splits_into_frame_and_per_person_parts():
+    # S_c = F_c + B_c; F = S (sum S_c^-1 F_c S_c^-1) S and B = S - F
+    f1, b1 = np.diag([1.0, 2.0]), np.diag([3.0, 0.5])
+    f2, b2 = np.array([[2.0, 0.5], [0.5, 1.0]]), np.diag([0.0, 1.0])
+    fused = fuse_cues([cue("height", [0.0, 0.0], f1, bias=b1), cue("ground", [0.5, 0.2], f2, bias=b2)], 0.999)
+    i1, i2 = np.linalg.inv(f1 + b1), np.linalg.inv(f2 + b2)
+    s = np.linalg.inv(i1 + i2)
+    frame = s @ (i1 @ f1 @ i1 + i2 @ f2 @ i2) @ s
+    np.testing.assert_allclose(fused.covariances[0], frame)
+    np.testing.assert_allclose(fused.bias_covariances[0], s - frame, atol=1e-12)
+
+
+def test_sources_name_used_cues_then_why_not_the_others():
+    cues = [cue("ground", [0.0, 0.0], np.eye(2), valid=False), cue("height", [5.0, 1.0], np.eye(2))]
+    fused = fuse_cues(cues, 0.999)
+    assert describe_sources(cues, fused, {}, np.array([False]))[0] == "height;ground:no-keypoints"
+    assert describe_sources(cues, fused, {}, np.array([True]))[0] == "boxheight;ground:no-keypoints"

@@ -2,22 +2,18 @@ import numpy as np
 import pytest
 
 from pedenv.config import FusedConfig
-from pedenv.fused.cue import keypoint_usable
 from pedenv.fused.ground import ground_cue, plane_intersection
 from pedenv.geometry import pixel_rays
 from pedenv.skeleton import ANKLE_KEYPOINTS
 
-from fused_frames import make_frame
+from fused_frames import make_frame, skeletons_of
 
 
 FAR = FusedConfig(ground_max_distance_m=60.0)
 
 
-def run_ground(frame, config=FAR):
-    det = frame.detections
-    rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
-    usable = keypoint_usable(det.keypoints, det.confidences, frame.camera.width, frame.camera.height)
-    return ground_cue(frame, det.keypoints, usable, rays, frame.cam_to_world[:3, 3], config)
+def run_ground(frame, config=FAR, noise_px=None):
+    return ground_cue(frame, skeletons_of(frame, config, noise_px), config)
 
 
 @pytest.mark.parametrize("pitch, roll", [(0.0, 0.0), (0.03, 0.0), (-0.03, 0.02)])
@@ -35,8 +31,8 @@ def test_ground_point_on_a_slope_seen_from_a_pitched_vehicle(pitch, roll):
 def test_ground_variance_grows_fast_with_distance():
     ground = np.array([[5.0, 0.0, 0.0], [10.0, 0.0, 0.0], [20.0, 0.0, 0.0], [40.0, 0.0, 0.0]])
     cue = run_ground(make_frame(ground))
-    along = cue.covariances[:, 0, 0]
-    across = cue.covariances[:, 1, 1]
+    total = cue.covariances + cue.bias_covariances
+    along, across = total[:, 0, 0], total[:, 1, 1]
     assert np.all(np.diff(along) > 0)
     assert along[3] / along[0] > 8 ** 2  # faster than the square of the distance
     assert np.all(along > across)  # wide along the ray, tight across it
@@ -46,7 +42,7 @@ def test_pixel_jacobian_matches_finite_differences():
     config = FusedConfig(ground_max_distance_m=60.0, road_height_std_m=0.0, road_curvature_std_per_m=0.0, ankle_height_std_m=0.0,
                          lateral_std_m=0.0, keypoint_pixel_std=1.0)
     frame = make_frame(np.array([[15.0, 2.0, 0.0]]), pitch=0.02, roll=0.01)
-    cue = run_ground(frame, config)
+    cue = run_ground(frame, config, noise_px=1.0)
     kp = frame.detections.keypoints[0, list(ANKLE_KEYPOINTS)]
     normal = frame.ego.rotation[:, 2]
     offset = float(normal @ frame.ego.translation) + 0.046 * 1.72
@@ -60,6 +56,14 @@ def test_pixel_jacobian_matches_finite_differences():
     jac = np.stack(jac, axis=-1)  # (2 ankles, 2, 2)
     expected = np.einsum("aij,akj->ik", jac, jac) / 4.0  # mean of two independent ankles
     np.testing.assert_allclose(cue.covariances[0], expected, rtol=1e-3)
+    assert np.allclose(cue.bias_covariances, 0.0)  # no road spread: nothing repeats per person
+
+
+def test_the_road_height_is_the_per_person_part():
+    cue = run_ground(make_frame(np.array([[12.0, 2.0, 0.0]])), FusedConfig(road_height_std_m=0.2))
+    vals, vecs = np.linalg.eigh(cue.bias_covariances[0])
+    assert vals[0] < 1e-9 * vals[1]  # along the ray only
+    assert abs(vecs[:, 1] @ np.array([12.0, 0.5]) / np.hypot(12.0, 0.5)) > 0.99
 
 
 @pytest.mark.parametrize("case, reason", [
@@ -84,7 +88,7 @@ def test_ground_declines_with_a_reason(case, reason):
         frame = make_frame(np.array([[70.0, 0.0, 0.0]]))
     cue = run_ground(frame)
     assert not cue.valid[0]
-    assert cue.reasons[0] == reason
+    assert cue.reason_names[0] == reason
     assert np.isfinite(cue.positions).all() and np.isfinite(cue.covariances).all()
 
 

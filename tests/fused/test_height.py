@@ -2,19 +2,15 @@ import numpy as np
 import pytest
 
 from pedenv.config import FusedConfig
-from pedenv.fused.cue import keypoint_usable
 from pedenv.fused.height import height_cue
 from pedenv.geometry import pixel_rays
 from pedenv.skeleton import ANKLE_KEYPOINTS, HEAD_KEYPOINTS, CocoKeypoint as K
 
-from fused_frames import make_frame
+from fused_frames import make_frame, skeletons_of
 
 
 def run_height(frame, config=FusedConfig(), **kw):
-    det = frame.detections
-    rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
-    usable = keypoint_usable(det.keypoints, det.confidences, frame.camera.width, frame.camera.height)
-    return height_cue(usable, rays, frame.cam_to_world[:3, 3], float(frame.camera.intrinsics[0, 0]), config, **kw)
+    return height_cue(skeletons_of(frame, config), float(frame.camera.intrinsics[0, 0]), config, **kw)
 
 
 def test_height_cue_is_exact_for_a_person_of_mean_height_on_a_rise_and_a_pitched_vehicle():
@@ -31,9 +27,11 @@ def test_height_cue_scales_with_the_true_height_and_its_variance_holds_the_heigh
     cue = run_height(make_frame(ground, heights=[1.72 * 1.05]))
     r = np.linalg.norm(cue.positions[0])
     assert r == pytest.approx(20.0 / 1.05, rel=0.01)
-    sd_along = np.sqrt(cue.covariances[0, 0, 0])
+    sd_along = np.sqrt(cue.covariances[0, 0, 0] + cue.bias_covariances[0, 0, 0])
     assert sd_along > r * 0.09 / 1.72  # at least the spread of human heights
     assert sd_along < r * 0.08
+    # the spread of heights repeats for the person: it is the per-person part, all of it
+    assert np.sqrt(cue.bias_covariances[0, 0, 0]) == pytest.approx(r * 0.09 / 1.72, rel=1e-6)
 
 
 def test_height_cue_without_ankles_uses_head_shoulders_and_hips():
@@ -48,7 +46,7 @@ def test_height_cue_without_ankles_uses_head_shoulders_and_hips():
 ])
 def test_height_cue_declines_with_a_reason(hidden, reason):
     cue = run_height(make_frame(np.array([[15.0, 0.0, 0.0]]), hidden=hidden))
-    assert not cue.valid[0] and cue.reasons[0] == reason
+    assert not cue.valid[0] and cue.reason_names[0] == reason
     assert np.isfinite(cue.positions).all()
 
 
@@ -59,7 +57,7 @@ def test_height_cue_declines_for_an_upside_down_skeleton():
     from dataclasses import replace
     from pedenv.records import Detections
     cue = run_height(replace(frame, detections=Detections(kp, frame.detections.confidences)))
-    assert not cue.valid[0] and cue.reasons[0] == "inconsistent"
+    assert not cue.valid[0] and cue.reason_names[0] == "inconsistent"
 
 
 def lift_left_ankle(frame, share):
@@ -77,19 +75,10 @@ def test_a_lifted_swing_foot_is_left_out(distance):
     frame = lift_left_ankle(make_frame(ground), 0.15)
     cue = run_height(frame)
     assert np.linalg.norm(cue.positions[0] - ground[0, :2]) / distance < 0.01
-    from pedenv.fused.cue import stance_ankle
-    det = frame.detections
-    usable = keypoint_usable(det.keypoints, det.confidences, 1600, 900)
-    use, lone = stance_ankle(usable, pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world),
-                             ANKLE_KEYPOINTS, 3.0 / 1266.0)
-    assert use[0].tolist() == [False, True] and not lone[0]
+    skel = skeletons_of(frame)
+    assert skel.stance[0].tolist() == [False, True] and not skel.lone[0]
 
 
 def test_noisy_standing_ankles_are_both_kept():
-    from pedenv.fused.cue import stance_ankle
     frame = lift_left_ankle(make_frame(np.array([[40.0, 0.0, 0.0]])), 0.02)  # within pixel noise
-    det = frame.detections
-    usable = keypoint_usable(det.keypoints, det.confidences, 1600, 900)
-    rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
-    use, _ = stance_ankle(usable, rays, ANKLE_KEYPOINTS, 3.0 / 1266.0)
-    assert use[0].all()
+    assert skeletons_of(frame).stance[0].all()

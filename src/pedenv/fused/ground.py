@@ -18,14 +18,18 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import FusedConfig
-from pedenv.fused.cue import CueEstimate, first_reason, stance_ankle
+from pedenv.fused.cue import CueEstimate, FrameSkeletons, first_reason, symmetric_2x2
 from pedenv.fused.height import KEYPOINT_HEIGHT_FRACTION, LONE_ANKLE_FRACTION_STD
+from pedenv.geometry import inverse_intrinsics
 from pedenv.records import Frame
 from pedenv.skeleton import ANKLE_KEYPOINTS
 
 NAME = "ground"
 #: Below this sine of the angle between a ray and the road plane the ray never meets it.
 MIN_GRAZING_SINE = 1e-4
+#: Below this |n . g| (n the road normal, g the unnormalized pixel ray) the Jacobian is
+#: not evaluated (the ray runs along the road).
+MIN_NORMAL_DOT = 1e-12
 
 
 def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray, plane_offset: np.ndarray):
@@ -42,52 +46,60 @@ def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray,
     return origin + s[..., None] * rays, sine, height
 
 
-def ground_cue(frame: Frame, keypoints: np.ndarray, usable: np.ndarray, rays: np.ndarray, origin: np.ndarray,
-               config: FusedConfig) -> CueEstimate:
+def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
     """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
 
-    keypoints: (N, 17, 2) pixels. usable: (N, 17) bool, seen and inside the image.
-    rays: (N, 17, 3) unit, world. origin: (3,) camera centre, world, metres.
+    skeletons: the frame's rays (world) and stance ankles. The frame-to-frame covariance
+    holds the pixel noise, the ankle's lift and the body's lateral spread; the per-person
+    part the road's unknown height under the pedestrian.
     Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
     """
-    n = len(keypoints)
-    ankles = list(ANKLE_KEYPOINTS)
+    n, ankles, origin = len(skeletons), list(ANKLE_KEYPOINTS), skeletons.origin
     normal = frame.ego.rotation[:, 2]
     rest = KEYPOINT_HEIGHT_FRACTION[ankles[0]] * config.person_height_mean_m
     offset = float(normal @ frame.ego.translation) + rest
-    points, sine, cam_height = plane_intersection(rays[:, ankles], origin, normal, offset)
-    seen, lone = stance_ankle(usable, rays, ANKLE_KEYPOINTS,
-                              config.keypoint_pixel_std / float(frame.camera.intrinsics[0, 0]))
+    rays = skeletons.rays[:, ankles]  # (N, 2, 3)
+    points, sine, cam_height = plane_intersection(rays, origin, normal, offset)
+    seen = skeletons.stance
     hits = seen & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
-    ranges = np.linalg.norm(points[..., :2] - origin[:2], axis=-1)
+    xy_all = points[..., :2]
+    ranges = np.sqrt((xy_all[..., 0] - origin[0]) ** 2 + (xy_all[..., 1] - origin[1]) ** 2)
     near = hits & (ranges <= config.ground_max_distance_m)
     count = near.sum(axis=1)
-    reasons = first_reason([(~seen.any(axis=1), "no-ankles"), (np.full(n, cam_height <= 0), "camera-below-road"),
-                            (~hits.any(axis=1), "above-horizon"), (count == 0, "beyond-range")], n)
-    if not (count > 0).any():
-        return CueEstimate(NAME, np.zeros((n, 2)), np.tile(np.eye(2), (n, 1, 1)), np.zeros(n, bool), reasons)
-    weight = near / np.maximum(count, 1)[:, None]
-    xy = np.einsum("na,nac->nc", weight, points[..., :2])
+    if not count.any():
+        return CueEstimate.declined(NAME, first_reason(
+            [(~seen.any(axis=1), "no-ankles"), (np.full(n, cam_height <= 0), "camera-below-road"),
+             (~hits.any(axis=1), "above-horizon"), (count == 0, "beyond-range")], n))
+    reasons = first_reason([(~seen.any(axis=1), "no-ankles"), (~hits.any(axis=1), "above-horizon"),
+                            (count == 0, "beyond-range")], n)
+    weight = near / np.maximum(count, 1)[:, None]  # (N, 2)
+    xy = (weight[..., None] * np.where(near[..., None], xy_all, 0.0)).sum(axis=1)
 
     # pixel noise through the Jacobian of the intersection: with the unnormalized ray
-    # g = M (u, v, 1) (M = R K^-1) the point is o + h g / (-n.g), so
-    # dp/du = h (g (n.M_u) - M_u (n.g)) / (n.g)^2, and likewise for v.
-    m = frame.cam_to_world[:3, :3] @ np.linalg.inv(frame.camera.intrinsics)
-    pix = keypoints[:, ankles]
-    g = pix[..., 0:1] * m[:, 0] + pix[..., 1:2] * m[:, 1] + m[:, 2]  # (N, 2 ankles, 3)
+    # g = M (u, v, 1) (M = R K^-1, so g is the unit ray over its optical-axis component)
+    # the point is o + h g / (-n.g), and dp/du = h (g (n.M_u) - M_u (n.g)) / (n.g)^2.
+    m = frame.cam_to_world[:3, :3] @ inverse_intrinsics(frame.camera.intrinsics)
+    depth = rays @ frame.cam_to_world[:3, 2]
+    g = rays / np.where(np.abs(depth) > MIN_NORMAL_DOT, depth, 1.0)[..., None]
     ng = g @ normal
-    safe = np.where(np.abs(ng) > 1e-12, ng, -1e-12)
-    jac = np.stack([(g * float(normal @ m[:, a]) - m[:, a] * ng[..., None])[..., :2] for a in (0, 1)], axis=-1)
-    jac = cam_height * jac / (safe**2)[..., None, None]  # (N, 2 ankles, 2 xy, 2 pixel)
-    pixel_cov = config.keypoint_pixel_std**2 * np.einsum("naij,nakj->naik", jac, jac)
-    cov = np.einsum("na,naij->nij", weight**2, np.where(near[..., None, None], pixel_cov, 0.0))
+    scale = cam_height / np.where(np.abs(ng) > MIN_NORMAL_DOT, ng, -MIN_NORMAL_DOT) ** 2
+    ju = scale[..., None] * (g[..., :2] * float(normal @ m[:, 0]) - m[:2, 0] * ng[..., None])  # (N, 2, xy)
+    jv = scale[..., None] * (g[..., :2] * float(normal @ m[:, 1]) - m[:2, 1] * ng[..., None])
+    focal = float(frame.camera.intrinsics[0, 0])
+    w2 = np.where(near, weight**2, 0.0) * ((skeletons.noise * focal) ** 2)[:, None]  # the skeleton's own pixel noise
+    pxx = (w2 * (ju[..., 0] ** 2 + jv[..., 0] ** 2)).sum(1)
+    pxy = (w2 * (ju[..., 0] * ju[..., 1] + jv[..., 0] * jv[..., 1])).sum(1)
+    pyy = (w2 * (ju[..., 1] ** 2 + jv[..., 1] ** 2)).sum(1)
 
-    # the road's (and the ankle's) unknown height moves the point along the ray
-    r = np.linalg.norm(xy - origin[:2], axis=1)
-    road_std = config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2
-    lift_std = np.where(lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m, config.ankle_height_std_m)
-    height_var = road_std**2 + lift_std**2
-    along = np.einsum("na,nac->nc", weight, rays[:, ankles, :2] / np.where(hits, sine, 1.0)[..., None])
-    cov = cov + height_var[:, None, None] * np.einsum("ni,nj->nij", along, along)
-    cov = cov + config.lateral_std_m**2 * np.eye(2)  # feet apart, body lean
-    return CueEstimate(NAME, xy, cov, count > 0, reasons)
+    # a height error dz of the contact point moves it along the ray by dz / sine
+    along = (weight[..., None] * rays[..., :2] / np.where(near, sine, 1.0)[..., None]).sum(axis=1)  # (N, 2)
+    ax, ay = along[:, 0], along[:, 1]
+    lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
+                        config.ankle_height_std_m)
+    lift, lat = lift_std**2, config.lateral_std_m**2  # the foot's lift changes with the gait
+    frame_cov = symmetric_2x2(pxx + lift * ax * ax + lat, pxy + lift * ax * ay, pyy + lift * ay * ay + lat)
+    # the road under a pedestrian r metres away stays off the vehicle's plane frame after frame
+    r = np.sqrt((xy[:, 0] - origin[0]) ** 2 + (xy[:, 1] - origin[1]) ** 2)
+    road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2) ** 2
+    bias = symmetric_2x2(road * ax * ax, road * ax * ay, road * ay * ay)
+    return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)
