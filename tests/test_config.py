@@ -36,6 +36,7 @@ def test_method_presets_fill_only_defaults():
     fused = Config().for_method("fused")
     assert fused.position.method == "fused"
     assert fused.tracking.max_height_ratio == 1.5 and fused.kalman.restart_gate == 25.0
+    assert fused.tracking.predict_motion
     assert Config().for_method("paper") == Config()
     mine = Config().replace(kalman={"restart_gate": 9.0}).for_method("fused")
     assert mine.kalman.restart_gate == 9.0

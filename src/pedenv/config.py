@@ -251,10 +251,11 @@ class FusedConfig:
 
 
 #: What each position method changes besides ``position.method``: the fused method comes
-#: with the tracker's height-ratio rule and the filter's restart gate (beyond the paper).
+#: with the tracker's height-ratio rule and motion prediction and the filter's restart gate
+#: (all beyond the paper).
 METHOD_PRESETS: dict[str, dict[str, dict]] = {
     "paper": {},
-    "fused": {"tracking": {"max_height_ratio": 1.5}, "kalman": {"restart_gate": 25.0}},
+    "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True}, "kalman": {"restart_gate": 25.0}},
 }
 
 
