@@ -130,7 +130,8 @@ class PedestrianEnvironmentModel:
         x, P = mem.x[rows], mem.P[rows]
         fresh = ~mem.started[rows]
         if cfg.kalman.restart_gate > 0 and (~fresh).any():
-            fresh |= ~fresh & (kalman.innovation_distance(x, P, z, meas.covariances) > cfg.kalman.restart_gate)
+            spread = meas.covariances if meas.bias_covariances is None else meas.covariances + meas.bias_covariances
+            fresh |= ~fresh & (kalman.innovation_distance(x, P, z, spread) > cfg.kalman.restart_gate)
         if fresh.any():
             x[fresh], P[fresh] = kalman.initial_state(z[fresh], meas.covariances[fresh],
                                                       cfg.kalman.initial_velocity_std_mps)
