@@ -18,11 +18,15 @@ def giou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
     ax0, ay0, ax1, ay1 = (c[:, None] for c in a.T)
     bx0, by0, bx1, by1 = b.T
-    inter = np.clip(np.minimum(ax1, bx1) - np.maximum(ax0, bx0), 0.0, None) * np.clip(
-        np.minimum(ay1, by1) - np.maximum(ay0, by0), 0.0, None)
-    union = (ax1 - ax0) * (ay1 - ay0) + (bx1 - bx0) * (by1 - by0) - inter
-    hull = (np.maximum(ax1, bx1) - np.minimum(ax0, bx0)) * (np.maximum(ay1, by1) - np.minimum(ay0, by0))
-    return inter / np.maximum(union, 1e-12) - (hull - union) / np.maximum(hull, 1e-12)
+    # signed overlap widths; the hull's sides follow from them: w_hull = w_a + w_b - w_overlap
+    iw = np.minimum(ax1, bx1) - np.maximum(ax0, bx0)
+    ih = np.minimum(ay1, by1) - np.maximum(ay0, by0)
+    wa, ha, wb, hb = ax1 - ax0, ay1 - ay0, bx1 - bx0, by1 - by0
+    hull = (wa + wb - iw) * (ha + hb - ih)
+    inter = np.maximum(iw, 0.0) * np.maximum(ih, 0.0)
+    union = wa * ha + wb * hb - inter
+    # IoU - (hull - union) / hull
+    return inter / np.maximum(union, 1e-12) + union / np.maximum(hull, 1e-12) - 1.0
 
 
 def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3,
