@@ -8,7 +8,7 @@ from typing import Sequence
 
 from pedenv.config import Config
 from pedenv.datasets import Dataset
-from pedenv.evaluation.metrics import Metrics
+from pedenv.evaluation.metrics import Metrics, strict_json
 from pedenv.evaluation.report import comparison_table
 from pedenv.evaluation.runner import run_evaluation
 
@@ -37,5 +37,5 @@ def run_ablation(dataset: Dataset, *, scenes: Sequence[str] | None = None, confi
     if output_dir:
         Path(output_dir).mkdir(parents=True, exist_ok=True)
         data = {name: m.to_dict()["overall"] for name, m in rows}
-        (Path(output_dir) / "ablation.json").write_text(json.dumps(data, indent=2) + "\n")
+        (Path(output_dir) / "ablation.json").write_text(json.dumps(strict_json(data), indent=2) + "\n")
     return comparison_table(rows, f"Ablation ({dataset.name}), as the paper's Sec. IV-D")

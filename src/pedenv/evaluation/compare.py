@@ -20,7 +20,9 @@ from rich.table import Table
 
 from pedenv.config import POSITION_METHODS, Config
 from pedenv.datasets import Dataset
+from pedenv.evaluation.metrics import strict_json
 from pedenv.evaluation.outputs import write_outputs
+from pedenv.evaluation.report import fmt
 from pedenv.evaluation.runner import EvaluationResult, run_evaluation
 from pedenv.plots import plot_error_by_distance
 from pedenv.pose import PoseBackend, create_pose_backend
@@ -65,23 +67,8 @@ def write_comparison(results: dict[str, EvaluationResult], output_dir: Path) -> 
                                         f"{first.get('pose_backend', '')})")
     metrics = output_dir / "metrics.json"
     data = {"methods": {m: r.metrics.to_dict() for m, r in results.items()}}
-    metrics.write_text(json.dumps(_strict_json(data), indent=2) + "\n")
+    metrics.write_text(json.dumps(strict_json(data), indent=2) + "\n")
     return {"error_by_distance": plot, "metrics": metrics}
-
-
-def _strict_json(value):
-    """NaN and inf -> None, so the file is strict JSON."""
-    if isinstance(value, dict):
-        return {k: _strict_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_strict_json(v) for v in value]
-    if isinstance(value, float) and value != value or value in (float("inf"), float("-inf")):
-        return None
-    return value
-
-
-def _fmt(x, digits: int) -> str:
-    return "-" if x is None or x != x else f"{x:.{digits}f}"
 
 
 def comparison_by_scene_table(results: dict[str, EvaluationResult], title: str = "") -> Table:
@@ -101,7 +88,7 @@ def comparison_by_scene_table(results: dict[str, EvaluationResult], title: str =
         values = []
         for m in results:
             s = cells[m]
-            values += [_fmt(s.rel_error_pct if s else None, 2), _fmt(s.abs_error_m if s else None, 3)]
+            values += [fmt(s.rel_error_pct if s else None, 2), fmt(s.abs_error_m if s else None, 3)]
         count = cells[next(iter(results))]
         table.add_row(name, *values, str(count.count if count else 0), style="bold" if name == "all" else None)
     return table
@@ -116,8 +103,8 @@ def comparison_summary_table(results: dict[str, EvaluationResult], title: str = 
     for m, r in results.items():
         mt = r.metrics
         cal, trk, tm = mt.calibration, mt.tracking or {}, mt.timing_ms
-        table.add_row(m, _fmt(mt.overall.rel_error_pct, 2), _fmt(mt.overall.abs_error_m, 3),
-                      _fmt(100 * cal.get("within_1sigma", float("nan")), 1),
-                      _fmt(100 * cal.get("within_2sigma", float("nan")), 1), _fmt(trk.get("mota"), 3),
-                      _fmt(tm.get("position_per_pedestrian"), 3), _fmt(tm.get("tracking_per_frame"), 3))
+        table.add_row(m, fmt(mt.overall.rel_error_pct, 2), fmt(mt.overall.abs_error_m, 3),
+                      fmt(100 * cal.get("within_1sigma", float("nan")), 1),
+                      fmt(100 * cal.get("within_2sigma", float("nan")), 1), fmt(trk.get("mota"), 3),
+                      fmt(tm.get("position_per_pedestrian"), 3), fmt(tm.get("tracking_per_frame"), 3))
     return table

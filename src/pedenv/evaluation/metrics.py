@@ -104,15 +104,15 @@ class Metrics:
         }
 
     def save(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(_jsonable(self.to_dict()), indent=2) + "\n")
+        Path(path).write_text(json.dumps(strict_json(self.to_dict()), indent=2) + "\n")
 
 
-def _jsonable(value):
-    """NaN -> None so the file is strict JSON."""
+def strict_json(value):
+    """NaN and inf -> None (in dicts, lists and tuples), so the file is strict JSON."""
     if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_jsonable(v) for v in value]
+        return {k: strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [strict_json(v) for v in value]
     if isinstance(value, float) and not np.isfinite(value):
         return None
     return value

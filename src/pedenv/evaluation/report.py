@@ -7,8 +7,9 @@ from rich.table import Table
 from pedenv.evaluation.metrics import Metrics
 
 
-def _fmt(x: float, digits: int) -> str:
-    return "-" if x != x else f"{x:.{digits}f}"
+def fmt(x: float | None, digits: int) -> str:
+    """A number for a table; "-" where there is none (None or NaN)."""
+    return "-" if x is None or x != x else f"{x:.{digits}f}"
 
 
 def results_table(metrics: Metrics, title: str = "") -> Table:
@@ -18,9 +19,9 @@ def results_table(metrics: Metrics, title: str = "") -> Table:
     for col in ("Data", "Abs. error [m]", "Rel. error [%]", "# Pedestrians"):
         table.add_column(col, justify="left" if col == "Data" else "right")
     o = metrics.overall
-    table.add_row("all", _fmt(o.abs_error_m, 3), _fmt(o.rel_error_pct, 2), str(o.count), style="bold")
+    table.add_row("all", fmt(o.abs_error_m, 3), fmt(o.rel_error_pct, 2), str(o.count), style="bold")
     for name, s in metrics.scenes:
-        table.add_row(name, _fmt(s.abs_error_m, 3), _fmt(s.rel_error_pct, 2), str(s.count))
+        table.add_row(name, fmt(s.abs_error_m, 3), fmt(s.rel_error_pct, 2), str(s.count))
     return table
 
 
@@ -47,5 +48,5 @@ def comparison_table(rows: list[tuple[str, Metrics]], title: str) -> Table:
         table.add_column(col, justify="left" if col == "Variant" else "right")
     for name, m in rows:
         o = m.overall
-        table.add_row(name, _fmt(o.abs_error_m, 3), _fmt(o.rel_error_pct, 2), str(o.count))
+        table.add_row(name, fmt(o.abs_error_m, 3), fmt(o.rel_error_pct, 2), str(o.count))
     return table
