@@ -50,3 +50,8 @@ def test_empty_frames_and_nan_keypoints_are_data():
     p = state.pedestrians
     assert p.confidences[0, :4].tolist() == [0, 0, 0, 0]
     assert np.isfinite(p.positions).all() and len(p) == 1
+
+
+def test_update_refuses_what_is_not_a_frame():
+    with pytest.raises(InputError, match="update\\(\\) takes a pedenv.records.Frame, got dict"):
+        PedestrianEnvironmentModel().update({"timestamp": 0.0})

@@ -102,9 +102,9 @@ class PedestrianEnvironmentModel:
         return EnvironmentState(frame.index, frame.timestamp, frame.ego, peds, frame.scene)
 
     def _check(self, frame: Frame):
-        where = f"frame {frame.index}" + (f" of scene {frame.scene!r}" if frame.scene else "")
         if not isinstance(frame, Frame):
             raise InputError(f"update() takes a pedenv.records.Frame, got {type(frame).__name__}")
+        where = f"frame {frame.index}" + (f" of scene {frame.scene!r}" if frame.scene else "")
         if frame.detections is None:
             raise InputError(f"{where}: field 'detections' is missing; run a pose backend first")
         if self._last is not None and frame.timestamp <= self._last.timestamp:
@@ -143,13 +143,11 @@ class PedestrianEnvironmentModel:
             positions = np.column_stack([x[:, 0], x[:, 2], meas.positions[:, 2]])
             velocities = np.column_stack([x[:, 1], x[:, 3], np.zeros(len(x))])
             cov = P[:, [0, 2]][:, :, [0, 2]]
-            if meas.bias_covariances is not None:
-                cov = cov + meas.bias_covariances
             skeleton = meas.keypoints_3d + (positions - meas.positions)[:, None, :]
         else:
             positions, velocities, cov, skeleton = meas.positions, np.zeros_like(meas.positions), meas.covariances, meas.keypoints_3d
-            if meas.bias_covariances is not None:
-                cov = cov + meas.bias_covariances
+        if meas.bias_covariances is not None:
+            cov = cov + meas.bias_covariances
         return Pedestrians(
             track_ids=self.tracker.ids[rows], ages=self.tracker.hits[rows], positions=positions,
             velocities=velocities, covariances=cov, keypoints=det.keypoints, confidences=det.confidences,
