@@ -22,6 +22,7 @@ import zlib
 
 import numpy as np
 
+from pedenv.config import _check_range
 from pedenv.errors import InputError
 from pedenv.records import Detections, Frame, boxes_from_keypoints
 from pedenv.skeleton import CocoKeypoint as K
@@ -32,8 +33,7 @@ _FACE = np.array([K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR])
 
 
 def _check(name: str, value: float, low: float, high: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not low <= value <= high:
-        raise ValueError(f"DetectorModel {name} must be a number in [{low}, {high}], got {value!r}")
+    _check_range(f"DetectorModel {name}", value, low, high)
     return float(value)
 
 
