@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from pedenv.config import Config
-from pedenv.datasets.memory import MemoryDataset
-from pedenv.demo import builtin_scenes, run_demo
-from pedenv.evaluation import run_evaluation
+from pedenv.io.datasets.memory import MemoryDataset
+from pedenv.apps.demo import builtin_scenes, run_demo
+from pedenv.apps.evaluate import run_evaluation
 
 PAPER_CARLA_REL_ERROR_PCT = 16.85
 
@@ -35,7 +35,7 @@ def test_refinement_matters_as_in_the_papers_ablation(scenes):
     # intersection, so those scenes use the height fallback either way
     data = MemoryDataset(scenes)
     with_ref = run_evaluation(data, pose_backend="ground-truth").metrics.overall
-    without = run_evaluation(data, config=Config().replace(position={"refine": False}),
+    without = run_evaluation(data, config=Config().replace(paper={"refine": False}),
                              pose_backend="ground-truth").metrics.overall
     assert with_ref.count == without.count
     assert without.rel_error_pct > 1.5 * with_ref.rel_error_pct

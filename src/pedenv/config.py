@@ -66,16 +66,14 @@ INITIAL_ESTIMATES = ("all-keypoints", "midpoint")
 
 
 @dataclass(frozen=True)
-class PositionConfig:
-    """World position of each pedestrian (Sec. III-C, Algorithm 1).
+class PaperConfig:
+    """The paper's position method (Sec. III-C, Algorithm 1): two-frame ray intersection
+    and height refinement (``pedenv.localization.paper``).
 
-    method: ``paper`` (two-frame ray intersection and height refinement) or ``fused``
-        (ground contact, multi-frame triangulation and a height prior fused with their
-        variances; its constants are in :class:`FusedConfig`).
     low_confidence_fraction: share of keypoints with the lowest confidence left out of
         the initial estimate (the paper: 0.3). Raising it trusts fewer, surer keypoints.
     initial_estimate: ``all-keypoints`` (the paper) or ``midpoint`` (ablation of
-        Sec. IV-D: only the midpoint of the skeleton's hips).
+        Sec. IV-D: only the skeleton's midpoint, the centre of its box).
     refine: run the distance and direction refinement (ablation: off).
     person_height_m: the assumed body height re-projected in the refinement (1.7 m).
         Raising it moves every refined pedestrian farther away.
@@ -87,9 +85,12 @@ class PositionConfig:
         position then falls back to the height-based distance.
     max_distance_m: triangulated keypoints farther than this from the camera are
         discarded as degenerate.
+    measurement_std_m: standard deviation of one position measurement per axis (the
+        Kalman filter's R), as a fraction of the distance plus this floor; the paper
+        gives none (tuned on the built-in scenes).
+    measurement_std_rel: relative part of the measurement noise (per metre of distance).
     """
 
-    method: str = "paper"
     low_confidence_fraction: float = 0.3
     initial_estimate: str = "all-keypoints"
     refine: bool = True
@@ -98,20 +99,22 @@ class PositionConfig:
     refinement_lambda_offset: float = 5.0
     min_parallax_rad: float = 1e-6
     max_distance_m: float = 500.0
+    measurement_std_m: float = 0.5
+    measurement_std_rel: float = 0.1
 
     def __post_init__(self) -> None:
-        _check_choice("position.method", self.method, POSITION_METHODS)
-        _check_range("position.low_confidence_fraction", self.low_confidence_fraction, 0.0, 1.0, high_open=True)
-        _check_choice("position.initial_estimate", self.initial_estimate, INITIAL_ESTIMATES)
-        _check_range("position.person_height_m", self.person_height_m, 0.3, 2.5)
+        _check_range("paper.low_confidence_fraction", self.low_confidence_fraction, 0.0, 1.0, high_open=True)
+        _check_choice("paper.initial_estimate", self.initial_estimate, INITIAL_ESTIMATES)
+        _check_range("paper.person_height_m", self.person_height_m, 0.3, 2.5)
         if not isinstance(self.refinement_steps, int) or self.refinement_steps < 0:
-            raise ValueError(f"position.refinement_steps must be an integer >= 0, got {self.refinement_steps!r}")
-        _check_range("position.refinement_lambda_offset", self.refinement_lambda_offset, 0.0, low_open=True)
-        _check_range("position.min_parallax_rad", self.min_parallax_rad, 0.0, 0.1)
-        _check_range("position.max_distance_m", self.max_distance_m, 1.0)
+            raise ValueError(f"paper.refinement_steps must be an integer >= 0, got {self.refinement_steps!r}")
+        _check_range("paper.refinement_lambda_offset", self.refinement_lambda_offset, 0.0, low_open=True)
+        _check_range("paper.min_parallax_rad", self.min_parallax_rad, 0.0, 0.1)
+        _check_range("paper.max_distance_m", self.max_distance_m, 1.0)
+        _check_range("paper.measurement_std_m", self.measurement_std_m, 0.0, low_open=True)
+        _check_range("paper.measurement_std_rel", self.measurement_std_rel, 0.0)
 
 
-POSITION_METHODS = ("paper", "fused")
 
 
 @dataclass(frozen=True)
@@ -124,9 +127,8 @@ class KalmanConfig:
     enabled: filter the positions (off: raw per-frame estimates).
     acceleration_std_mps2: white-noise acceleration of a pedestrian (Q via filterpy's
         ``Q_discrete_white_noise``). Raising it follows turns faster, smooths less.
-    measurement_std_m: standard deviation of one position measurement per axis (R),
-        as a fraction of the distance plus this floor; see ``measurement_std_rel``.
-    measurement_std_rel: relative part of the measurement noise (per metre of distance).
+    The measurement noise R comes with each measurement from the position method.
+
     initial_velocity_std_mps: prior spread of a new track's velocity.
     restart_gate: beyond the paper, off (0) by default: a measurement whose squared
         Mahalanobis distance from the track's prediction exceeds this restarts the
@@ -136,15 +138,11 @@ class KalmanConfig:
 
     enabled: bool = True
     acceleration_std_mps2: float = 1.0
-    measurement_std_m: float = 0.5
-    measurement_std_rel: float = 0.1
     initial_velocity_std_mps: float = 2.0
     restart_gate: float = 0.0
 
     def __post_init__(self) -> None:
         _check_range("kalman.acceleration_std_mps2", self.acceleration_std_mps2, 0.0, low_open=True)
-        _check_range("kalman.measurement_std_m", self.measurement_std_m, 0.0, low_open=True)
-        _check_range("kalman.measurement_std_rel", self.measurement_std_rel, 0.0)
         _check_range("kalman.initial_velocity_std_mps", self.initial_velocity_std_mps, 0.0, low_open=True)
         _check_range("kalman.restart_gate (0 = off)", self.restart_gate, 0.0)
 
@@ -159,7 +157,7 @@ def _check_count(name: str, value, low: int) -> None:
 
 @dataclass(frozen=True)
 class FusedConfig:
-    """The ``fused`` position method (``pedenv.fused``): three cues fused with their variances.
+    """The ``fused`` position method (``pedenv.localization.fused``): three cues fused with their variances.
 
     Not in the paper; defaults are anthropometric tables, the synthetic scenes' ranges
     and values tuned on the built-in scenes. Every variance below is a 1-sigma spread.
@@ -250,71 +248,66 @@ class FusedConfig:
         _check_range("fused.lateral_std_m", self.lateral_std_m, 0.0, 5.0)
 
 
-#: What each position method changes besides ``position.method``: the fused method comes
-#: with the tracker's height-ratio rule and motion prediction and the filter's restart gate
-#: (all beyond the paper).
-METHOD_PRESETS: dict[str, dict[str, dict]] = {
-    "paper": {},
-    "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True}, "kalman": {"restart_gate": 25.0}},
-}
-
-
 @dataclass(frozen=True)
 class Config:
-    """Everything the environment model needs besides the data."""
+    """Everything the environment model needs besides the data.
 
+    method: the position method, a name of :data:`pedenv.localization.LOCATORS`
+        (``paper`` or ``fused``); ``pedenv.localization.configure`` sets it together with
+        the method's preset. Each method's constants are in its own section.
+    """
+
+    method: str = "paper"
     tracking: TrackingConfig = field(default_factory=TrackingConfig)
-    position: PositionConfig = field(default_factory=PositionConfig)
+    paper: PaperConfig = field(default_factory=PaperConfig)
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
     fused: FusedConfig = field(default_factory=FusedConfig)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.method, str) or not self.method:
+            raise ValueError(f"method must be the name of a position method, got {self.method!r}")
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
 
     @classmethod
     def from_dict(cls, data: dict) -> "Config":
-        parts = {"tracking": TrackingConfig, "position": PositionConfig, "kalman": KalmanConfig,
-                 "fused": FusedConfig}
-        unknown = set(data) - set(parts)
+        unknown = set(data) - set(SECTIONS) - {"method"}
         if unknown:
-            raise ValueError(f"unknown config section(s): {', '.join(sorted(unknown))}; valid: {', '.join(parts)}")
+            raise ValueError(f"unknown config section(s): {', '.join(sorted(unknown))}; "
+                             f"valid: method, {', '.join(SECTIONS)}")
         built = {}
-        for name, kind in parts.items():
+        for name, kind in SECTIONS.items():
             values = data.get(name, {})
+            if not isinstance(values, dict):
+                raise ValueError(f"config.{name} must be an object of fields, got {type(values).__name__}")
             names = {f.name for f in dataclasses.fields(kind)}
             extra = set(values) - names
             if extra:
                 raise ValueError(f"unknown field(s) in config.{name}: {', '.join(sorted(extra))}; valid: {', '.join(sorted(names))}")
             built[name] = kind(**values)
-        return cls(**built)
+        return cls(method=data.get("method", "paper"), **built)
 
-    def replace(self, **sections) -> "Config":
-        """A copy with some sections' fields changed: ``cfg.replace(position={"refine": False})``."""
+    def replace(self, method: str | None = None, **sections) -> "Config":
+        """A copy with the method or some sections' fields changed:
+        ``cfg.replace(paper={"refine": False})``."""
         data = self.to_dict()
+        if method is not None:
+            data["method"] = method
         for name, values in sections.items():
-            if name not in data:
-                raise ValueError(f"unknown config section {name!r}")
+            if name not in SECTIONS:
+                raise ValueError(f"unknown config section {name!r}; valid: {', '.join(SECTIONS)}")
             data[name] = {**data[name], **values}
         return Config.from_dict(data)
 
-    def for_method(self, method: str) -> "Config":
-        """This config with ``position.method = method`` and that method's preset.
-
-        A preset (:data:`METHOD_PRESETS`) changes only fields still at their defaults, so
-        values set on purpose win. ``paper`` has no preset: the paper's method as printed.
-        """
-        if method not in METHOD_PRESETS:
-            raise ValueError(f"unknown position method {method!r}; valid: {', '.join(METHOD_PRESETS)}")
-        defaults, data = Config().to_dict(), self.to_dict()
-        changes: dict = {"position": {"method": method}}
-        for section, values in METHOD_PRESETS[method].items():
-            keep = {k: v for k, v in values.items() if data[section][k] == defaults[section][k]}
-            changes[section] = {**changes.get(section, {}), **keep}
-        return self.replace(**changes)
-
     def save(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
 
     @classmethod
     def load(cls, path: str | Path) -> "Config":
         return cls.from_dict(json.loads(Path(path).read_text()))
+
+
+#: Section name -> its class.
+SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
+                             "fused": FusedConfig}

@@ -68,3 +68,25 @@ def innovation_distance(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarr
     S = H @ P @ H.T + r
     e = z - x @ H.T
     return np.einsum("ni,nij,nj->n", e, inverse_2x2(S), e)
+
+
+def correct(x: np.ndarray, P: np.ndarray, started: np.ndarray, z: np.ndarray, r: np.ndarray, spread: np.ndarray,
+            config) -> tuple[np.ndarray, np.ndarray]:
+    """One frame's correction of the tracks that have a measurement.
+
+    x (N, 4), P (N, 4, 4): predicted states; started (N,) bool: the filter holds a state.
+    z (N, 2): measured ground points, world x-y, metres, with frame-to-frame covariance
+    r (N, 2, 2) and whole spread (``r`` plus the per-person bias) ``spread`` (N, 2, 2).
+    A track not started, or (with ``config.restart_gate`` > 0, a ``KalmanConfig``) one whose
+    measurement lies beyond the gate, starts again at its measurement.
+    Returns the corrected ``(x, P)``.
+    """
+    x, P = x.copy(), P.copy()
+    fresh = ~started
+    if config.restart_gate > 0 and started.any():
+        fresh |= started & (innovation_distance(x, P, z, spread) > config.restart_gate)
+    if fresh.any():
+        x[fresh], P[fresh] = initial_state(z[fresh], r[fresh], config.initial_velocity_std_mps)
+    if (~fresh).any():
+        x[~fresh], P[~fresh] = update(x[~fresh], P[~fresh], z[~fresh], r[~fresh])
+    return x, P

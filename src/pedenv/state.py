@@ -21,7 +21,7 @@ class Pedestrians:
     keypoints: (N, 17, 2) pixels; confidences: (N, 17); boxes: (N, 4) pixels.
     keypoints_3d: (N, 17, 3) world frame, metres, the skeleton in 3D.
     distances: (N,) metres from the camera to the person.
-    sources: (N,) str, how the position was found (see ``pedenv.position``).
+    sources: (N,) str, how the position was found (see ``pedenv.localization.paper``).
     """
 
     track_ids: np.ndarray

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from scene_checks import assert_scenes_equal
-from pedenv.datasets import open_dataset
+from pedenv.io.datasets import open_dataset
 from pedenv.errors import InputError
 from pedenv.records import Scene
 from pedenv.synthetic import generate_scenes

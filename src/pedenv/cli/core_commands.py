@@ -15,10 +15,14 @@ from pedenv.config import Config
 _out = console.__class__(width=None if sys.stdout.isatty() else 140)
 
 
-def _config(path: Optional[Path], **position) -> Config:
+def _config(path: Optional[Path], method: Optional[str] = None, **paper) -> Config:
+    """The config of ``--config`` (or the defaults) with the paper settings given and ``method``'s preset."""
+    from pedenv.localization import configure
+
     config = Config.load(path) if path else Config()
-    changes = {k: v for k, v in position.items() if v is not None}
-    return config.replace(position=changes) if changes else config
+    changes = {k: v for k, v in paper.items() if v is not None}
+    config = config.replace(paper=changes) if changes else config
+    return configure(config, method) if method else config
 
 
 def _print_result(metrics, title: str = "") -> None:
@@ -39,9 +43,9 @@ def demo(
     method: Optional[str] = typer.Option(None, "--method", help="paper (default) or fused."),
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
-    from pedenv.demo import run_demo
+    from pedenv.apps.demo import run_demo
 
-    cfg = _config(config).for_method(method) if method else _config(config)
+    cfg = _config(config, method)
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend)
     _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
     for name, path in result.extras["paths"].items():
@@ -59,8 +63,8 @@ def simulate(
     frame_rate: Optional[float] = typer.Option(None, "--frame-rate", help="Hz; default 10 (12 for nuscenes)."),
 ) -> None:
     """Write the built-in synthetic scenes to disk in one of the supported formats."""
-    from pedenv.datasets import scene_writer
-    from pedenv.demo import builtin_scenes, scenes_summary
+    from pedenv.io.datasets import scene_writer
+    from pedenv.apps.demo import builtin_scenes, scenes_summary
 
     write = scene_writer(fmt)
     rate = frame_rate or (12.0 if fmt == "nuscenes" else 10.0)
@@ -85,8 +89,8 @@ def evaluate(
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
-    from pedenv.datasets import open_dataset
-    from pedenv.evaluation import evaluate_dataset
+    from pedenv.io.datasets import open_dataset
+    from pedenv.apps.evaluate import evaluate_dataset
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
@@ -95,7 +99,7 @@ def evaluate(
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
     if method == "both":
-        from pedenv.evaluation.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
+        from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 
         results = compare_methods(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
                                   progress=True)
@@ -104,12 +108,14 @@ def evaluate(
         _out.print(f"outputs: {output}", highlight=False)
         return
     if method:
-        cfg = cfg.for_method(method)
+        from pedenv.localization import configure
+
+        cfg = configure(cfg, method)
     metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
                                progress=True)
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
     if ablation:
-        from pedenv.evaluation.ablation import run_ablation
+        from pedenv.apps.ablation import run_ablation
 
         _out.print(run_ablation(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output))
     _out.print(f"outputs: {output}", highlight=False)
@@ -121,14 +127,14 @@ def bench(
     pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
-    from pedenv.bench import bench_core, format_bench
+    from pedenv.apps.bench import bench_core, format_bench
 
     from pedenv.errors import InputError
 
     rows = bench_core(n_frames=frames)
     pose_rows = []
     if pose:
-        from pedenv.bench import bench_end_to_end
+        from pedenv.apps.bench import bench_end_to_end
 
         try:
             pose_rows = bench_end_to_end()

@@ -68,7 +68,7 @@ def run(
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
-    from pedenv.run import run_recording
+    from pedenv.apps.run import run_recording
 
     columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
     with Progress(*columns, console=console, transient=False) as bar:

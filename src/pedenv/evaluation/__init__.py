@@ -1,6 +1,6 @@
-"""Evaluation with the paper's protocol: matching, errors, tracking metrics, outputs."""
+"""Metrics of the paper's evaluation protocol: matching, errors, tracking metrics, tables."""
 
 from pedenv.evaluation.metrics import ErrorSummary, Metrics
-from pedenv.evaluation.runner import EvaluationResult, evaluate_dataset, run_evaluation
+from pedenv.evaluation.result import EvaluationResult
 
-__all__ = ["ErrorSummary", "EvaluationResult", "Metrics", "evaluate_dataset", "run_evaluation"]
+__all__ = ["ErrorSummary", "EvaluationResult", "Metrics"]

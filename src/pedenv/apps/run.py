@@ -1,0 +1,86 @@
+"""``pedenv run``: the environment model over a user's recording, with overlays and outputs."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+
+from pedenv.config import Config
+from pedenv.errors import InputError
+from pedenv.io.jsonl import EnvironmentWriter
+from pedenv.model import PedestrianEnvironmentModel
+from pedenv.visualize.plots import plot_birds_eye
+from pedenv.pose.base import create_pose_backend
+from pedenv.pose.models import backend_options, choose_input_size
+from pedenv.io.footage import Recording, load_recording
+from pedenv.visualize.overlay import draw_environment, write_image
+
+
+def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
+                  pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
+                  video_out: bool = False, progress=None) -> dict:
+    """Run the environment model over a recording and write everything into ``output``.
+
+    Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
+    ``run.json`` (pose backend, recording, frames done), ``overlays/<index>.png`` or
+    ``overlay.mp4`` (``video_out``) with skeletons, track ids and distances, and
+    ``birds_eye.png`` of the last frame. A bad frame stops the run with an InputError; what
+    was computed before it stays on disk. ``progress(done, total)`` is called per frame.
+    ``pose_input_size`` (``onnx``): None picks 384x640 for wide cameras, else 640.
+    Returns the summary also saved as ``run.json``.
+    """
+    cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
+    rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
+                         start_time=start_time)
+    if pose_backend == "onnx" and pose_input_size is None and pose_model is None:
+        pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
+    out = Path(output)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg.save(out / "config.json")
+    describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
+    summary = {"recording": rec.name, "pose_backend": describe, "frames_total": len(rec), "frames_done": 0,
+               "environment": str(out / "environment.jsonl")}
+    model = PedestrianEnvironmentModel(cfg)
+    writer_video, last = None, None
+    try:
+        with EnvironmentWriter(out / "environment.jsonl") as writer:
+            for frame in rec.frames():
+                frame = dataclasses.replace(frame, detections=backend(frame))
+                state = model.update(frame)
+                writer.write(state)
+                drawn = draw_environment(frame.image, state)
+                if video_out:
+                    writer_video = writer_video or _open_video(out / "overlay.mp4", rec, drawn.shape)
+                    writer_video.write(drawn[..., ::-1].copy())
+                else:
+                    write_image(out / "overlays" / f"{frame.index:06d}.png", drawn)
+                last = (state, frame)
+                summary["frames_done"] += 1
+                if progress is not None:
+                    progress(summary["frames_done"], summary["frames_total"])
+    finally:
+        if writer_video is not None:
+            writer_video.release()
+        if last is not None:
+            summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
+        (out / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return summary
+
+
+def _open_video(path: Path, rec: Recording, shape):
+    import cv2
+
+    stamps = np.array([t for _, t in rec.images]) if rec.images else None
+    rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
+    if rec.video is not None and not rec.fps:
+        cap = cv2.VideoCapture(str(rec.video))
+        rate = cap.get(cv2.CAP_PROP_FPS) or rate
+        cap.release()
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), rate, (shape[1], shape[0]))
+    if not writer.isOpened():
+        raise InputError(f"{path}: cannot write the overlay video")
+    return writer

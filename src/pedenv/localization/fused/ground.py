@@ -1,0 +1,105 @@
+"""Ground-contact cue: the stance ankle's viewing ray meets the road under the pedestrian.
+
+Of two seen ankles the lower one is used (the other may be the swing foot, lifted up to
+~0.15 of body height, which at 10 m would put the point ~20 % too far); a lone ankle
+may be the lifted one and gets a wider variance.
+
+The road is the vehicle's own plane (z = 0 of the vehicle frame, so the vehicle's pitch
+and roll tilt it), lifted by the ankle's resting height. The range follows from the
+camera's height above that plane and the ray's angle below it; both the pixel noise
+(through the Jacobian of the intersection w.r.t. the pixel) and
+the road's unknown height under the pedestrian (which grows with distance on rolling
+terrain) make the variance, which grows fast with distance: it is tight near the car
+and fades where the ray grazes the road.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pedenv.config import FusedConfig
+from pedenv.localization.fused.cue import CueEstimate, FrameSkeletons, first_reason, symmetric_2x2
+from pedenv.localization.fused.height import KEYPOINT_HEIGHT_FRACTION, LONE_ANKLE_FRACTION_STD
+from pedenv.geometry import inverse_intrinsics
+from pedenv.records import Frame
+from pedenv.skeleton import ANKLE_KEYPOINTS
+
+NAME = "ground"
+#: Below this sine of the angle between a ray and the road plane the ray never meets it.
+MIN_GRAZING_SINE = 1e-4
+#: Below this |n . g| (n the road normal, g the unnormalized pixel ray) the Jacobian is
+#: not evaluated (the ray runs along the road).
+MIN_NORMAL_DOT = 1e-12
+
+
+def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray, plane_offset: np.ndarray):
+    """Where rays from ``origin`` meet the plane ``normal . x = plane_offset``.
+
+    rays: (..., 3) unit, world. origin: (3,) world, metres. normal: (3,) unit, world.
+    plane_offset: broadcastable to (...,), metres. Returns ``(points (..., 3), sine (...,),
+    height (...,))``: the points (garbage where the ray misses), the sine of the ray's angle
+    below the plane, and the camera's height above it.
+    """
+    height = float(normal @ origin) - plane_offset
+    sine = -(rays @ normal)
+    s = height / np.where(sine > MIN_GRAZING_SINE, sine, 1.0)
+    return origin + s[..., None] * rays, sine, height
+
+
+def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
+    """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
+
+    skeletons: the frame's rays (world) and stance ankles. The frame-to-frame covariance
+    holds the pixel noise, the ankle's lift and the body's lateral spread; the per-person
+    part the road's unknown height under the pedestrian.
+    Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
+    """
+    n, ankles, origin = len(skeletons), list(ANKLE_KEYPOINTS), skeletons.origin
+    normal = frame.ego.rotation[:, 2]
+    rest = KEYPOINT_HEIGHT_FRACTION[ankles[0]] * config.person_height_mean_m
+    offset = float(normal @ frame.ego.translation) + rest
+    rays = skeletons.rays[:, ankles]  # (N, 2, 3)
+    points, sine, cam_height = plane_intersection(rays, origin, normal, offset)
+    seen = skeletons.stance
+    hits = seen & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
+    xy_all = points[..., :2]
+    ranges = np.sqrt((xy_all[..., 0] - origin[0]) ** 2 + (xy_all[..., 1] - origin[1]) ** 2)
+    near = hits & (ranges <= config.ground_max_distance_m)
+    count = near.sum(axis=1)
+    if not count.any():
+        return CueEstimate.declined(NAME, first_reason(
+            [(~seen.any(axis=1), "no-ankles"), (np.full(n, cam_height <= 0), "camera-below-road"),
+             (~hits.any(axis=1), "above-horizon"), (count == 0, "beyond-range")], n))
+    reasons = first_reason([(~seen.any(axis=1), "no-ankles"), (~hits.any(axis=1), "above-horizon"),
+                            (count == 0, "beyond-range")], n)
+    weight = near / np.maximum(count, 1)[:, None]  # (N, 2)
+    xy = (weight[..., None] * np.where(near[..., None], xy_all, 0.0)).sum(axis=1)
+
+    # pixel noise through the Jacobian of the intersection: with the unnormalized ray
+    # g = M (u, v, 1) (M = R K^-1, so g is the unit ray over its optical-axis component)
+    # the point is o + h g / (-n.g), and dp/du = h (g (n.M_u) - M_u (n.g)) / (n.g)^2.
+    m = frame.cam_to_world[:3, :3] @ inverse_intrinsics(frame.camera.intrinsics)
+    depth = rays @ frame.cam_to_world[:3, 2]
+    g = rays / np.where(np.abs(depth) > MIN_NORMAL_DOT, depth, 1.0)[..., None]
+    ng = g @ normal
+    scale = cam_height / np.where(np.abs(ng) > MIN_NORMAL_DOT, ng, -MIN_NORMAL_DOT) ** 2
+    ju = scale[..., None] * (g[..., :2] * float(normal @ m[:, 0]) - m[:2, 0] * ng[..., None])  # (N, 2, xy)
+    jv = scale[..., None] * (g[..., :2] * float(normal @ m[:, 1]) - m[:2, 1] * ng[..., None])
+    focal = float(frame.camera.intrinsics[0, 0])
+    w2 = np.where(near, weight**2, 0.0) * ((skeletons.noise * focal) ** 2)[:, None]  # the skeleton's own pixel noise
+    pxx = (w2 * (ju[..., 0] ** 2 + jv[..., 0] ** 2)).sum(1)
+    pxy = (w2 * (ju[..., 0] * ju[..., 1] + jv[..., 0] * jv[..., 1])).sum(1)
+    pyy = (w2 * (ju[..., 1] ** 2 + jv[..., 1] ** 2)).sum(1)
+
+    # a height error dz of the contact point moves it along the ray by dz / sine
+    along = (weight[..., None] * rays[..., :2] / np.where(near, sine, 1.0)[..., None]).sum(axis=1)  # (N, 2)
+    ax, ay = along[:, 0], along[:, 1]
+    lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
+                        config.ankle_height_std_m)
+    lift, lat = lift_std**2, config.lateral_std_m**2  # the foot's lift changes with the gait
+    frame_cov = symmetric_2x2(pxx + lift * ax * ax + lat, pxy + lift * ax * ay, pyy + lift * ay * ay + lat)
+    # the road under a pedestrian r metres away stays off the vehicle's plane frame after frame
+    r = np.sqrt((xy[:, 0] - origin[0]) ** 2 + (xy[:, 1] - origin[1]) ** 2)
+    road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2) ** 2
+    bias = symmetric_2x2(road * ax * ax, road * ax * ay, road * ay * ay)
+    return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)

@@ -1,0 +1,156 @@
+"""The ``fused`` locator: ground contact, triangulation and height prior, gated and fused.
+
+Per frame and vectorized over the N tracked skeletons: the skeletons' shared geometry is
+computed once (:class:`~pedenv.localization.fused.cue.FrameSkeletons`); each enabled cue gives an x-y
+estimate with its frame-to-frame and per-person covariances or declines with a reason;
+:func:`~pedenv.localization.fused.fusion.fuse_cues` drops a cue that disagrees and fuses the rest.
+The model's Kalman filter then filters the fused measurement with its frame-to-frame
+covariance and adds the per-person part to what it reports. ``sources`` says which cues
+made each position and why the others did not, e.g. ``ground+height;triangulation:no-baseline``.
+A pedestrian no cue can place gets a wide guess from its box height (``box``).
+
+The 3D skeleton: the person's shape triangulated over the track's history where the
+parallax allows (a swinging limb fails the outlier test), placed at the fused position;
+else each keypoint cut from its ray at the person's range.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pedenv.config import Config
+from pedenv.localization.fused.cue import (CueEstimate, FrameSkeletons, across_variance, horizontal_bearing, keypoint_usable,
+                              range_bearing_covariance)
+from pedenv.localization.fused.fusion import describe_sources, fuse_cues
+from pedenv.localization.fused.ground import ground_cue
+from pedenv.localization.fused.height import KEYPOINT_HEIGHT_FRACTION, height_cue
+from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.triangulation import Triangulated, triangulate, triangulation_cue
+from pedenv.localization.base import FrameGeometry, Measurement
+from pedenv.skeleton import CocoKeypoint as K
+
+#: A pedestrian no cue can place is guessed from its box with this relative spread.
+BOX_RELATIVE_STD = 0.5
+#: Pixel noise (pixels) and lateral spread (metres) across the box centre's ray.
+BOX_PIXEL_STD, BOX_LATERAL_STD_M = 5.0, 0.5
+#: Box ranges are clipped to this interval (metres).
+BOX_RANGE_M = (0.5, 500.0)
+#: How far a keypoint may lie in front of or behind the body's plane facing the camera
+#: (arms and legs reaching), metres: the spread of a keypoint cut at the person's range.
+BODY_DEPTH_STD_M = 0.15
+#: A keypoint ray this close to vertical is cut at this share of the range (no division by 0).
+MIN_ALONG = 1e-3
+
+
+def box_estimate(boxes: np.ndarray, centre_rays: np.ndarray, origin: np.ndarray, focal_px: float,
+                 height_m: float) -> CueEstimate:
+    """Last resort: range ``f H / box height`` along the box centre's ray, 50 % spread
+    (the person's own height and pose: per-person); across the ray frame-to-frame.
+
+    boxes: (N, 4) pixels. centre_rays: (N, 3) unit, world. origin: (3,) world, metres.
+    """
+    r = np.clip(focal_px * height_m / np.maximum(boxes[:, 3] - boxes[:, 1], 1.0), *BOX_RANGE_M)
+    bearing = horizontal_bearing(centre_rays)
+    across = across_variance(r, focal_px, BOX_PIXEL_STD, BOX_LATERAL_STD_M)
+    return CueEstimate("box", origin[:2] + r[:, None] * bearing, range_bearing_covariance(bearing, 0.0 * r, across),
+                       range_bearing_covariance(bearing, (BOX_RELATIVE_STD * r) ** 2, 0.0),
+                       np.ones(len(r), bool), np.zeros(len(r), np.int64))
+
+
+def keypoints_at_range(rays: np.ndarray, origin: np.ndarray, bearing: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+    """3D skeleton (N, 17, 3), world, metres: each keypoint ray (N, 17, 3) cut by the vertical
+    plane facing the camera at horizontal ``ranges`` (N,) along ``bearing`` (N, 2)."""
+    along = rays[..., 0] * bearing[:, None, 0] + rays[..., 1] * bearing[:, None, 1]
+    return origin + (ranges[:, None] / np.maximum(along, MIN_ALONG))[..., None] * rays
+
+
+def skeleton_3d(tri: Triangulated, rays: np.ndarray, origin: np.ndarray, xy: np.ndarray, bearing: np.ndarray,
+                ranges: np.ndarray) -> np.ndarray:
+    """(N, 17, 3) world, metres: the person's shape from triangulation placed at the fused
+    ground point ``xy`` (N, 2), or each keypoint ray cut at ``ranges`` (N,) along ``bearing``
+    (N, 2) (:func:`keypoints_at_range`).
+
+    A walker's drift moves every triangulated keypoint alike, so it leaves the shape (each
+    keypoint against the torso) alone: a keypoint is taken from triangulation where its
+    pixel-noise variance along the bearing is below the cut's :data:`BODY_DEPTH_STD_M`,
+    and the torso was triangulated; the shape is moved so the torso sits over ``xy``.
+    """
+    cut = keypoints_at_range(rays, origin, bearing, ranges)
+    torso = tri.good[:, TORSO_KEYPOINTS]
+    count = torso.sum(axis=1)
+    if not count.any():
+        return cut
+    centre = (np.where(torso[..., None], tri.points[:, TORSO_KEYPOINTS, :2], 0.0)).sum(axis=1) / np.maximum(count, 1)[:, None]
+    bx, by = bearing[:, None, 0], bearing[:, None, 1]
+    c = tri.covariances
+    var = c[..., 0] * bx * bx + 2.0 * c[..., 1] * bx * by + c[..., 2] * by * by
+    better = tri.good & (count > 0)[:, None] & (var < BODY_DEPTH_STD_M**2)
+    placed = tri.points.copy()
+    placed[..., :2] += (xy - centre)[:, None, :]
+    return np.where(better[..., None], placed, cut)
+
+
+class FusedLocator:
+    """The ``fused`` position method (``Config.fused``), one :class:`Measurement` per frame.
+
+    Its per-track memory (``columns``) is the :class:`TrackHistory`.
+    """
+
+    #: What the method changes besides ``Config.method``, beyond the paper: the tracker's
+    #: height-ratio rule and motion prediction and the filter's restart gate.
+    PRESET = {"tracking": {"max_height_ratio": 1.5, "predict_motion": True}, "kalman": {"restart_gate": 25.0}}
+
+    def __init__(self, config: Config) -> None:
+        self.config = config
+        self.columns = self.history = TrackHistory(config.fused.history_length)
+        self._sources: dict = {}
+
+    def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
+        cfg, frame, det = self.config.fused, geo.frame, geo.detections
+        n, cam, h = len(det), frame.camera, self.history
+        focal = float(cam.intrinsics[0, 0])
+        rays, origin = geo.rays, geo.origin
+        usable = keypoint_usable(det.keypoints, det.confidences, cam.width, cam.height, cfg.min_keypoint_confidence)
+        skel = FrameSkeletons.of(rays, origin, usable, cfg.keypoint_pixel_std / focal)
+        placed = h.placed[rows]
+        last = h.positions[rows] - origin[:2]
+        last_range = np.where(placed, np.sqrt(last[:, 0] ** 2 + last[:, 1] ** 2), np.nan)
+
+        cues: list[CueEstimate] = []
+        if "ground" in cfg.cues:
+            cues.append(ground_cue(frame, skel, cfg))
+        if "height" in cfg.cues:
+            cues.append(height_cue(skel, focal, cfg, reference_range=last_range))
+        terms, dots = ray_terms(rays, origin)
+        # where each keypoint was: the track's last skeleton, moved onto this frame's rays
+        last_skel = h.skeletons[rows]
+        depth = ((last_skel - origin) * rays).sum(-1)
+        start = origin + np.where(placed[:, None], np.maximum(depth, MIN_ALONG), 1.0)[..., None] * rays
+        tri = triangulate(rays, terms, usable, origin, frame.timestamp, start, placed, *h.of(rows), skel.noise, cfg)
+        h.push(rows, rays, terms, dots, usable, origin, frame.timestamp)
+        if "triangulation" in cfg.cues:
+            cues.append(triangulation_cue(tri, skel, cfg))
+        fused = fuse_cues(cues, cfg.gate_probability)
+        sources = describe_sources(cues, fused, self._sources, ~fused.valid)
+
+        xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
+        if not fused.valid.all():
+            box = box_estimate(det.boxes, geo.centre_rays, origin, focal, cfg.person_height_mean_m)
+            lost = ~fused.valid
+            xy = np.where(lost[:, None], box.positions, xy)
+            cov = np.where(lost[:, None, None], box.covariances, cov)
+            bias = np.where(lost[:, None, None], box.bias_covariances, bias)
+
+        positions = np.column_stack([xy, road_height(frame.ego.rotation, frame.ego.translation, xy)])
+        offset = xy - origin[:2]
+        ranges = np.sqrt(offset[:, 0] ** 2 + offset[:, 1] ** 2)
+        bearing = offset / np.maximum(ranges, MIN_ALONG)[:, None]
+        skeleton = skeleton_3d(tri, rays, origin, xy, bearing, ranges)
+        h.place(rows, xy, skeleton, fused.valid)
+        return Measurement(positions, cov, sources, skeleton, bias)
+
+
+def road_height(rotation: np.ndarray, translation: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """World z (N,) of the vehicle's road plane (vehicle z = 0) at world ``xy`` (N, 2), metres."""
+    normal = rotation[:, 2]
+    return translation[2] - ((xy - translation[:2]) @ normal[:2]) / max(normal[2], 1e-6)

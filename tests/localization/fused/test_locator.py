@@ -1,0 +1,113 @@
+import numpy as np
+import pytest
+
+from pedenv.config import Config, FusedConfig
+from pedenv.model import PedestrianEnvironmentModel
+from pedenv.skeleton import ANKLE_KEYPOINTS
+
+from fused_frames import make_frame
+
+FUSED = Config().replace(method="fused")
+
+
+def run(frames, config=FUSED):
+    model = PedestrianEnvironmentModel(config)
+    return [model.update(f) for f in frames]
+
+
+def test_standing_ego_uses_ground_and_height_and_says_why_not_triangulation():
+    ground = np.array([[8.0, 1.5, 0.0], [30.0, -4.0, 0.0]])
+    states = run([make_frame(ground, index=i, timestamp=0.1 * i) for i in range(4)])
+    peds = states[-1].pedestrians
+    assert peds.sources[0] == "ground+height;triangulation:no-baseline"
+    assert peds.sources[1] == "height;ground:beyond-range;triangulation:no-baseline"
+    assert states[0].pedestrians.sources[0].endswith("triangulation:no-history")
+    np.testing.assert_allclose(peds.positions[:, :2], ground[:, :2], rtol=0.02, atol=0.1)
+
+
+def test_driving_ego_triangulates_and_the_covariance_is_long_along_the_ray():
+    ground = np.array([[30.0, 6.0, 0.0]])
+    frames = [make_frame(ground, ego_xyz=(1.0 * i, 0.0, 0.0), index=i, timestamp=0.1 * i) for i in range(6)]
+    peds = run(frames)[-1].pedestrians
+    assert "triangulation" in peds.sources[0].split(";")[0]
+    ray = (ground[0, :2] - [5.0, 0.0]) / np.linalg.norm(ground[0, :2] - [5.0, 0.0])
+    vals, vecs = np.linalg.eigh(peds.covariances[0])
+    assert abs(vecs[:, 1] @ ray) > 0.95 and vals[1] > 4 * vals[0]
+    assert peds.keypoints_3d.shape == (1, 17, 3)
+
+
+def test_bad_input_never_gives_nan():
+    # no ankles, a person above the horizon on a rise, a skeleton with almost nothing seen
+    ground = np.array([[10.0, 0.0, 0.0], [40.0, 2.0, 4.0], [15.0, -3.0, 0.0]])
+    frame = make_frame(ground, pitch=0.04)
+    conf = frame.detections.confidences.copy()
+    conf[0, list(ANKLE_KEYPOINTS)] = 0.0
+    conf[2, :] = 0.0
+    conf[2, [9, 10]] = 1.0  # only the wrists
+    from dataclasses import replace
+    from pedenv.records import Detections
+    frame = replace(frame, detections=Detections(frame.detections.keypoints, conf))
+    peds = run([frame])[-1].pedestrians
+    for array in (peds.positions, peds.covariances, peds.keypoints_3d, peds.distances):
+        assert np.isfinite(array).all()
+    assert "ground:no-ankles" in peds.sources[0]
+    assert "ground:above-horizon" in peds.sources[1]
+    assert peds.sources[2].startswith("box;")
+
+
+@pytest.mark.parametrize("values, message", [
+    ({"cues": ("ground", "magic")}, "fused.cues entry"),
+    ({"cues": ()}, "at least one"),
+    ({"person_height_std_m": 0.0}, "person_height_std_m"),
+    ({"history_length": 0}, "history_length"),
+    ({"gate_probability": 1.0}, "gate_probability"),
+])
+def test_config_is_range_checked(values, message):
+    with pytest.raises(ValueError, match=message):
+        FusedConfig(**values)
+
+
+def test_config_round_trip_and_cue_selection():
+    cfg = Config().replace(method="fused", fused={"cues": "height,ground"})
+    assert cfg.fused.cues == ("height", "ground")
+    assert Config.from_dict(cfg.to_dict()) == cfg
+    peds = run([make_frame(np.array([[9.0, 0.0, 0.0]]))], cfg)[-1].pedestrians
+    assert peds.sources[0] == "ground+height"
+
+
+def pointing_person_frames(ground, n_frames=7, speed_m_per_frame=0.8):
+    """Frames of a standing person at ``ground`` (1, 3) holding both wrists 0.5 m out in
+    front (towards -x, the ego), seen from an ego driving along +x; and the true skeleton."""
+    from dataclasses import replace
+    from pedenv.geometry import invert_transform, project
+    from pedenv.records import Detections
+    from fused_frames import upright_skeletons
+    truth = upright_skeletons(ground, [1.72])
+    truth[0, [9, 10], 0] -= 0.5  # wrists reaching towards the road
+    truth[0, [9, 10], 2] += 0.4
+    frames = []
+    for i in range(n_frames):
+        frame = make_frame(ground, ego_xyz=(speed_m_per_frame * i, 0.0, 0.0), index=i, timestamp=0.1 * i)
+        px, _ = project(truth, frame.camera.intrinsics, invert_transform(frame.cam_to_world))
+        frames.append(replace(frame, detections=Detections(px, frame.detections.confidences)))
+    return frames, truth[0]
+
+
+def test_the_3d_skeleton_is_triangulated_over_the_history():
+    # a distinctive pose: a cut at the person's range would put the wrists ~0.45 m too far
+    ground = np.array([[14.0, 5.0, 0.0]])
+    frames, truth = pointing_person_frames(ground)
+    peds = run(frames)[-1].pedestrians
+    error = np.linalg.norm(peds.keypoints_3d[0] - truth, axis=1)
+    assert error.max() < 0.05  # metres, every keypoint, wrists included (exact detections)
+    first = run(frames[:1])[-1].pedestrians  # no history yet: cut at the range along each ray
+    assert np.linalg.norm(first.keypoints_3d[0, 9] - truth[9]) > 0.3
+
+
+def test_the_reported_covariance_holds_the_per_person_part():
+    # the unknown height repeats every frame: filtering must not shrink it away
+    ground = np.array([[30.0, -4.0, 0.0]])
+    states = run([make_frame(ground, index=i, timestamp=0.1 * i) for i in range(30)])
+    cov = states[-1].pedestrians.covariances[0]
+    ray = ground[0, :2] / np.linalg.norm(ground[0, :2])
+    assert np.sqrt(ray @ cov @ ray) > 0.5 * 30.0 * 0.09 / 1.72  # at least half the height prior's spread
