@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared_paths import SHARED
 
 from pedenv.io.datasets import open_dataset
 from pedenv.io.datasets.carla import CarlaDataset, load_record, natural_key
@@ -17,10 +18,7 @@ from pedenv.geometry import invert_transform, project
 from pedenv.records import OPTICAL_TO_VEHICLE
 from pedenv.skeleton import CocoKeypoint as K
 
-# shared/ lies beside the repository (CI clones next to it)
-SAMPLES = Path(__file__).resolve().parents[3] / "shared" / "samples" / "carla-recording"
-if not SAMPLES.is_dir():
-    SAMPLES = Path("/work/shared/samples/carla-recording")
+SAMPLES = SHARED / "samples" / "carla-recording"
 
 
 @pytest.fixture(scope="module")
