@@ -9,6 +9,7 @@ from pedenv.config import Config
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.apps.demo import builtin_scenes, run_demo
 from pedenv.apps.evaluate import run_evaluation
+from golden import assert_golden
 
 PAPER_CARLA_REL_ERROR_PCT = 16.85
 
@@ -20,10 +21,10 @@ def scenes():
 
 @pytest.mark.slow
 def test_exact_skeletons_beat_the_papers_carla_error(scenes):
-    result = run_evaluation(MemoryDataset(scenes), config=Config(), pose_backend="ground-truth")
+    result = run_evaluation(MemoryDataset(scenes, name="flat"), config=Config(), pose_backend="ground-truth")
     m = result.metrics
-    # measured 15.50 % over 26811 matched pedestrians (seed 0); the paper: 16.85 % on CARLA
-    assert m.overall.rel_error_pct < PAPER_CARLA_REL_ERROR_PCT
+    assert_golden("flat7/paper/ground-truth", m)  # 15.30 % over 23906 matched (seed 0)
+    assert m.overall.rel_error_pct < PAPER_CARLA_REL_ERROR_PCT  # the paper: 16.85 % on CARLA
     assert m.overall.count > 20000
     assert len(m.scenes) == 7 and all(s.count > 1000 for _, s in m.scenes)
     assert m.tracking["mota"] > 0.8
@@ -31,12 +32,13 @@ def test_exact_skeletons_beat_the_papers_carla_error(scenes):
 
 @pytest.mark.slow
 def test_refinement_matters_as_in_the_papers_ablation(scenes):
-    # measured (seed 0): 15.61 % with refinement, 28.25 % without; a standing ego gives no
-    # intersection, so those scenes use the height fallback either way
-    data = MemoryDataset(scenes)
+    # a standing ego gives no intersection, so those scenes use the height fallback either way
+    data = MemoryDataset(scenes, name="flat")
     with_ref = run_evaluation(data, pose_backend="ground-truth").metrics.overall
-    without = run_evaluation(data, config=Config().replace(paper={"refine": False}),
-                             pose_backend="ground-truth").metrics.overall
+    without_metrics = run_evaluation(data, config=Config().replace(paper={"refine": False}),
+                                     pose_backend="ground-truth").metrics
+    without = without_metrics.overall
+    assert_golden("flat7/paper-no-refinement/ground-truth", without_metrics)
     assert with_ref.count == without.count
     assert without.rel_error_pct > 1.5 * with_ref.rel_error_pct
 

@@ -35,3 +35,43 @@ def test_innovation_distance_hand_checked():
     r = np.array([np.eye(2)])
     # innovation (2, 2), S = 2 I: d^2 = (4 + 4) / 2
     assert kalman.innovation_distance(x, P, np.array([[3.0, 4.0]]), r)[0] == pytest.approx(4.0)
+
+
+@pytest.mark.parametrize("dt, std", [(0.1, 1.0), (1 / 12, 0.3), (0.5, 2.0)])
+def test_q_equals_filterpys_white_noise(dt, std):
+    from filterpy.common import Q_discrete_white_noise
+
+    _, Q = kalman.transition(dt, std)
+    want = Q_discrete_white_noise(dim=2, dt=dt, var=std**2, block_size=2, order_by_dim=True)
+    np.testing.assert_allclose(Q, want, rtol=1e-12, atol=1e-15)
+
+
+def test_batched_filter_equals_filterpy_track_by_track():
+    """Five tracks with different covariances through predict/update, each against its own
+    filterpy.kalman.KalmanFilter (same F, Q, H, R)."""
+    from filterpy.kalman import KalmanFilter
+
+    rng = np.random.default_rng(3)
+    n = 5
+    z0 = rng.normal(0, 10, (n, 2))
+    r0 = np.array([np.diag(rng.uniform(0.1, 2.0, 2)) for _ in range(n)])
+    x, P = kalman.initial_state(z0, r0, 1.5)
+    filters = []
+    for i in range(n):
+        kf = KalmanFilter(dim_x=4, dim_z=2)
+        kf.x, kf.P, kf.H = x[i].copy(), P[i].copy(), kalman.H.copy()
+        filters.append(kf)
+    for step in range(12):
+        dt = 0.05 + 0.01 * step
+        F, Q = kalman.transition(dt, 0.8)
+        x, P = kalman.predict(x, P, F, Q)
+        a = rng.normal(0, 1, (n, 2, 2))
+        R = a @ np.transpose(a, (0, 2, 1)) + 0.1 * np.eye(2)  # full, correlated covariances
+        z = x @ kalman.H.T + rng.normal(0, 1, (n, 2))
+        x, P = kalman.update(x, P, z, R)
+        for i, kf in enumerate(filters):
+            kf.F, kf.Q = F, Q
+            kf.predict()
+            kf.update(z[i], R=R[i])
+            np.testing.assert_allclose(x[i], kf.x, rtol=1e-10, atol=1e-10)
+            np.testing.assert_allclose(P[i], kf.P, rtol=1e-9, atol=1e-10)

@@ -1,16 +1,16 @@
 """Constant-velocity Kalman filter on the ground plane, batched over tracks.
 
-State per track ``[x, vx, y, vy]`` (world frame, metres and metres per second), the
-order of filterpy's ``Q_discrete_white_noise(..., order_by_dim=True)``. The matrices
-come from filterpy; the batched predict/update is plain numpy so that a frame with a
-hundred pedestrians costs a few array operations.
+State per track ``[x, vx, y, vy]`` (world frame, metres and metres per second). The
+process noise is the discrete white-noise acceleration model (Bar-Shalom, *Estimation
+with Applications to Tracking and Navigation*, Sec. 6.3.3), in the order of filterpy's
+``Q_discrete_white_noise(dim=2, block_size=2, order_by_dim=True)``; the batched
+predict/update is plain numpy so that a frame with a hundred pedestrians costs a few
+array operations. ``tests/test_kalman.py`` checks both against filterpy's own filter.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
-
 from pedenv.geometry import inverse_2x2
 
 #: Measurement matrix: the filter observes x and y.
@@ -20,14 +20,15 @@ H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
 def transition(dt: float, acceleration_std: float) -> tuple[np.ndarray, np.ndarray]:
     """``(F, Q)`` (4, 4) of the constant-velocity model over ``dt`` seconds.
 
-    Q is filterpy's discrete white-noise acceleration with variance ``acceleration_std**2``.
+    Q is the discrete white-noise acceleration with variance ``acceleration_std**2``: per
+    axis ``var * [[dt^4/4, dt^3/2], [dt^3/2, dt^2]]``.
     """
     f1 = np.array([[1.0, dt], [0.0, 1.0]])
-    F = np.zeros((4, 4))
-    F[:2, :2] = f1
-    F[2:, 2:] = f1
-    Q = Q_discrete_white_noise(dim=2, dt=dt, var=acceleration_std**2, block_size=2, order_by_dim=True)
-    return F, np.asarray(Q, dtype=np.float64)
+    q1 = acceleration_std**2 * np.array([[dt**4 / 4.0, dt**3 / 2.0], [dt**3 / 2.0, dt**2]])
+    F, Q = np.zeros((4, 4)), np.zeros((4, 4))
+    F[:2, :2] = F[2:, 2:] = f1
+    Q[:2, :2] = Q[2:, 2:] = q1
+    return F, Q
 
 
 def initial_state(z: np.ndarray, r: np.ndarray, velocity_std: float) -> tuple[np.ndarray, np.ndarray]:

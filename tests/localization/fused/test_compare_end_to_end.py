@@ -1,6 +1,7 @@
 """Seeded end-to-end comparison on the built-in scenes with rolling terrain.
 
-The bounds are the measured numbers (seed 0, 8 s of each scene) with a small margin.
+The figures (seed 0, 8 s of each scene) are pinned in tests/golden_metrics.json; the
+bounds below say what they must show.
 """
 
 import json
@@ -12,6 +13,7 @@ from pedenv.config import Config
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 from pedenv.synthetic import generate_scenes
+from golden import assert_golden
 
 SCENES = ["standing-pedestrians", "drive-30kmh-sidewalk"]
 
@@ -25,13 +27,15 @@ def dataset():
 def test_fused_beats_paper_with_exact_skeletons(dataset, tmp_path):
     results = compare_methods(dataset, pose_backend="ground-truth", output_dir=tmp_path)
     paper, fused = results["paper"].metrics, results["fused"].metrics
+    assert_golden("terrain2/paper/ground-truth", paper)
+    assert_golden("terrain2/fused/ground-truth", fused)
     assert fused.overall.count == paper.overall.count > 1000
-    assert fused.overall.rel_error_pct < 4.4  # measured 3.92
-    assert paper.overall.rel_error_pct > 10.0  # measured 11.01
+    assert fused.overall.rel_error_pct < 4.4
+    assert paper.overall.rel_error_pct > 10.0
     still, driving = (dict(fused.scenes)[s].rel_error_pct for s in SCENES)
     assert still < driving + 1.0  # the ego standing still is no worse than driving
-    assert 0.30 <= fused.calibration["within_1sigma"] <= 0.58  # measured 0.538 (all 7 scenes: 0.485)
-    assert fused.calibration["within_2sigma"] >= 0.78  # measured 0.830 (all 7 scenes: 0.810)
+    assert 0.30 <= fused.calibration["within_1sigma"] <= 0.58
+    assert fused.calibration["within_2sigma"] >= 0.78
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert set(saved["methods"]) == {"paper", "fused"}
     assert (tmp_path / "error_by_distance.png").exists() and (tmp_path / "fused" / "metrics.json").exists()
@@ -43,10 +47,12 @@ def test_fused_beats_paper_with_exact_skeletons(dataset, tmp_path):
 def test_fused_beats_paper_with_the_detector_model(dataset):
     results = compare_methods(dataset, pose_backend="detector-model", config=Config())
     paper, fused = results["paper"].metrics, results["fused"].metrics
-    assert fused.overall.rel_error_pct < paper.overall.rel_error_pct - 5.0  # measured 8.62 vs 15.83
+    assert_golden("terrain2/paper/detector-model", paper)
+    assert_golden("terrain2/fused/detector-model", fused)
+    assert fused.overall.rel_error_pct < paper.overall.rel_error_pct - 5.0
     assert fused.overall.rel_error_pct < 9.2
-    assert 0.30 <= fused.calibration["within_1sigma"] <= 0.50  # measured 0.380 (all 7 scenes: 0.373)
-    assert fused.calibration["within_2sigma"] >= 0.70  # measured 0.763 (all 7 scenes: 0.725)
+    assert 0.30 <= fused.calibration["within_1sigma"] <= 0.50
+    assert fused.calibration["within_2sigma"] >= 0.70
 
 
 def test_compare_rejects_unknown_methods(dataset):

@@ -1,0 +1,94 @@
+"""The package's layout: no module imports a module that imports it back, and the
+README's module map names every module of the tree."""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(SRC).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> the pedenv modules it imports anywhere (function-level imports too)."""
+    modules = {module_name(p): p for p in SRC.rglob("*.py")}
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                targets |= {a.name for a in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1] + ([base] if base else []))
+                targets |= {f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names}
+        graph[name] = {t for t in targets if t in modules and t != name}
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_the_graph_sees_imports():
+    graph = import_graph()
+    assert "pedenv.tracking.tracker" in graph["pedenv.model"]
+    assert "pedenv.localization.base" in graph["pedenv.localization.paper"]
+
+
+def test_no_module_imports_a_module_that_imports_it_back():
+    assert cycles(import_graph()) == []
+
+
+def test_readme_module_map_matches_the_tree():
+    """Every module and package of src/pedenv is named in the README's module map, and the
+    map names nothing that does not exist."""
+    text = README.read_text()
+    block = text[text.index("## Module map"):]
+    block = block[: block.index("\n## ", 4)]
+    named = set(re.findall(r"`((?:[a-z_]+/)*[a-z_]+(?:\.py|/))`", block))
+    tree = {str(p.relative_to(SRC / "pedenv")) for p in (SRC / "pedenv").rglob("*.py") if p.name != "__init__.py"}
+    tree |= {str(p.relative_to(SRC / "pedenv")) + "/" for p in (SRC / "pedenv").rglob("*") if p.is_dir()
+             and (p / "__init__.py").exists()}
+    assert sorted(tree - named) == []
+    assert sorted(named - tree) == []
