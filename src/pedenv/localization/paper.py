@@ -232,21 +232,35 @@ def keypoints_on_plane(rays: np.ndarray, origin: np.ndarray, directions: np.ndar
     return origin + depth[..., None] * rays
 
 
+class PaperMemory(ColumnGroup):
+    """Each track's previous observation (the paper's method intersects two frames):
+    keypoint rays ``rays (T, 17, 3)`` and box-centre rays ``centre_rays (T, 3)`` (unit,
+    world), ``confidences (T, 17)``, camera centres ``origins (T, 3)`` (world, metres) and
+    ``seen (T,)``, the track has a previous observation."""
+
+    rays: np.ndarray
+    centre_rays: np.ndarray
+    confidences: np.ndarray
+    origins: np.ndarray
+    seen: np.ndarray
+
+    def __init__(self) -> None:
+        super().__init__({"rays": ((17, 3), np.float64), "centre_rays": ((3,), np.float64),
+                          "confidences": ((17,), np.float64), "origins": ((3,), np.float64), "seen": ((), bool)})
+
+
 class PaperLocator:
     """The paper's two-frame intersection with height refinement (Algorithm 1).
 
-    Its memory (``columns``) is each track's previous observation: keypoint rays ``rays
-    (T, 17, 3)``, box-centre rays ``centre_rays (T, 3)``, ``confidences (T, 17)``, camera
-    centres ``origins (T, 3)`` and ``seen (T,)``. Its measurement covariance is isotropic:
+    Its memory (``columns``) is each track's previous observation (:class:`PaperMemory`).
+    Its measurement covariance is isotropic:
     ``(measurement_std_m + measurement_std_rel * distance)^2`` per axis
     (:class:`~pedenv.config.PaperConfig`); the paper gives none.
     """
 
     def __init__(self, config: Config) -> None:
         self.config = config.paper
-        self.columns = ColumnGroup({"rays": ((17, 3), np.float64), "centre_rays": ((3,), np.float64),
-                                    "confidences": ((17,), np.float64), "origins": ((3,), np.float64),
-                                    "seen": ((), bool)})
+        self.columns = PaperMemory()
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
         det, frame, mem, cfg = geo.detections, geo.frame, self.columns, self.config

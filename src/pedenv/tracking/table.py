@@ -27,7 +27,8 @@ class ColumnGroup:
     """A named group of per-track columns, each an attribute of shape (T, ...).
 
     columns: column name -> ``(row shape, dtype)``; every column starts with no rows and a
-    new track's row is zero (False for booleans).
+    new track's row is zero (False for booleans). Subclasses declare their columns as
+    annotated attributes (``boxes: np.ndarray``) so readers and type checkers see them.
     """
 
     def __init__(self, columns: dict[str, tuple[tuple[int, ...], type]]) -> None:
@@ -50,6 +51,12 @@ class TrackColumns(ColumnGroup):
     (ego-yaw compensated); ``misses (T,)`` consecutive frames without a detection; ``hits
     (T,)`` detections so far; ``velocities (T, 4)`` pixels per frame of the box edges."""
 
+    ids: np.ndarray
+    boxes: np.ndarray
+    misses: np.ndarray
+    hits: np.ndarray
+    velocities: np.ndarray
+
     def __init__(self) -> None:
         super().__init__({"ids": ((), np.int64), "boxes": ((4,), np.float64), "misses": ((), np.int64),
                           "hits": ((), np.int64), "velocities": ((4,), np.float64)})
@@ -58,6 +65,10 @@ class TrackColumns(ColumnGroup):
 class FilterColumns(ColumnGroup):
     """The Kalman filter's columns: ``x (T, 4)`` state ``[x, vx, y, vy]`` (world, metres and
     m/s), ``P (T, 4, 4)`` its covariance, ``started (T,)`` the filter holds a state."""
+
+    x: np.ndarray
+    P: np.ndarray
+    started: np.ndarray
 
     def __init__(self) -> None:
         super().__init__({"x": ((4,), np.float64), "P": ((4, 4), np.float64), "started": ((), bool)})

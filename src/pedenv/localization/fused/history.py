@@ -48,6 +48,17 @@ class TrackHistory(ColumnGroup):
     last 3D skeleton, world, metres (valid where ``placed``).
     """
 
+    rays: np.ndarray
+    terms: np.ndarray
+    dots: np.ndarray
+    usable: np.ndarray
+    cameras: np.ndarray
+    filled: np.ndarray
+    positions: np.ndarray
+    placed: np.ndarray
+    skeletons: np.ndarray
+    count: np.ndarray
+
     def __init__(self, length: int) -> None:
         self.length = L = int(length)
         k, f = NUM_KEYPOINTS, np.float64
