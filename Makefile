@@ -1,4 +1,6 @@
 # The two commands of the README:  make demo  and  make test.
+# make test-fast: the tests without the slow end-to-end runs and the pose network (under a minute).
+# make lint: ruff and mypy (CI runs it after the tests).
 # Both create the virtual environment .venv with everything pedenv needs (the
 # ultralytics/torch extra included, to export the pose network to ONNX offline).
 
@@ -7,7 +9,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.pedenv-setup
 
-.PHONY: setup demo test bench clean
+.PHONY: setup demo test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +25,13 @@ demo: setup
 
 test: setup
 	$(BIN)/python -m pytest
+
+test-fast: setup
+	$(BIN)/python -m pytest -q -m "not slow and not ultralytics and not onnx_model"
+
+lint: setup
+	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/mypy
 
 bench: setup
 	$(BIN)/pedenv bench
