@@ -3,7 +3,7 @@ import pytest
 
 from pedenv.geometry import (closest_points, inverse_2x2, inverse_2x2_entries, invert_transform, pixel_rays, project,
                              quaternion_to_rotation, rotation_from_ypr, rotation_to_quaternion)
-from pedenv.records import Camera, EgoPose, Frame
+from pedenv.records import EgoPose, Frame
 
 
 def test_closest_points_of_skew_rays_hand_checked():

@@ -7,8 +7,6 @@ from scipy.optimize import linear_sum_assignment
 
 from pedenv.boxes import giou_matrix
 
-_EMPTY = np.zeros(0, dtype=np.int64)
-
 
 def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3,
               max_height_ratio: float = 0.0):
