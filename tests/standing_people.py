@@ -6,17 +6,15 @@ from dataclasses import replace
 
 import numpy as np
 
+from pedenv.body import standing_body, world_keypoints
 from pedenv.geometry import invert_transform, project
 from pedenv.records import Camera, Detections, EgoPose, Frame
 
-#: A standing COCO-17 person 1 m tall (fractions of the height), facing the camera.
-HEIGHT_FRACTION = np.array([.92, .94, .94, .93, .93, .82, .82, .62, .62, .48, .48, .53, .53, .29, .29, .05, .05])
-LATERAL = np.array([0, .03, -.03, .07, -.07, .2, -.2, .24, -.24, .25, -.25, .1, -.1, .1, -.1, .1, -.1])
-
 
 def person_points(xy, height: float = 1.72, ground_z: float = 0.0) -> np.ndarray:
-    """(17, 3) world keypoints of a person standing at ``xy`` facing -x."""
-    return np.column_stack([np.full(17, xy[0]), xy[1] + LATERAL * height, ground_z + HEIGHT_FRACTION * height])
+    """(17, 3) world keypoints of a person of the body template standing at ``xy`` facing -x."""
+    ground = np.array([[xy[0], xy[1], ground_z]], float)
+    return world_keypoints(ground, np.array([np.pi]), standing_body([height]))[0]
 
 
 def frame_with_people(index: int, t: float, ego: EgoPose, people_xy, camera: Camera | None = None,

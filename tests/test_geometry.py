@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from pedenv.geometry import (closest_points, invert_transform, pixel_rays, project, quaternion_to_rotation,
-                             rotation_from_ypr, rotation_to_quaternion)
-from pedenv.records import Camera, EgoPose, Frame
+from pedenv.geometry import (closest_points, inverse_2x2, inverse_2x2_entries, invert_transform, pixel_rays, project,
+                             quaternion_to_rotation, rotation_from_ypr, rotation_to_quaternion)
+from pedenv.records import EgoPose, Frame
 
 
 def test_closest_points_of_skew_rays_hand_checked():
@@ -48,3 +48,13 @@ def test_quaternion_round_trip_and_nuscenes_front_camera():
     # FORMATS.md: a front camera looking straight ahead has rotation [0.5, -0.5, 0.5, -0.5]
     from pedenv.records import OPTICAL_TO_VEHICLE
     np.testing.assert_allclose(quaternion_to_rotation([0.5, -0.5, 0.5, -0.5]), OPTICAL_TO_VEHICLE, atol=1e-12)
+
+
+def test_inverse_2x2_hand_checked_and_batched():
+    # [[4, 7], [2, 6]]: determinant 10, inverse [[0.6, -0.7], [-0.2, 0.4]]
+    np.testing.assert_allclose(inverse_2x2(np.array([[4.0, 7.0], [2.0, 6.0]])), [[0.6, -0.7], [-0.2, 0.4]], atol=1e-15)
+    m = np.random.default_rng(3).normal(size=(5, 3, 2, 2)) + 3 * np.eye(2)
+    np.testing.assert_allclose(inverse_2x2(m) @ m, np.broadcast_to(np.eye(2), m.shape), atol=1e-12)
+    # the symmetric case on separate component arrays: [[2, 1], [1, 3]] -> [[3, -1], [-1, 2]] / 5
+    a, b, c, d = inverse_2x2_entries(np.array([2.0]), np.array([1.0]), np.array([1.0]), np.array([3.0]))
+    np.testing.assert_allclose(np.concatenate([a, b, c, d]), [0.6, -0.2, -0.2, 0.4], atol=1e-15)

@@ -30,11 +30,22 @@ def inverse_intrinsics(k: np.ndarray) -> np.ndarray:
                      [0.0, 0.0, 1.0]]) / k[2, 2] if k[2, 0] == 0 and k[2, 1] == 0 and k[1, 0] == 0 else np.linalg.inv(k)
 
 
-def inverse_2x2(m: np.ndarray) -> np.ndarray:
-    """Inverse of a batch of (..., 2, 2) matrices in closed form."""
-    a, b, c, d = m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1]
+def inverse_2x2_entries(a, b, c, d):
+    """Entries ``(a', b', c', d')`` of the inverse of ``[[a, b], [c, d]]``, in closed form.
+
+    a, b, c, d: arrays of one shape (or scalars), any unit. For a symmetric matrix pass
+    ``b`` twice: ``b' == c'``. Singular matrices give inf or NaN (no check).
+    Written on the entries so code that keeps 2x2 matrices as separate component arrays
+    needs not stack them: on a few matrices a frame, stacking costs more than the arithmetic.
+    """
     det = a * d - b * c
-    return np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], -2) / det[..., None, None]
+    return d / det, -b / det, -c / det, a / det
+
+
+def inverse_2x2(m: np.ndarray) -> np.ndarray:
+    """Inverse of a batch of (..., 2, 2) matrices in closed form (:func:`inverse_2x2_entries`)."""
+    a, b, c, d = inverse_2x2_entries(m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1])
+    return np.stack([np.stack([a, b], -1), np.stack([c, d], -1)], -2)
 
 
 def closest_points(o1: np.ndarray, d1: np.ndarray, o2: np.ndarray, d2: np.ndarray, min_sin: float = 1e-9):

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from pedenv.evaluation.matching import iou_matrix, match_to_ground_truth, position_errors
+from pedenv.evaluation.matching import match_to_ground_truth, position_errors
 from pedenv.evaluation.metrics import calibration, error_by_distance
 
 
@@ -17,7 +17,6 @@ def test_match_takes_nearest_in_world_among_overlapping_boxes():
 def test_errors_hand_checked():
     abs_err, rel, dist = position_errors(np.array([[13.0, 4.0]]), np.array([[10.0, 0.0]]), np.array([0.0, 0.0]))
     assert abs_err[0] == pytest.approx(5.0) and dist[0] == pytest.approx(10.0) and rel[0] == pytest.approx(50.0)
-    assert iou_matrix(np.array([[0, 0, 2, 2.0]]), np.array([[1, 1, 3, 3.0]]))[0, 0] == pytest.approx(1 / 7)
 
 
 def test_error_by_distance_bins_and_calibration():

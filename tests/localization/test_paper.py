@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 from pedenv.config import Config, PaperConfig
-from pedenv.geometry import invert_transform
+from pedenv.geometry import invert_transform, project
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.localization.paper import HEIGHT_FIRST, HEIGHT_PARALLEL, TRIANGULATION, height_distance, keep_most_confident, refine_distance
+from pedenv.localization.paper import (HEIGHT_FIRST, HEIGHT_PARALLEL, TRIANGULATION, estimate_positions, keep_most_confident,
+                                      refine_distance)
 from pedenv.records import EgoPose, Frame
 
 from standing_people import frame_with_people
@@ -39,11 +40,33 @@ def test_refinement_removes_three_quarters_of_the_error(camera, start_factor):
     assert refined[0] / d_true - 1 == pytest.approx((start_factor - 1) * 5 / 20, abs=2e-3)
 
 
-def test_height_distance_finds_the_true_distance(camera):
+def test_one_refinement_step_is_the_papers_rescaling(camera):
+    """d * (1 + (h_est / h_orig - 1) / lambda), h_est the projected height of the person at d (Eq. 6-7)."""
+    origin, w2c, direction, _ = _geometry(camera, (25.0, 4.0))
+    cfg = PaperConfig()
+    d0, h_orig, lam = 20.0, 80.0, 3.0
+    bottom = origin + d0 * direction[0]
+    bottom[2] = 0.0
+    px, _ = project(np.stack([bottom, bottom + [0.0, 0.0, cfg.person_height_m]]), camera.intrinsics, w2c)
+    h_est = np.linalg.norm(px[1] - px[0])
+    got = refine_distance(np.array([d0]), direction, origin, np.array([h_orig]), 0.0, camera.intrinsics, w2c, cfg,
+                          lambdas=np.array([lam]))
+    assert got[0] == pytest.approx(d0 * (1 + (h_est / h_orig - 1) / lam), rel=1e-12)
+
+
+@pytest.mark.parametrize("has_prev, source", [(False, HEIGHT_FIRST), (True, HEIGHT_PARALLEL)])
+def test_height_fallback_finds_the_true_distance(camera, has_prev, source):
+    """Without a usable second view the distance comes from the person's pixel height alone."""
     origin, w2c, direction, d_true = _geometry(camera, (42.0, 0.0))
-    h_px = camera.intrinsics[1, 1] * 1.7 / 42.0
-    d = height_distance(direction, origin, np.array([h_px]), 0.0, camera.intrinsics, w2c, PaperConfig())
-    assert d[0] == pytest.approx(d_true, rel=1e-3)
+    h_px = camera.intrinsics[1, 1] * 1.7 / 42.0  # a 1.7 m person at a depth of 42 m
+    rays = np.broadcast_to(direction[:, None], (1, 17, 3))
+    ones = np.ones((1, 17))
+    # the previous view, when there is one, is the same: parallel rays, no intersection
+    est = estimate_positions(rays, direction, ones, np.array([h_px]), origin, rays, direction, ones, origin[None],
+                             np.array([has_prev]), camera.intrinsics, w2c, 0.0, PaperConfig())
+    assert est.sources.tolist() == [source]
+    assert est.distances[0] == pytest.approx(d_true, rel=1e-3)
+    np.testing.assert_allclose(est.positions[0], [42.0, 0.0, 0.0], atol=0.05)
 
 
 def test_driving_ego_triangulates_a_standing_person():

@@ -1,4 +1,4 @@
-"""Letterbox, NMS and decoding of the YOLO-pose output, with hand-checked numbers."""
+"""Letterbox and decoding of the YOLO-pose output, with hand-checked numbers."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 
 from pedenv.errors import InputError
 from pedenv.pose.postprocess import (
-    Letterbox, box_iou, decode, frame_image, letterbox, nms, parse_input_size, read_image_rgb, to_input_tensor)
+    Letterbox, decode, frame_image, letterbox, parse_input_size, read_image_rgb, to_input_tensor)
 from pedenv.records import Camera, EgoPose, Frame
 
 
@@ -58,22 +58,6 @@ def test_to_input_tensor():
     assert x.shape == (1, 3, 32, 64) and x.dtype == np.float32
     assert x[0, 0].min() == 1.0 and x[0, 1].max() == 0.0
     assert x[0, 2, 0, 0] == pytest.approx(114 / 255)
-
-
-def test_box_iou_hand_checked():
-    iou = box_iou(np.array([0.0, 0, 10, 10]), np.array([[5.0, 0, 15, 10], [0, 0, 10, 10], [20, 20, 30, 30]]))
-    np.testing.assert_allclose(iou, [50 / 150, 1.0, 0.0])
-
-
-def test_nms_keeps_best_and_drops_overlaps():
-    boxes = np.array([[1.0, 0, 11, 10], [0, 0, 10, 10], [5, 0, 15, 10], [40, 40, 50, 50]])
-    scores = np.array([0.8, 0.9, 0.7, 0.6])
-    # box 0 overlaps box 1 by IoU 90/110 = 0.82 > 0.7: dropped; box 2 overlaps box 1 by 1/3: kept
-    np.testing.assert_array_equal(nms(boxes, scores, 0.7), [1, 2, 3])
-    # with a threshold of 0.3 box 2 (IoU 1/3 with box 1) goes too
-    np.testing.assert_array_equal(nms(boxes, scores, 0.3), [1, 3])
-    np.testing.assert_array_equal(nms(boxes, scores, 0.7, max_detections=2), [1, 2])
-    assert nms(np.zeros((0, 4)), np.zeros(0), 0.7).shape == (0,)
 
 
 def _raw_output(persons: list[tuple[list[float], float, float]], anchors: int = 10) -> np.ndarray:

@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pedenv.body import world_keypoints
 from pedenv.records import Camera, EgoPose
 from pedenv.synthetic.visibility import VisibilityRules, box_coverage, visible_pedestrians
-from pedenv.synthetic.walker import body_keypoints, world_keypoints
+from pedenv.synthetic.walker import body_keypoints
 
 CAMERA = Camera.from_fov(1600, 900, 64.5, height_m=1.5)
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pedenv.body import world_keypoints
 from pedenv.skeleton import CocoKeypoint as K
-from pedenv.synthetic.walker import body_keypoints, stride_length, world_keypoints
+from pedenv.synthetic.walker import body_keypoints, stride_length
 
 
 def standing(height: float) -> np.ndarray:

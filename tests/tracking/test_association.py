@@ -1,29 +1,7 @@
 import numpy as np
 import pytest
 
-from pedenv.tracking.association import associate, giou_matrix
-
-
-@pytest.mark.parametrize("a, b, expected", [
-    ([0, 0, 2, 2], [0, 0, 2, 2], 1.0),
-    ([0, 0, 2, 2], [1, 1, 3, 3], 1 / 7 - 2 / 9),          # IoU 1/7, hull 9, union 7
-    ([0, 0, 1, 1], [2, 0, 3, 1], -1 / 3),                 # disjoint: hull 3, union 2
-    ([0, 0, 1, 1], [1.5, 0, 2.5, 1], -0.2),               # hull 2.5, union 2
-    ([0, 0, 1, 1], [100, 100, 101, 101], 2 / (101 * 101) - 1),
-])
-def test_giou_hand_checked(a, b, expected):
-    assert giou_matrix(np.array([a], float), np.array([b], float))[0, 0] == pytest.approx(expected, abs=1e-12)
-
-
-def test_giou_is_symmetric_and_vectorized():
-    rng = np.random.default_rng(1)
-    lo = rng.uniform(0, 100, (6, 2))
-    boxes = np.hstack([lo, lo + rng.uniform(1, 30, (6, 2))])
-    g = giou_matrix(boxes, boxes[:4])
-    assert g.shape == (6, 4)
-    np.testing.assert_allclose(g[:4, :4], g[:4, :4].T)
-    np.testing.assert_allclose(np.diag(g[:4, :4]), 1.0)
-    assert np.all(g >= -1) and np.all(g <= 1)
+from pedenv.tracking.association import associate
 
 
 def test_associate_hungarian_prefers_best_total():

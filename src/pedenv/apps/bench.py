@@ -11,16 +11,13 @@ from dataclasses import replace
 
 import numpy as np
 
+from pedenv.body import standing_body, world_keypoints
 from pedenv.config import Config
 from pedenv.geometry import invert_transform, project
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.records import Camera, Detections, EgoPose, Frame
 
 PAPER_MS = {"tracking_per_frame": 0.35, "position_per_pedestrian": 0.29, "pose_network": 39.94, "total": 40.54}
-
-#: Height fractions and lateral offsets (metres, for 1 m of height) of a standing COCO-17 person.
-_HEIGHT_FRACTION = np.array([.92, .94, .94, .93, .93, .82, .82, .62, .62, .48, .48, .53, .53, .29, .29, .05, .05])
-_LATERAL = np.array([0, .03, -.03, .07, -.07, .2, -.2, .24, -.24, .25, -.25, .1, -.1, .1, -.1, .1, -.1])
 
 
 def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera: Camera | None = None) -> list[Frame]:
@@ -30,13 +27,13 @@ def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera:
     start = np.column_stack([rng.uniform(8, 60, n_pedestrians), rng.uniform(-12, 12, n_pedestrians)])
     vel = rng.normal(0, 1.0, (n_pedestrians, 2))
     heights = rng.normal(1.72, 0.09, n_pedestrians)
+    body, facing_ego = standing_body(heights), np.full(n_pedestrians, np.pi)  # upright, facing -x
     frames = []
     for i in range(n_frames):
         t = 0.1 * i
         ego = EgoPose.from_xy_yaw(8.33 * t, 0.0, 0.0)
         xy = start + vel * t + np.array([8.33 * t, 0.0])
-        pts = np.stack([np.broadcast_to(xy[:, :1], (n_pedestrians, 17)),
-                        xy[:, 1:2] + _LATERAL * heights[:, None], _HEIGHT_FRACTION * heights[:, None]], axis=-1)
+        pts = world_keypoints(np.column_stack([xy, np.zeros(n_pedestrians)]), facing_ego, body)
         frame = Frame(i, t, camera, ego)
         uv, _ = project(pts, camera.intrinsics, invert_transform(frame.cam_to_world))
         uv += rng.normal(0, 1.0, uv.shape)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
+from pedenv.apps.progress import progress_bar
 from pedenv.config import Config
 from pedenv.io.datasets import Dataset
 from pedenv.errors import InputError
@@ -52,8 +54,8 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
     tracking = TrackingAccumulator()
     busiest, busiest_n = None, -1
     writer = EnvironmentWriter(Path(output_dir) / "environment.jsonl") if output_dir else None
-    bar = _progress(progress)
-    with bar, (writer or _Null()) as out:
+    bar = progress_bar() if progress else None
+    with bar or nullcontext(), writer or nullcontext():
         for name in names:
             frames = list(dataset.frames(name))
             task = bar.add_task(name, total=len(frames)) if bar else None
@@ -62,7 +64,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
                 frame = replace(frame, detections=backend(frame))
                 state = model.update(frame)
                 if writer:
-                    out.write(state)
+                    writer.write(state)
                 if frame.ground_truth is not None:
                     n = _score(frame, state, samples[name], tracking)
                     if n > busiest_n:
@@ -103,24 +105,3 @@ def _score(frame: Frame, state: EnvironmentState, samples: ErrorSamples, trackin
 
 def _backend(spec) -> PoseBackend:
     return create_pose_backend(spec) if isinstance(spec, str) else spec
-
-
-def _progress(enabled: bool):
-    if not enabled:
-        return _Null()
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
-    return Progress(TextColumn("{task.description:<24}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-
-
-class _Null:
-    """Stands in for the writer or progress bar when they are off."""
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return None
-
-    def __bool__(self) -> bool:
-        return False

@@ -7,7 +7,6 @@ from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from pedenv.cli.app import app, console
 
@@ -68,14 +67,12 @@ def run(
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
+    from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
 
-    columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=False) as bar:
-        task = bar.add_task("run", total=None)
+    with progress_callback("frames", console=console) as progress:
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
-            fps=fps, start_time=start_time, video_out=video_out,
-            progress=lambda done, total: bar.update(task, completed=done, total=total or None))
+            fps=fps, start_time=start_time, video_out=video_out, progress=progress)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

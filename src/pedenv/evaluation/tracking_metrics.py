@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pedenv.evaluation.matching import iou_matrix
+from pedenv.boxes import iou_matrix
 
 
 class TrackingAccumulator:

@@ -82,22 +82,6 @@ def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarra
     return total / np.maximum(count, 1)[:, None], ok
 
 
-def reprojected_height(centres: np.ndarray, ground_z: float, height_m: float, intrinsics: np.ndarray,
-                       world_to_cam: np.ndarray) -> np.ndarray:
-    """Pixel height of an upright person of ``height_m`` standing under ``centres`` (N, 3).
-
-    The bottom point is at ``ground_z`` and the top ``height_m`` above it (Eq. 6).
-    Returns (N,) pixels; NaN where the person is not in front of the camera.
-    """
-    bottom = np.array(centres, dtype=np.float64, copy=True)
-    bottom[:, 2] = ground_z
-    top = bottom.copy()
-    top[:, 2] += height_m
-    px, depth = project(np.stack([bottom, top], axis=1), intrinsics, world_to_cam)
-    h = np.linalg.norm(px[:, 1] - px[:, 0], axis=1)
-    return np.where((depth > 0).all(axis=1), h, np.nan)
-
-
 def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray,
                     ground_z: float, intrinsics: np.ndarray, world_to_cam: np.ndarray, config: PaperConfig,
                     lambdas=None) -> np.ndarray:
@@ -108,9 +92,11 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
     divisors, (S,) or per pedestrian (S, N); by default ``r + c`` for ``r = 1..steps``.
     Returns the refined (N,) distances, kept within [0.1 m, ``max_distance_m``].
 
-    Same as calling :func:`reprojected_height` each step, but the bottom and top points
-    are linear in the distance ``d`` (``a + d b`` in the camera frame), so each step is a
-    handful of operations on precomputed (4, N) arrays.
+    Each step re-projects an upright person of ``person_height_m`` standing under the
+    point ``origin + d * direction`` (bottom at ``ground_z``, Eq. 6) and compares its pixel
+    height with the skeleton's. The bottom and top points are linear in the distance
+    ``d`` (``a + d b`` in the camera frame), so each step is a handful of operations on
+    precomputed (4, N) arrays.
     """
     if lambdas is None:
         lambdas = np.arange(1, config.refinement_steps + 1) + config.refinement_lambda_offset
@@ -144,17 +130,6 @@ def pinhole_distance(pixel_heights: np.ndarray, intrinsics: np.ndarray, config: 
     """``f * H / h``: the distance of an upright person ``h`` pixels tall, camera level (N,)."""
     start = intrinsics[1, 1] * config.person_height_m / np.maximum(pixel_heights, 1.0)
     return np.clip(start, 0.5, config.max_distance_m)
-
-
-def height_distance(directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray, ground_z: float,
-                    intrinsics: np.ndarray, world_to_cam: np.ndarray, config: PaperConfig) -> np.ndarray:
-    """Distance (N,) at which a person of the assumed height appears ``pixel_heights`` tall.
-
-    Starts from :func:`pinhole_distance` and iterates full steps (``lambda = 1``), which
-    converges in a few iterations.
-    """
-    return refine_distance(pinhole_distance(pixel_heights, intrinsics, config), directions, origin, pixel_heights,
-                           ground_z, intrinsics, world_to_cam, config, lambdas=np.ones(FALLBACK_STEPS))
 
 
 def mean_directions(rays: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pedenv.boxes import nms
 from pedenv.errors import InputError
 from pedenv.records import Detections, Frame
 from pedenv.skeleton import NUM_KEYPOINTS
@@ -128,33 +129,6 @@ def to_input_tensor(padded: np.ndarray) -> np.ndarray:
     chw = np.ascontiguousarray(padded.transpose(2, 0, 1), dtype=np.float32)
     chw *= np.float32(1.0 / 255.0)
     return chw[None]
-
-
-def box_iou(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-    """IoU of one box (4,) with boxes (M, 4), all ``[x_min, y_min, x_max, y_max]`` pixels -> (M,)."""
-    iw = np.clip(np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0]), 0.0, None)
-    ih = np.clip(np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1]), 0.0, None)
-    inter = iw * ih
-    area = (box[2] - box[0]) * (box[3] - box[1])
-    areas = (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])
-    return inter / np.maximum(area + areas - inter, 1e-12)
-
-
-def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float, max_detections: int = 300) -> np.ndarray:
-    """Greedy non-maximum suppression.
-
-    boxes: (N, 4) ``[x_min, y_min, x_max, y_max]``; scores: (N,). A box is dropped when its
-    IoU with a higher-scoring kept box is above ``iou_threshold``. Returns the kept indices
-    (K,) int64, best score first, at most ``max_detections``.
-    """
-    order = np.argsort(-scores, kind="stable")
-    keep = []
-    while order.size and len(keep) < max_detections:
-        best = order[0]
-        keep.append(best)
-        rest = order[1:]
-        order = rest[box_iou(boxes[best], boxes[rest]) <= iou_threshold]
-    return np.asarray(keep, dtype=np.int64)
 
 
 def decode(output: np.ndarray, box: Letterbox, score_threshold: float = 0.25, iou_threshold: float = 0.7,

@@ -11,13 +11,14 @@ from typing import Sequence
 
 import numpy as np
 
+from pedenv.body import world_keypoints
 from pedenv.records import Camera, Frame, GroundTruth, Scene
 from pedenv.synthetic.ego_motion import ego_poses, integrate_track
 from pedenv.synthetic.population import Pedestrians
 from pedenv.synthetic.scenarios import SCENARIOS, build_scenario, default_duration
 from pedenv.synthetic.terrain import Terrain, random_terrain
 from pedenv.synthetic.visibility import VisibilityRules, visible_pedestrians
-from pedenv.synthetic.walker import body_keypoints, gait_amplitude, stride_length, world_keypoints
+from pedenv.synthetic.walker import body_keypoints, gait_amplitude, stride_length
 
 #: Standing people lean about their ankles by up to this angle (radians) with this period (s).
 SWAY_RAD, SWAY_PERIOD_S = 0.012, 4.0

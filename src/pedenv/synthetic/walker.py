@@ -1,10 +1,10 @@
 """Articulated COCO-17 walking skeletons in 3D, vectorized over pedestrians.
 
 A person of height ``H`` is built in a body frame (x forward along the heading, y to
-the person's left, z up, origin on the ground between the feet) from anthropometric
-proportions of ``H`` (segment lengths after the classic Drillis & Contini table):
-shoulders at 0.818 H, hip joints at 0.530 H, knees at 0.285 H, ankles at 0.046 H
-(about 0.08 m), eyes at 0.933 H, nose at 0.920 H; the top of the head is H.
+the person's left, z up, origin on the ground between the feet) from the body template's
+proportions of ``H`` (:mod:`pedenv.body`: shoulders at 0.818 H, hip joints at 0.530 H,
+knees at 0.285 H, ankles at 0.046 H, eyes at 0.933 H, nose at 0.920 H). Placing the
+body-frame skeletons in the world is :func:`pedenv.body.world_keypoints`.
 
 Walking is a gait cycle of phase ``phi`` (radians) advancing by ``2 pi`` per stride,
 so it is phase-locked to the distance walked: the legs swing in anti-phase (thigh
@@ -17,15 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from pedenv.body import (ANKLE, EAR, EAR_FORWARD, EAR_HALF_WIDTH, EYE, EYE_FORWARD, EYE_HALF_WIDTH, FOREARM, HIP,
+                         HIP_HALF_WIDTH, KNEE, NOSE, NOSE_FORWARD, SHOULDER, SHOULDER_HALF_WIDTH, UPPER_ARM)
 from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
 
-# Heights above the ground and half widths, as fractions of the body height H.
-EYE, NOSE, EAR, SHOULDER, HIP, KNEE, ANKLE = 0.933, 0.920, 0.915, 0.818, 0.530, 0.285, 0.046
-SHOULDER_HALF_WIDTH, HIP_HALF_WIDTH = 0.110, 0.058
-UPPER_ARM, FOREARM = 0.186, 0.146
+# Thigh (hip joint to knee) and shank (knee to ankle), as shares of the body height H.
 THIGH, SHANK = HIP - KNEE, KNEE - ANKLE
-# Face offsets (forward, lateral) as fractions of H.
-NOSE_FORWARD, EYE_FORWARD, EYE_HALF_WIDTH, EAR_FORWARD, EAR_HALF_WIDTH = 0.052, 0.040, 0.019, -0.004, 0.044
 
 #: Walking speed (m/s) at which ``gait`` = 1.
 NORMAL_WALKING_SPEED = 1.4
@@ -128,16 +125,3 @@ def _tilt(points: np.ndarray, angle: np.ndarray, pivot_z: np.ndarray, axis: int)
     out[..., axis] = points[..., axis] * c + dz * s
     out[..., 2] = pivot_z + dz * c - points[..., axis] * s
     return out
-    return kp
-
-
-def world_keypoints(ground: np.ndarray, heading: np.ndarray, body: np.ndarray) -> np.ndarray:
-    """Place body-frame skeletons in the world (upright, turned to their heading).
-
-    ground: (N, 3) world frame, metres: the ground point under each person.
-    heading: (N,) radians, counter-clockwise from world +x. body: (N, 17, 3) body frame.
-    Returns (N, 17, 3) world frame, metres.
-    """
-    c, s = np.cos(heading)[:, None], np.sin(heading)[:, None]
-    x, y, z = body[..., 0], body[..., 1], body[..., 2]
-    return np.stack([c * x - s * y, s * x + c * y, z], axis=-1) + np.asarray(ground, float)[:, None, :]

@@ -5,28 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-_EMPTY = np.zeros(0, dtype=np.int64)
-
-
-def giou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Generalized IoU (Rezatofighi et al. 2019) between every box of ``a`` and of ``b``.
-
-    a: (N, 4), b: (M, 4) float, pixels ``[u_min, v_min, u_max, v_max]``.
-    Returns (N, M) in [-1, 1]: IoU minus the share of the enclosing box that neither
-    covers. Zero-area boxes are guarded against division by zero (they give 0 with
-    themselves).
-    """
-    ax0, ay0, ax1, ay1 = (c[:, None] for c in a.T)
-    bx0, by0, bx1, by1 = b.T
-    # signed overlap widths; the hull's sides follow from them: w_hull = w_a + w_b - w_overlap
-    iw = np.minimum(ax1, bx1) - np.maximum(ax0, bx0)
-    ih = np.minimum(ay1, by1) - np.maximum(ay0, by0)
-    wa, ha, wb, hb = ax1 - ax0, ay1 - ay0, bx1 - bx0, by1 - by0
-    hull = (wa + wb - iw) * (ha + hb - ih)
-    inter = np.maximum(iw, 0.0) * np.maximum(ih, 0.0)
-    union = wa * ha + wb * hb - inter
-    # IoU - (hull - union) / hull
-    return inter / np.maximum(union, 1e-12) + union / np.maximum(hull, 1e-12) - 1.0
+from pedenv.boxes import giou_matrix
 
 
 def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3,

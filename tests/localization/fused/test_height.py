@@ -3,7 +3,6 @@ import pytest
 
 from pedenv.config import FusedConfig
 from pedenv.localization.fused.height import height_cue
-from pedenv.geometry import pixel_rays
 from pedenv.skeleton import ANKLE_KEYPOINTS, HEAD_KEYPOINTS, CocoKeypoint as K
 
 from fused_frames import make_frame, skeletons_of

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from pedenv.config import FusedConfig
-from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.history import TrackHistory, ray_terms
 from pedenv.localization.fused.triangulation import triangulate, triangulation_cue
 
 from fused_frames import make_frame, skeletons_of

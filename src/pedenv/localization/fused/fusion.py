@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pedenv.geometry import inverse_2x2_entries
 from pedenv.localization.fused.cue import REASON_CODE, REASONS, CueEstimate
 
 #: Which cue to keep when only two disagree: earlier in this tuple wins.
@@ -58,8 +59,8 @@ class Fused:
 
 def inverse_sym(a, b, c):
     """Inverse ``(a', b', c')`` of symmetric 2x2 matrices ``[[a, b], [b, c]]`` (arrays)."""
-    det = a * c - b * b
-    return c / det, -b / det, a / det
+    ia, ib, _, ic = inverse_2x2_entries(a, b, b, c)
+    return ia, ib, ic
 
 
 def sandwich(m, f):

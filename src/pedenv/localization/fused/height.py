@@ -17,23 +17,24 @@ fractions' spread (gait, head tilt) are new every frame.
 
 import numpy as np
 
+from pedenv.body import STANDING
 from pedenv.config import FusedConfig
 from pedenv.localization.fused.cue import CueEstimate, FrameSkeletons, first_reason, horizontal_bearing, range_bearing_covariance
 from pedenv.skeleton import ANKLE_KEYPOINTS, NUM_KEYPOINTS, CocoKeypoint as K
 
 NAME = "height"
 
-#: Height above the ground of an upright adult's keypoints, as a share of body height
-#: (segment proportions after Drillis & Contini); NaN: no fixed height (knees, arms).
-KEYPOINT_HEIGHT_FRACTION = np.full(NUM_KEYPOINTS, np.nan)
-#: Spread of each fraction (head tilt, shoulders and pelvis riding on the gait, a foot
-#: lifted in the swing phase), as a share of body height.
+#: Spread of each keypoint's height fraction (head tilt, shoulders and pelvis riding on
+#: the gait, a foot lifted in the swing phase), as a share of body height; NaN: the
+#: keypoint has no fixed height (knees, arms) and the cue does not use it.
 KEYPOINT_FRACTION_STD = np.full(NUM_KEYPOINTS, np.nan)
-for _k, _f, _s in ((K.NOSE, 0.920, 0.012), (K.LEFT_EYE, 0.933, 0.012), (K.RIGHT_EYE, 0.933, 0.012),
-                   (K.LEFT_EAR, 0.915, 0.012), (K.RIGHT_EAR, 0.915, 0.012), (K.LEFT_SHOULDER, 0.818, 0.012),
-                   (K.RIGHT_SHOULDER, 0.818, 0.012), (K.LEFT_HIP, 0.530, 0.015), (K.RIGHT_HIP, 0.530, 0.015),
-                   (K.LEFT_ANKLE, 0.046, 0.025), (K.RIGHT_ANKLE, 0.046, 0.025)):
-    KEYPOINT_HEIGHT_FRACTION[_k], KEYPOINT_FRACTION_STD[_k] = _f, _s
+KEYPOINT_FRACTION_STD[[K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR, K.LEFT_SHOULDER,
+                       K.RIGHT_SHOULDER]] = 0.012
+KEYPOINT_FRACTION_STD[[K.LEFT_HIP, K.RIGHT_HIP]] = 0.015
+KEYPOINT_FRACTION_STD[[K.LEFT_ANKLE, K.RIGHT_ANKLE]] = 0.025
+#: Height above the ground of an upright adult's keypoints, as a share of body height
+#: (the body template, :data:`pedenv.body.STANDING`); NaN where the cue uses none.
+KEYPOINT_HEIGHT_FRACTION = np.where(np.isfinite(KEYPOINT_FRACTION_STD), STANDING[:, 2], np.nan)
 #: Spread of a lone ankle's fraction: with the other ankle unseen it may be the swing
 #: foot, lifted up to ~0.15 (of two seen ankles only the lower, the stance foot, is used).
 LONE_ANKLE_FRACTION_STD = 0.025
@@ -50,11 +51,6 @@ PASSES = 2
 MIN_RANGE_M = 0.3
 #: Relative determinant below which the straight-line fit is singular.
 MIN_RELATIVE_DET = 1e-12
-
-
-def elevation_tangents(rays: np.ndarray) -> np.ndarray:
-    """tan of each ray's elevation above the world horizontal: (..., 3) unit -> (...,)."""
-    return rays[..., 2] / np.maximum(np.sqrt(rays[..., 0] ** 2 + rays[..., 1] ** 2), 1e-9)
 
 
 def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.ndarray, used: np.ndarray,

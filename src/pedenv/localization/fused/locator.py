@@ -23,11 +23,10 @@ from pedenv.localization.fused.cue import (CueEstimate, FrameSkeletons, across_v
                               range_bearing_covariance)
 from pedenv.localization.fused.fusion import describe_sources, fuse_cues
 from pedenv.localization.fused.ground import ground_cue
-from pedenv.localization.fused.height import KEYPOINT_HEIGHT_FRACTION, height_cue
+from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
 from pedenv.localization.fused.triangulation import Triangulated, triangulate, triangulation_cue
 from pedenv.localization.base import FrameGeometry, Measurement
-from pedenv.skeleton import CocoKeypoint as K
 
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
 BOX_RELATIVE_STD = 0.5
@@ -107,7 +106,7 @@ class FusedLocator:
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
         cfg, frame, det = self.config.fused, geo.frame, geo.detections
-        n, cam, h = len(det), frame.camera, self.history
+        cam, h = frame.camera, self.history
         focal = float(cam.intrinsics[0, 0])
         rays, origin = geo.rays, geo.origin
         usable = keypoint_usable(det.keypoints, det.confidences, cam.width, cam.height, cfg.min_keypoint_confidence)

@@ -1,0 +1,30 @@
+"""The one progress bar of pedenv's applications (evaluation over scenes, runs over recordings)."""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import Callable, Iterator
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+
+def progress_bar(console: Console | None = None) -> Progress:
+    """A rich progress bar: the task's description, the bar, done of total, time left.
+
+    Use it as a context manager and add one task per scene or recording
+    (``bar.add_task(name, total=frames)``). ``console``: where to draw (default: rich's).
+    """
+    return Progress(TextColumn("{task.description:<24}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                    console=console)
+
+
+@contextmanager
+def progress_callback(description: str, console: Console | None = None) -> Iterator[Callable[[int, int], None]]:
+    """A :func:`progress_bar` with one task, handed out as a ``progress(done, total)`` callback.
+
+    ``total`` 0 means not known yet (the bar then shows no time left).
+    """
+    with progress_bar(console) as bar:
+        task = bar.add_task(description, total=None)
+        yield lambda done, total: bar.update(task, completed=done, total=total or None)
