@@ -26,8 +26,8 @@ OPTICAL_TO_UNREAL_CAM = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 
 def carla_rotation(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
     """(3, 3) rotation of a CARLA transform, as ``carla.Transform.get_matrix()`` builds it (Unreal axes).
 
-    Unreal turns pitch and roll the other way round from the right-hand rule about its
-    (left-handed) y and x axes, so the matrix is ``Rz(yaw) Ry(-pitch) Rx(-roll)``.
+    That matrix is ``Rz(yaw) Ry(-pitch) Rx(-roll)`` in the usual right-hand-rule matrices
+    (CARLA's pitch and roll turn the other way round); the test compares it entry by entry.
     """
     return Rotation.from_euler("ZYX", [yaw_deg, -pitch_deg, -roll_deg], degrees=True).as_matrix()
 
