@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from pedenv.geometry import (closest_points, inverse_2x2, inverse_2x2_entries, invert_transform, pixel_rays, project,
-                             quaternion_to_rotation, rotation_from_ypr, rotation_to_quaternion)
+                             quaternion_to_rotation, rotation_from_ypr, rotation_to_quaternion, rotation_z)
 from pedenv.records import EgoPose, Frame
 
 
@@ -58,3 +58,35 @@ def test_inverse_2x2_hand_checked_and_batched():
     # the symmetric case on separate component arrays: [[2, 1], [1, 3]] -> [[3, -1], [-1, 2]] / 5
     a, b, c, d = inverse_2x2_entries(np.array([2.0]), np.array([1.0]), np.array([1.0]), np.array([3.0]))
     np.testing.assert_allclose(np.concatenate([a, b, c, d]), [0.6, -0.2, -0.2, 0.4], atol=1e-15)
+
+
+def _rz_ry_rx(yaw, pitch, roll):
+    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    return rz @ ry @ rx
+
+
+def _textbook_quaternion_matrix(q):
+    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+@pytest.mark.parametrize("ypr", [(0.0, 0.0, 0.0), (0.3, -0.05, 0.02), (-2.9, 0.4, -1.2), (np.pi, 1.5, 3.0)])
+def test_rotations_agree_with_the_written_out_formulas(ypr):
+    np.testing.assert_allclose(rotation_from_ypr(*ypr), _rz_ry_rx(*ypr), atol=1e-15)
+    np.testing.assert_allclose(rotation_z(ypr[0]), _rz_ry_rx(ypr[0], 0.0, 0.0), atol=1e-15)
+    q = rotation_to_quaternion(rotation_from_ypr(*ypr))
+    assert q[0] >= 0 and np.linalg.norm(q) == pytest.approx(1.0)
+    np.testing.assert_allclose(_textbook_quaternion_matrix(q), rotation_from_ypr(*ypr), atol=1e-15)
+    np.testing.assert_allclose(quaternion_to_rotation(2.5 * q), _textbook_quaternion_matrix(q), atol=1e-15)
+
+
+def test_half_turn_quaternion_hand_checked():
+    # 180 degrees about z: q = [0, 0, 0, +-1]; a quarter turn about z: [cos 45, 0, 0, sin 45]
+    np.testing.assert_allclose(np.abs(rotation_to_quaternion(np.diag([-1.0, -1.0, 1.0]))), [0, 0, 0, 1], atol=1e-15)
+    np.testing.assert_allclose(rotation_to_quaternion(rotation_z(np.pi / 2)), [np.sqrt(0.5), 0, 0, np.sqrt(0.5)],
+                               atol=1e-15)

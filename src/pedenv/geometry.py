@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 
 def pixel_rays(pixels: np.ndarray, intrinsics: np.ndarray, cam_to_world: np.ndarray) -> np.ndarray:
@@ -93,51 +94,26 @@ def invert_transform(t: np.ndarray) -> np.ndarray:
 
 def rotation_z(angle: float) -> np.ndarray:
     """(3, 3) rotation by ``angle`` radians about z (counter-clockwise seen from above)."""
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return Rotation.from_euler("z", angle).as_matrix()
 
 
 def rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
     """(3, 3) rotation from yaw about z, pitch about y, roll about x (radians, z-y-x order).
 
-    In the vehicle frame (x forward, y left, z up) a positive pitch turns the nose down.
+    ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (intrinsic z-y'-x''). In the vehicle frame (x forward,
+    y left, z up) a positive pitch turns the nose down.
     """
-    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
-    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    return rz @ ry @ rx
+    return Rotation.from_euler("ZYX", [yaw, pitch, roll]).as_matrix()
 
 
 def quaternion_to_rotation(q) -> np.ndarray:
-    """(3, 3) rotation of a unit quaternion ``[w, x, y, z]`` (normalised first)."""
-    w, x, y, z = np.asarray(q, float) / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    """(3, 3) rotation of a quaternion ``[w, x, y, z]`` (normalised first; not zero)."""
+    return Rotation.from_quat(np.asarray(q, float), scalar_first=True).as_matrix()
 
 
 def rotation_to_quaternion(r: np.ndarray) -> np.ndarray:
     """Unit quaternion ``[w, x, y, z]`` with ``w >= 0`` of a (3, 3) rotation."""
-    m = np.asarray(r, float)
-    tr = np.trace(m)
-    if tr > 0:
-        s = 2.0 * np.sqrt(tr + 1.0)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    q = np.array(q)
-    q /= np.linalg.norm(q)
-    return q if q[0] >= 0 else -q
+    return Rotation.from_matrix(np.asarray(r, float)).as_quat(canonical=True, scalar_first=True)
 
 
 def wrap_angle(angle):

@@ -30,3 +30,9 @@ def test_evaluation_draws_one_task_per_scene(capsys):
     run_evaluation(data, pose_backend="ground-truth", progress=True)
     shown = capsys.readouterr().out
     assert "standing-pedestrians" in shown and f"{frames}/{frames}" in shown
+
+
+def test_disabled_evaluation_draws_nothing(capsys):
+    data = MemoryDataset(generate_scenes(0, ["standing-pedestrians"], duration_s=1.0), name="tiny")
+    run_evaluation(data, pose_backend="ground-truth", progress=False)
+    assert capsys.readouterr().out == ""

@@ -100,6 +100,31 @@ def test_ego_poses_quaternion_rows(tmp_path):
     np.testing.assert_allclose(slerp(np.array([1.0, 0, 0, 0]), np.array([-1.0, 0, 0, 0]), 0.5), [1, 0, 0, 0])
 
 
+def _textbook_slerp(q0, q1, f):
+    """The slerp formula, sin((1-f) theta) q0 + sin(f theta) q1 over sin theta, on the shorter arc."""
+    if np.dot(q0, q1) < 0:
+        q1 = -q1
+    theta = np.arccos(np.clip(np.dot(q0, q1), -1.0, 1.0))
+    if theta < 1e-9:
+        return q0
+    return (np.sin((1 - f) * theta) * q0 + np.sin(f * theta) * q1) / np.sin(theta)
+
+
+def test_slerp_agrees_with_the_textbook_formula():
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        q0, q1 = (q / np.linalg.norm(q) for q in rng.normal(size=(2, 4)))
+        f = rng.uniform()
+        want = _textbook_slerp(q0, q1, f)
+        want = want if want[0] >= 0 else -want
+        np.testing.assert_allclose(slerp(q0, q1, f), want, atol=1e-12)
+    # nearly equal rotations and the ends themselves
+    q0 = np.array([1.0, 0, 0, 0])
+    q1 = np.array([np.cos(1e-6), 0, 0, np.sin(1e-6)])
+    np.testing.assert_allclose(slerp(q0, q1, 0.5), [np.cos(5e-7), 0, 0, np.sin(5e-7)], atol=1e-15)
+    np.testing.assert_allclose(slerp(q0, -q1, 1.0), q1, atol=1e-15)
+
+
 @pytest.mark.parametrize("text, message", [
     ("t,x,y\n0,0,0\n", "header must be timestamp,x,y,z,qw,qx,qy,qz or timestamp,x,y,yaw"),
     ("timestamp,x,y,yaw\n", "no ego pose rows"),

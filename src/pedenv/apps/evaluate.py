@@ -54,11 +54,10 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
     tracking = TrackingAccumulator()
     busiest, busiest_n = None, -1
     writer = EnvironmentWriter(Path(output_dir) / "environment.jsonl") if output_dir else None
-    bar = progress_bar() if progress else None
-    with bar or nullcontext(), writer or nullcontext():
+    with progress_bar(enabled=progress) as bar, writer or nullcontext():
         for name in names:
             frames = list(dataset.frames(name))
-            task = bar.add_task(name, total=len(frames)) if bar else None
+            task = bar.add_task(name, total=len(frames))
             model.reset()
             for frame in frames:
                 frame = replace(frame, detections=backend(frame))
@@ -69,8 +68,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
                     n = _score(frame, state, samples[name], tracking)
                     if n > busiest_n:
                         busiest, busiest_n = (state, frame), n
-                if bar:
-                    bar.advance(task)
+                bar.advance(task)
     info = {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method,
             "scenes": names}
     metrics = Metrics.from_samples(samples, tracking.summary(), model.timer.per_stage_ms(), info)

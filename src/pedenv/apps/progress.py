@@ -9,14 +9,15 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 
-def progress_bar(console: Console | None = None) -> Progress:
+def progress_bar(console: Console | None = None, *, enabled: bool = True) -> Progress:
     """A rich progress bar: the task's description, the bar, done of total, time left.
 
     Use it as a context manager and add one task per scene or recording
     (``bar.add_task(name, total=frames)``). ``console``: where to draw (default: rich's).
+    ``enabled`` False gives a bar that counts but draws nothing.
     """
     return Progress(TextColumn("{task.description:<24}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                    console=console)
+                    console=console, disable=not enabled)
 
 
 @contextmanager

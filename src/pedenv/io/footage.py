@@ -24,9 +24,10 @@ from typing import Iterator
 
 import numpy as np
 import yaml
+from scipy.spatial.transform import Rotation, Slerp
 
 from pedenv.errors import InputError, check_array
-from pedenv.geometry import quaternion_to_rotation, rotation_to_quaternion, rotation_z
+from pedenv.geometry import quaternion_to_rotation
 from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame
 
@@ -92,15 +93,13 @@ def load_calibration(path: str | Path) -> Camera:
 
 
 def slerp(q0: np.ndarray, q1: np.ndarray, fraction: float) -> np.ndarray:
-    """Spherical interpolation between unit quaternions ``[w, x, y, z]`` (shortest arc)."""
-    dot = float(np.dot(q0, q1))
-    if dot < 0.0:
-        q1, dot = -q1, -dot
-    if dot > 0.9995:  # nearly equal: linear interpolation is exact enough
-        q = q0 + fraction * (q1 - q0)
-        return q / np.linalg.norm(q)
-    theta = np.arccos(dot)
-    return (np.sin((1.0 - fraction) * theta) * q0 + np.sin(fraction * theta) * q1) / np.sin(theta)
+    """Spherical interpolation between unit quaternions ``[w, x, y, z]`` (shortest arc).
+
+    Returns the rotation ``fraction`` (0..1) of the way from ``q0`` to ``q1`` as a unit
+    quaternion ``[w, x, y, z]`` with ``w >= 0`` (scipy's :class:`~scipy.spatial.transform.Slerp`).
+    """
+    ends = Rotation.from_quat(np.stack([q0, q1]), scalar_first=True)
+    return Slerp([0.0, 1.0], ends)(fraction).as_quat(canonical=True, scalar_first=True)
 
 
 @dataclass(frozen=True)
@@ -174,7 +173,7 @@ def load_ego_poses(path: str | Path) -> EgoTrajectory:
         quats = quats / norms[:, None]
     else:
         trans = np.column_stack([values[:, 1:3], np.zeros(len(values))])
-        quats = np.array([rotation_to_quaternion(rotation_z(yaw)) for yaw in values[:, 3]])
+        quats = Rotation.from_euler("z", values[:, 3:4]).as_quat(canonical=True, scalar_first=True)
     return EgoTrajectory(ts, trans, quats, str(path))
 
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.config import Config, PaperConfig
-from pedenv.geometry import closest_points, project
+from pedenv.geometry import closest_points
 from pedenv.localization.base import FrameGeometry, Measurement
 from pedenv.tracking.table import ColumnGroup
 

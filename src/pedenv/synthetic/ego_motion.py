@@ -66,24 +66,24 @@ def integrate_track(times: np.ndarray, speed: Profile, yaw_rate: Profile, *, sta
 def ego_poses(track: EgoTrack, terrain: Terrain) -> list[EgoPose]:
     """One :class:`EgoPose` per sample of ``track`` standing on ``terrain``.
 
-    Flat terrain gives z = 0 and no pitch or roll (the suspension is ignored there too).
+    Flat terrain gives z = 0 and no pitch or roll (the suspension is ignored there too):
+    the vehicle's z axis is exactly the world's.
     """
+    if terrain.is_flat:
+        return [EgoPose.from_xy_yaw(x, y, yaw) for (x, y), yaw in zip(track.xy, track.yaw)]
     c, s = np.cos(track.yaw), np.sin(track.yaw)
     fwd = np.stack([c, s], axis=1)
     left = np.stack([-s, c], axis=1)
-    if terrain.is_flat:
-        z = pitch = roll = np.zeros_like(track.yaw)
-    else:
-        half_l, half_w = WHEELBASE_M / 2.0, TRACK_WIDTH_M / 2.0
-        wheels = {(fx, sy): terrain.height(track.xy + fx * half_l * fwd + sy * half_w * left)
-                  for fx in (1, -1) for sy in (1, -1)}
-        front = 0.5 * (wheels[1, 1] + wheels[1, -1])
-        rear = 0.5 * (wheels[-1, 1] + wheels[-1, -1])
-        left_z = 0.5 * (wheels[1, 1] + wheels[-1, 1])
-        right_z = 0.5 * (wheels[1, -1] + wheels[-1, -1])
-        z = 0.25 * sum(wheels.values())
-        # positive pitch turns the nose down (front lower); accelerating lifts it
-        pitch = np.arctan2(rear - front, WHEELBASE_M) - SUSPENSION_PITCH_RAD_PER_MPS2 * track.acceleration
-        roll = np.arctan2(left_z - right_z, TRACK_WIDTH_M)  # positive roll lifts the left side
+    half_l, half_w = WHEELBASE_M / 2.0, TRACK_WIDTH_M / 2.0
+    wheels = {(fx, sy): terrain.height(track.xy + fx * half_l * fwd + sy * half_w * left)
+              for fx in (1, -1) for sy in (1, -1)}
+    front = 0.5 * (wheels[1, 1] + wheels[1, -1])
+    rear = 0.5 * (wheels[-1, 1] + wheels[-1, -1])
+    left_z = 0.5 * (wheels[1, 1] + wheels[-1, 1])
+    right_z = 0.5 * (wheels[1, -1] + wheels[-1, -1])
+    z = 0.25 * sum(wheels.values())
+    # positive pitch turns the nose down (front lower); accelerating lifts it
+    pitch = np.arctan2(rear - front, WHEELBASE_M) - SUSPENSION_PITCH_RAD_PER_MPS2 * track.acceleration
+    roll = np.arctan2(left_z - right_z, TRACK_WIDTH_M)  # positive roll lifts the left side
     return [EgoPose(np.array([x, y, zz]), rotation_from_ypr(yaw, p, r))
             for (x, y), zz, yaw, p, r in zip(track.xy, z, track.yaw, pitch, roll)]

@@ -1,18 +1,27 @@
-"""Pictures as the paper shows them: the environment model (Fig. 1) and error by distance (Fig. 3)."""
+"""Pictures as the paper shows them: the environment model (Fig. 1) and error by distance (Fig. 3).
+
+Figures are drawn with matplotlib's object API on the Agg canvas (no pyplot), so
+importing pedenv leaves the user's matplotlib backend and open figures alone.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from pedenv.records import Frame
+from pedenv.skeleton import COCO_BONES
+from pedenv.state import EnvironmentState
 
-from pedenv.records import Frame  # noqa: E402
-from pedenv.skeleton import COCO_BONES  # noqa: E402
-from pedenv.state import EnvironmentState  # noqa: E402
+
+def _figure(figsize: tuple[float, float]) -> Figure:
+    """A figure on its own Agg canvas (inches), outside pyplot's figure manager."""
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def _to_vehicle(points: np.ndarray, state: EnvironmentState) -> np.ndarray:
@@ -29,7 +38,7 @@ def plot_birds_eye(state: EnvironmentState, path: str | Path, frame: Frame | Non
     """
     peds = state.pedestrians
     pos = _to_vehicle(peds.positions, state) if len(peds) else np.zeros((0, 3))
-    fig = plt.figure(figsize=(14, 6.5))
+    fig = _figure((14, 6.5))
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")
     ax2 = fig.add_subplot(1, 2, 2)
     reach = max(20.0, float(np.max(pos[:, 0])) + 5 if len(pos) else 20.0)
@@ -73,7 +82,6 @@ def plot_birds_eye(state: EnvironmentState, path: str | Path, frame: Frame | Non
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 
@@ -82,7 +90,8 @@ def plot_error_by_distance(series: dict[str, list[dict]], path: str | Path, titl
 
     series: label -> rows ``{"distance_m", "abs_error_m", "count"}`` as in ``Metrics.error_by_distance``.
     """
-    fig, (ax, axn) = plt.subplots(2, 1, figsize=(9, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    fig = _figure((9, 6))
+    ax, axn = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [3, 1]})
     for label, rows in series.items():
         if not rows:
             continue
@@ -99,5 +108,4 @@ def plot_error_by_distance(series: dict[str, list[dict]], path: str | Path, titl
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path

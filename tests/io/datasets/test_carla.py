@@ -117,6 +117,17 @@ def test_ego_conversion_round_trip(ypr):
     assert np.degrees(np.arctan2(*ego_from_unreal(xyz, (ypr[0], 0, 0))[[1, 0], 0])) == pytest.approx(-ypr[0])
 
 
+@pytest.mark.parametrize("ypr", [(16.0, -1.9, 0.0), (-130.0, 7.0, 3.0), (95.0, -20.0, -11.0), (0.0, 89.0, 45.0)])
+def test_carla_rotation_is_carlas_get_matrix(ypr):
+    """The matrix carla.Transform.get_matrix() writes out entry by entry."""
+    y, p, r = np.radians(ypr)
+    cy, sy, cp, sp, cr, sr = np.cos(y), np.sin(y), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
+    carla = np.array([[cp * cy, cy * sp * sr - sy * cr, -cy * sp * cr - sy * sr],
+                      [sy * cp, sy * sp * sr + cy * cr, -sy * sp * cr + cy * sr],
+                      [sp, -cp * sr, cp * cr]])
+    np.testing.assert_allclose(carla_rotation(*ypr), carla, atol=1e-15)
+
+
 def test_natural_scene_order(tmp_path):
     for name in ("scene10", "scene2", "scene1"):
         shutil.copytree(SAMPLES / "scene2", tmp_path / name)

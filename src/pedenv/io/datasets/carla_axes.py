@@ -14,6 +14,7 @@ the converted bones project onto ``2d_skel`` with 0.20 px RMS (the generator's n
 from __future__ import annotations
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 #: (3, 3) reflection of the y axis: Unreal's world <-> pedenv's world (its own inverse).
 FLIP_Y = np.diag([1.0, -1.0, 1.0])
@@ -23,23 +24,21 @@ OPTICAL_TO_UNREAL_CAM = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 
 
 
 def carla_rotation(yaw_deg: float, pitch_deg: float, roll_deg: float) -> np.ndarray:
-    """(3, 3) rotation of a CARLA transform, as ``carla.Transform.get_matrix()`` builds it (Unreal axes)."""
-    y, p, r = np.radians([yaw_deg, pitch_deg, roll_deg])
-    cy, sy, cp, sp, cr, sr = np.cos(y), np.sin(y), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
-    return np.array([
-        [cp * cy, cy * sp * sr - sy * cr, -cy * sp * cr - sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, -sy * sp * cr + cy * sr],
-        [sp, -cp * sr, cp * cr],
-    ])
+    """(3, 3) rotation of a CARLA transform, as ``carla.Transform.get_matrix()`` builds it (Unreal axes).
+
+    That matrix is ``Rz(yaw) Ry(-pitch) Rx(-roll)`` in the usual right-hand-rule matrices
+    (CARLA's pitch and roll turn the other way round); the test compares it entry by entry.
+    """
+    return Rotation.from_euler("ZYX", [yaw_deg, -pitch_deg, -roll_deg], degrees=True).as_matrix()
 
 
 def carla_ypr(rotation: np.ndarray) -> np.ndarray:
-    """(3,) yaw, pitch, roll in degrees of a (3, 3) CARLA rotation (inverse of :func:`carla_rotation`)."""
-    m = np.asarray(rotation, float)
-    pitch = np.arcsin(np.clip(m[2, 0], -1.0, 1.0))
-    yaw = np.arctan2(m[1, 0], m[0, 0])
-    roll = np.arctan2(-m[2, 1], m[2, 2])
-    return np.degrees([yaw, pitch, roll])
+    """(3,) yaw, pitch, roll in degrees of a (3, 3) CARLA rotation (inverse of :func:`carla_rotation`).
+
+    Pitch lies in [-90, 90] degrees, yaw and roll in [-180, 180].
+    """
+    yaw, pitch, roll = Rotation.from_matrix(np.asarray(rotation, float)).as_euler("ZYX", degrees=True)
+    return np.array([yaw, -pitch, -roll])
 
 
 def points_from_unreal(points) -> np.ndarray:

@@ -23,7 +23,6 @@ import numpy as np
 
 from pedenv.io.datasets.nuscenes_skeletons import SIDE_FILE_NAME, Skeleton, read_side_file
 from pedenv.errors import InputError
-from pedenv.geometry import quaternion_to_rotation
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth
 from pedenv.skeleton import NUM_KEYPOINTS
 
@@ -36,13 +35,6 @@ PAPER_SCENES: tuple[str, ...] = ("scene-0061", "scene-0103", "scene-0553", "scen
 TABLES: tuple[str, ...] = ("category", "attribute", "visibility", "instance", "sensor", "calibrated_sensor",
                            "ego_pose", "log", "scene", "sample", "sample_data", "sample_annotation", "map")
 CHANNEL = "CAM_FRONT"
-
-
-def _transform(translation, rotation) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, :3] = quaternion_to_rotation(rotation)
-    m[:3, 3] = translation
-    return m
 
 
 class NuScenesDataset:
@@ -122,12 +114,15 @@ class NuScenesDataset:
         return chain
 
     def _frame(self, sd: dict, index: int, scene: str) -> Frame:
+        from nuscenes.utils.geometry_utils import transform_matrix
+        from pyquaternion import Quaternion
+
         nusc = self.nusc
         pose = nusc.get("ego_pose", sd["ego_pose_token"])
         cs = nusc.get("calibrated_sensor", sd["calibrated_sensor_token"])
-        ego = _transform(pose["translation"], pose["rotation"])
+        ego = transform_matrix(pose["translation"], Quaternion(pose["rotation"]))  # ego -> global
         camera = Camera(np.array(cs["camera_intrinsic"], float), sd["width"], sd["height"],
-                        _transform(cs["translation"], cs["rotation"]))
+                        transform_matrix(cs["translation"], Quaternion(cs["rotation"])))  # optical camera -> ego
         skeletons = self.skeletons.get(sd["token"], [])
         truth = detections = None
         if sd["is_key_frame"]:
