@@ -41,10 +41,7 @@ class UltralyticsPose:
         self.input_size = parse_input_size(input_size)
         self.weights = models.find_weights(weights)
         self.device = device
-        try:
-            from ultralytics import YOLO
-        except ImportError as exc:
-            raise InputError(f"the 'ultralytics' pose backend needs ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
+        YOLO = models.yolo_class()  # loads the .pt with weights_only=True
         try:
             self._model = YOLO(str(self.weights), task="pose")
         except Exception as exc:
