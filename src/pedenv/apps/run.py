@@ -67,7 +67,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
             writer_video.release()
         if last is not None:
             summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
-        (out / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
+        (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
 
 

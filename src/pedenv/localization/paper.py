@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.config import Config, PaperConfig
-from pedenv.geometry import closest_points, project
+from pedenv.geometry import closest_points, project, unit_vectors
 from pedenv.localization.base import FrameGeometry, Measurement
 from pedenv.tracking.table import ColumnGroup
 
@@ -160,8 +160,7 @@ def height_distance(directions: np.ndarray, origin: np.ndarray, pixel_heights: n
 def mean_directions(rays: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Unit mean (N, 3) of the rays (N, K, 3) under ``mask`` (N, K); all rays where none."""
     mask = mask | ~mask.any(axis=1, keepdims=True)
-    d = np.where(mask[..., None], rays, 0.0).sum(axis=1)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
+    return unit_vectors(np.where(mask[..., None], rays, 0.0).sum(axis=1))
 
 
 def pixel_heights(keypoints: np.ndarray, seen: np.ndarray) -> np.ndarray:
@@ -244,6 +243,7 @@ class PaperLocator:
 
     def __init__(self, config: Config) -> None:
         self.config = config.paper
+        self.max_range_m = config.paper.max_distance_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = ColumnGroup({"rays": ((17, 3), np.float64), "centre_rays": ((3,), np.float64),
                                     "confidences": ((17,), np.float64), "origins": ((3,), np.float64),
                                     "seen": ((), bool)})

@@ -99,7 +99,7 @@ def write_scenes(scenes: Iterable[Scene], output_dir: str | Path) -> None:
                 "num_frames": len(scene.frames),
                 "image_paths": [None if f.image_path is None else str(f.image_path) for f in scene.frames],
                 "frame_scenes": [f.scene for f in scene.frames]}
-        (folder / "scene.json").write_text(json.dumps(meta, indent=1) + "\n")
+        (folder / "scene.json").write_text(json.dumps(meta, indent=1, allow_nan=False) + "\n")
 
 
 def read_metadata(folder: str | Path) -> dict:

@@ -64,7 +64,7 @@ def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str
     yaw from the shoulders' line where the 3D skeleton is known, one instance per (scene, id).
     """
     if not 1 <= jpeg_quality <= 100:
-        raise ValueError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
+        raise InputError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
     root = Path(output_dir)
     tables: dict[str, list[dict]] = {name: [] for name in (
         "category", "attribute", "visibility", "instance", "sensor", "calibrated_sensor", "ego_pose",
@@ -86,7 +86,7 @@ def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str
     tables["map"] = [{"token": token("map"), "category": "semantic_prior", "filename": map_file,
                       "log_tokens": [r["token"] for r in tables["log"]]}]
     for name, records in tables.items():
-        (root / version / f"{name}.json").write_text(json.dumps(records, indent=0))
+        (root / version / f"{name}.json").write_text(json.dumps(records, indent=0, allow_nan=False))
     write_side_file(root / SIDE_FILE_NAME, skeletons)
     return root / version
 
