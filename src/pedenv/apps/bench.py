@@ -12,6 +12,7 @@ from dataclasses import replace
 import numpy as np
 
 from pedenv.config import Config
+from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -46,6 +47,8 @@ def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera:
 
 def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config | None = None) -> list[dict]:
     """Tracking ms/frame and position ms/pedestrian of the model for each pedestrian count."""
+    if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
+        raise InputError(f"the number of frames to time must be an integer >= 1, got {n_frames!r}")
     rows = []
     for n in pedestrian_counts:
         frames = bench_frames(n, n_frames)

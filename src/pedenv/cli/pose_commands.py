@@ -41,13 +41,16 @@ def detect(
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
     pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
+    from pedenv.io.output_dir import prepare_output_dir
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
     from pedenv.visualize.overlay import annotate_images
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
+    prepare_output_dir(output, overwrite=overwrite, command="pedenv detect")
     path = annotate_images(images=images, output=output, backend=backend)
     typer.echo(str(path))
 
@@ -66,16 +69,27 @@ def run(
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
     start_time: Optional[float] = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
     from pedenv.apps.run import run_recording
 
     columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=console, transient=False) as bar:
-        task = bar.add_task("run", total=None)
+    bar = Progress(*columns, console=console, transient=False)
+    task = None
+
+    def progress(done: int, total) -> None:
+        nonlocal task
+        if task is None:  # opened at the first frame: a loading error stays one line
+            bar.start()
+            task = bar.add_task("run", total=None)
+        bar.update(task, completed=done, total=total or None)
+
+    try:
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
-            fps=fps, start_time=start_time, video_out=video_out,
-            progress=lambda done, total: bar.update(task, completed=done, total=total or None))
+            fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, progress=progress)
+    finally:
+        bar.stop()
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

@@ -13,12 +13,13 @@ belong to and are left out. One scene gets one log; every frame its own ego pose
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import logging
 import re
 import warnings
 from pathlib import Path
-from typing import Sequence
+from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
@@ -54,7 +55,7 @@ def token(*parts) -> str:
     return hashlib.md5("/".join(map(str, parts)).encode()).hexdigest()
 
 
-def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str = "v1.0-mini", *,
+def write_nuscenes(scenes: Iterable[Scene], output_dir: str | Path, version: str = "v1.0-mini", *,
                    jpeg_quality: int = 80) -> Path:
     """Write ``scenes`` under ``output_dir`` (the dataroot) and return the table folder.
 
@@ -78,7 +79,8 @@ def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str
     for folder in ("samples/CAM_FRONT", "sweeps/CAM_FRONT", "maps", version):
         (root / folder).mkdir(parents=True, exist_ok=True)
     skeletons: dict[str, list[dict]] = {}
-    names = _scene_names(scenes)
+    # a generator is written scene by scene (its images at once, only table rows kept)
+    names = _scene_names(scenes) if isinstance(scenes, Sequence) else (f"scene-{i + 1:04d}" for i in itertools.count())
     for scene, name in zip(scenes, names):
         _write_scene(scene, name, root, tables, skeletons, sensor_token, jpeg_quality)
     map_file = "maps/pedenv_blank.png"
