@@ -27,9 +27,11 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 def main() -> None:
     """Entry point of the ``pedenv`` console script: bad input (InputError) is one ``error:`` line,
     warnings one ``warning:`` line each."""
-    warnings.formatwarning = _one_line_warning
+    previous, warnings.formatwarning = warnings.formatwarning, _one_line_warning
     try:
         app()
     except InputError as exc:  # bad input only: any other exception is a bug and keeps its traceback
         console.print(f"error: {exc}", style="red", highlight=False, markup=False)
         sys.exit(2)
+    finally:
+        warnings.formatwarning = previous
