@@ -90,3 +90,15 @@ def test_half_turn_quaternion_hand_checked():
     np.testing.assert_allclose(np.abs(rotation_to_quaternion(np.diag([-1.0, -1.0, 1.0]))), [0, 0, 0, 1], atol=1e-15)
     np.testing.assert_allclose(rotation_to_quaternion(rotation_z(np.pi / 2)), [np.sqrt(0.5), 0, 0, np.sqrt(0.5)],
                                atol=1e-15)
+
+
+def test_pixel_rays_do_not_overflow_for_huge_pixels(camera):
+    """Issue 10.2: 1e155 px and more overflowed the norm into NaN; normalising first keeps unit rays."""
+    from pedenv.geometry import pixel_rays, unit_vectors
+
+    pixels = np.array([[1e155, 1e155], [1e300, -1e300], [800.0, 450.0]])
+    rays = pixel_rays(pixels, camera.intrinsics, np.eye(4))
+    assert np.isfinite(rays).all()
+    np.testing.assert_allclose(np.linalg.norm(rays, axis=1), 1.0)
+    np.testing.assert_allclose(rays[0], [np.sqrt(0.5), np.sqrt(0.5), 0.0], atol=1e-12)
+    assert unit_vectors(np.zeros((1, 3))).tolist() == [[0.0, 0.0, 0.0]]

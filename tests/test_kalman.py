@@ -75,3 +75,18 @@ def test_batched_filter_equals_filterpy_track_by_track():
             kf.update(z[i], R=R[i])
             np.testing.assert_allclose(x[i], kf.x, rtol=1e-10, atol=1e-10)
             np.testing.assert_allclose(P[i], kf.P, rtol=1e-9, atol=1e-10)
+
+
+def test_correct_leaves_tracks_with_a_non_finite_measurement_alone():
+    """Issue 10.2: a NaN or inf measurement is no measurement; nothing non-finite enters the state."""
+    from pedenv.config import KalmanConfig
+
+    x, P = kalman.initial_state(np.array([[5.0, 1.0], [7.0, 2.0], [0.0, 0.0]]), np.tile(np.eye(2), (3, 1, 1)), 2.0)
+    started = np.array([True, True, False])
+    z = np.array([[5.5, 1.0], [np.nan, 2.0], [np.inf, 0.0]])
+    r = np.tile(np.eye(2) * 0.25, (3, 1, 1))
+    x2, P2, measured = kalman.correct(x, P, started, z, r, r, KalmanConfig(restart_gate=25.0))
+    assert measured.tolist() == [True, False, False]
+    assert np.isfinite(x2).all() and np.isfinite(P2).all()
+    np.testing.assert_array_equal(x2[1:], x[1:])
+    assert 5.0 < x2[0, 0] < 5.5

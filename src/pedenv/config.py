@@ -11,21 +11,23 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from pedenv.errors import InputError
+
 
 def _check_range(name: str, value, low=None, high=None, *, low_open=False, high_open=False) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{name} must be a number, got {value!r}")
+        raise InputError(f"{name} must be a number, got {value!r}")
     bad_low = low is not None and (value <= low if low_open else value < low)
     bad_high = high is not None and (value >= high if high_open else value > high)
     if bad_low or bad_high:
         lo = "" if low is None else ("(" if low_open else "[") + f"{low}"
         hi = "" if high is None else f"{high}" + (")" if high_open else "]")
-        raise ValueError(f"{name} must be in {lo or '(-inf'}, {hi or 'inf)'}, got {value}")
+        raise InputError(f"{name} must be in {lo or '(-inf'}, {hi or 'inf)'}, got {value}")
 
 
 def _check_choice(name: str, value, choices) -> None:
     if value not in choices:
-        raise ValueError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
+        raise InputError(f"{name} must be one of {', '.join(map(repr, choices))}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -59,7 +61,7 @@ class TrackingConfig:
         if self.max_height_ratio != 0.0:
             _check_range("tracking.max_height_ratio (0 = off)", self.max_height_ratio, 1.0, low_open=True)
         if not isinstance(self.max_misses, int) or isinstance(self.max_misses, bool) or self.max_misses < 1:
-            raise ValueError(f"tracking.max_misses must be an integer >= 1, got {self.max_misses!r}")
+            raise InputError(f"tracking.max_misses must be an integer >= 1, got {self.max_misses!r}")
 
 
 INITIAL_ESTIMATES = ("all-keypoints", "midpoint")
@@ -84,7 +86,8 @@ class PaperConfig:
     min_parallax_rad: rays closer to parallel than this angle do not intersect; the
         position then falls back to the height-based distance.
     max_distance_m: triangulated keypoints farther than this from the camera are
-        discarded as degenerate.
+        discarded as degenerate, and no position is reported farther than this
+        (horizontally) from the camera: the model clamps it as ``fused.max_range_m``.
     measurement_std_m: standard deviation of one position measurement per axis (the
         Kalman filter's R), as a fraction of the distance plus this floor; the paper
         gives none (tuned on the built-in scenes).
@@ -107,7 +110,7 @@ class PaperConfig:
         _check_choice("paper.initial_estimate", self.initial_estimate, INITIAL_ESTIMATES)
         _check_range("paper.person_height_m", self.person_height_m, 0.3, 2.5)
         if not isinstance(self.refinement_steps, int) or self.refinement_steps < 0:
-            raise ValueError(f"paper.refinement_steps must be an integer >= 0, got {self.refinement_steps!r}")
+            raise InputError(f"paper.refinement_steps must be an integer >= 0, got {self.refinement_steps!r}")
         _check_range("paper.refinement_lambda_offset", self.refinement_lambda_offset, 0.0, low_open=True)
         _check_range("paper.min_parallax_rad", self.min_parallax_rad, 0.0, 0.1)
         _check_range("paper.max_distance_m", self.max_distance_m, 1.0)
@@ -152,7 +155,7 @@ FUSED_CUES = ("ground", "triangulation", "height")
 
 def _check_count(name: str, value, low: int) -> None:
     if not isinstance(value, int) or isinstance(value, bool) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+        raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -201,6 +204,12 @@ class FusedConfig:
         lean, feet apart). Raising it widens the covariance across the ray; 0.04 m keeps
         the across-ray part honest with exact skeletons (0.1 m made the 2D coverage
         behave like 1D: 64 % within 1 sigma).
+    max_range_m: the farthest horizontal range from the camera the method reports, metres
+        (200 m: a 1.7 m person is then about 11 px tall in a 1600 px wide 64.5 deg image,
+        below what a pose network finds). A skeleton placed farther (a tiny false
+        positive went to 243 km) is clamped to this range along its bearing and its
+        covariance along the ray widened by ``max_range_m**2`` (its range is unknown);
+        its ``sources`` ends with ``;clamped``. Raising it lets farther estimates through.
 
     Each cue splits its covariance into the part new every frame (pixel noise, gait) and
     the part that repeats for the same person (height prior, road under them, a walker's
@@ -223,11 +232,12 @@ class FusedConfig:
     outlier_sigma: float = 3.0
     gate_probability: float = 0.999
     lateral_std_m: float = 0.04
+    max_range_m: float = 200.0
 
     def __post_init__(self) -> None:
         cues = tuple(self.cues) if not isinstance(self.cues, str) else tuple(c for c in self.cues.split(",") if c)
         if not cues:
-            raise ValueError(f"fused.cues must name at least one of {', '.join(FUSED_CUES)}")
+            raise InputError(f"fused.cues must name at least one of {', '.join(FUSED_CUES)}")
         for cue in cues:
             _check_choice("fused.cues entry", cue, FUSED_CUES)
         object.__setattr__(self, "cues", cues)
@@ -246,6 +256,7 @@ class FusedConfig:
         _check_range("fused.outlier_sigma", self.outlier_sigma, 0.0, low_open=True)
         _check_range("fused.gate_probability", self.gate_probability, 0.0, 1.0, low_open=True, high_open=True)
         _check_range("fused.lateral_std_m", self.lateral_std_m, 0.0, 5.0)
+        _check_range("fused.max_range_m", self.max_range_m, 5.0, 10000.0)
 
 
 @dataclass(frozen=True)
@@ -265,7 +276,7 @@ class Config:
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method:
-            raise ValueError(f"method must be the name of a position method, got {self.method!r}")
+            raise InputError(f"method must be the name of a position method, got {self.method!r}")
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -274,17 +285,17 @@ class Config:
     def from_dict(cls, data: dict) -> "Config":
         unknown = set(data) - set(SECTIONS) - {"method"}
         if unknown:
-            raise ValueError(f"unknown config section(s): {', '.join(sorted(unknown))}; "
+            raise InputError(f"unknown config section(s): {', '.join(sorted(unknown))}; "
                              f"valid: method, {', '.join(SECTIONS)}")
         built = {}
         for name, kind in SECTIONS.items():
             values = data.get(name, {})
             if not isinstance(values, dict):
-                raise ValueError(f"config.{name} must be an object of fields, got {type(values).__name__}")
+                raise InputError(f"config.{name} must be an object of fields, got {type(values).__name__}")
             names = {f.name for f in dataclasses.fields(kind)}
             extra = set(values) - names
             if extra:
-                raise ValueError(f"unknown field(s) in config.{name}: {', '.join(sorted(extra))}; valid: {', '.join(sorted(names))}")
+                raise InputError(f"unknown field(s) in config.{name}: {', '.join(sorted(extra))}; valid: {', '.join(sorted(names))}")
             built[name] = kind(**values)
         return cls(method=data.get("method", "paper"), **built)
 
@@ -296,7 +307,7 @@ class Config:
             data["method"] = method
         for name, values in sections.items():
             if name not in SECTIONS:
-                raise ValueError(f"unknown config section {name!r}; valid: {', '.join(SECTIONS)}")
+                raise InputError(f"unknown config section {name!r}; valid: {', '.join(SECTIONS)}")
             data[name] = {**data[name], **values}
         return Config.from_dict(data)
 
@@ -305,7 +316,23 @@ class Config:
 
     @classmethod
     def load(cls, path: str | Path) -> "Config":
-        return cls.from_dict(json.loads(Path(path).read_text()))
+        """The config saved at ``path`` (JSON); every error names the file."""
+        path = Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise InputError(f"{path}: cannot read the config: {exc.strerror or exc}") from None
+        except UnicodeDecodeError:
+            raise InputError(f"{path}: the config is not UTF-8 text (a binary file?)") from None
+        except json.JSONDecodeError as exc:
+            raise InputError(f"{path}: the config is not valid JSON (line {exc.lineno}, column {exc.colno}: "
+                             f"{exc.msg})") from None
+        if not isinstance(data, dict):
+            raise InputError(f"{path}: a config must be a JSON object of sections, got {type(data).__name__}")
+        try:
+            return cls.from_dict(data)
+        except InputError as exc:
+            raise InputError(f"{path}: {exc}") from None
 
 
 #: Section name -> its class.

@@ -16,7 +16,21 @@ def pixel_rays(pixels: np.ndarray, intrinsics: np.ndarray, cam_to_world: np.ndar
     rot = cam_to_world[:3, :3]
     m = rot @ k_inv
     d = pixels[..., 0:1] * m[:, 0] + pixels[..., 1:2] * m[:, 1] + m[:, 2]
-    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+    return unit_vectors(d)
+
+
+def unit_vectors(d: np.ndarray) -> np.ndarray:
+    """``d`` (..., 3) scaled to unit length along the last axis, without overflow.
+
+    Each vector is first divided by its largest absolute component, so the norm of
+    components up to 1e308 does not overflow to inf (``np.linalg.norm`` squares them).
+    A zero vector stays zero.
+    """
+    scale = np.max(np.abs(d), axis=-1, keepdims=True)
+    scale = np.where(scale > 0, scale, 1.0)
+    d = d / scale
+    norm = np.linalg.norm(d, axis=-1, keepdims=True)
+    return d / np.where(norm > 0, norm, 1.0)
 
 
 def inverse_intrinsics(k: np.ndarray) -> np.ndarray:

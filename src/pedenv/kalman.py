@@ -80,14 +80,27 @@ def correct(x: np.ndarray, P: np.ndarray, started: np.ndarray, z: np.ndarray, r:
     r (N, 2, 2) and whole spread (``r`` plus the per-person bias) ``spread`` (N, 2, 2).
     A track not started, or (with ``config.restart_gate`` > 0, a ``KalmanConfig``) one whose
     measurement lies beyond the gate, starts again at its measurement.
-    Returns the corrected ``(x, P)``.
+    A row whose measurement (z, r or spread) holds NaN or inf is no measurement: its state
+    is left as it is, so no non-finite value enters a track's state.
+    Returns the corrected ``(x, P)`` and ``measured`` (N,) bool, the rows corrected.
     """
     x, P = x.copy(), P.copy()
-    fresh = ~started
-    if config.restart_gate > 0 and started.any():
-        fresh |= started & (innovation_distance(x, P, z, spread) > config.restart_gate)
+    measured = (np.isfinite(z).all(axis=1) & np.isfinite(r).reshape(len(r), -1).all(axis=1)
+                & np.isfinite(spread).reshape(len(spread), -1).all(axis=1))
+    fresh = ~started & measured
+    known = started & measured
+    if config.restart_gate > 0 and known.any():
+        far = np.zeros(len(x), bool)
+        far[known] = innovation_distance(x[known], P[known], z[known], spread[known]) > config.restart_gate
+        fresh |= far
     if fresh.any():
         x[fresh], P[fresh] = initial_state(z[fresh], r[fresh], config.initial_velocity_std_mps)
-    if (~fresh).any():
-        x[~fresh], P[~fresh] = update(x[~fresh], P[~fresh], z[~fresh], r[~fresh])
-    return x, P
+    step = measured & ~fresh
+    if step.any():
+        x[step], P[step] = update(x[step], P[step], z[step], r[step])
+    return x, P, measured
+
+
+def finite_states(x: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """(N,) bool: states x (N, 4) and covariances P (N, 4, 4) free of NaN and inf."""
+    return np.isfinite(x).all(axis=1) & np.isfinite(P).reshape(len(P), -1).all(axis=1)

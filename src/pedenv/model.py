@@ -22,6 +22,7 @@ from pedenv import kalman
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.localization import FrameGeometry, Locator, create_locator
+from pedenv.localization.bounds import CLAMPED, along_ray, bound_measurement, clamp_to_range
 from pedenv.records import Detections, Frame
 from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.stage_timer import StageTimer
@@ -71,32 +72,50 @@ class PedestrianEnvironmentModel:
             return 0.0
         return yaw_shift_pixels(yaw_change(self._last.ego.yaw, frame.ego.yaw), frame.camera.hfov, frame.camera.width)
 
+    @property
+    def max_range_m(self) -> float:
+        """The farthest horizontal range from the camera a position is reported at, metres:
+        the locator's ``max_range_m`` (``fused.max_range_m``), else ``paper.max_distance_m``."""
+        return float(getattr(self.locator, "max_range_m", self.config.paper.max_distance_m))
+
     def _predict(self, frame: Frame) -> None:
         f = self.tracks.filter
         if self._last is not None and len(f.x):
             f.x, f.P = kalman.predict(f.x, f.P, *self._transition(round(frame.timestamp - self._last.timestamp, 6)))
+            lost = ~kalman.finite_states(f.x, f.P)  # an absurd interval overflowed: start those tracks afresh
+            f.x[lost], f.P[lost], f.started[lost] = 0.0, np.eye(4), False
 
     def _locate(self, frame: Frame, det: Detections, rows: np.ndarray) -> Pedestrians:
-        geo = FrameGeometry.of(frame)
-        meas = self.locator.locate(geo, rows)
+        geo, cap, ground_z = FrameGeometry.of(frame), self.max_range_m, float(frame.ego.translation[2])
+        meas, measured = bound_measurement(self.locator.locate(geo, rows), geo.centre_rays, geo.origin, ground_z, cap)
         cov, bias, f = meas.covariances, meas.bias_covariances, self.tracks.filter
         spread = cov if bias is None else cov + bias
-        x, P = kalman.correct(f.x[rows], f.P[rows], f.started[rows], meas.positions[:, :2], cov, spread,
-                              self.config.kalman)
-        f.x[rows], f.P[rows], f.started[rows] = x, P, True
+        z = np.where(measured[:, None], meas.positions[:, :2], np.nan)  # unlocalised: no measurement
+        was_started = f.started[rows]
+        x, P, corrected = kalman.correct(f.x[rows], f.P[rows], was_started, z, cov, spread, self.config.kalman)
+        f.x[rows], f.P[rows], f.started[rows] = x, P, was_started | corrected
         positions, velocities, skeleton = meas.positions, np.zeros_like(meas.positions), meas.keypoints_3d
+        sources = meas.sources
         if self.config.kalman.enabled:
-            positions = np.column_stack([x[:, 0], x[:, 2], meas.positions[:, 2]])
-            velocities = np.column_stack([x[:, 1], x[:, 3], np.zeros(len(x))])
-            cov = P[:, [0, 2]][:, :, [0, 2]]
+            # an unlocalised person whose track has a state is reported at its prediction
+            use = corrected | was_started
+            positions = np.where(use[:, None], np.column_stack([x[:, 0], x[:, 2], meas.positions[:, 2]]), positions)
+            velocities = np.where(use[:, None], np.column_stack([x[:, 1], x[:, 3], np.zeros(len(x))]), velocities)
+            cov = np.where(use[:, None, None], P[:, [0, 2]][:, :, [0, 2]], cov)
             skeleton = skeleton + (positions - meas.positions)[:, None, :]
         if bias is not None:
             cov = cov + bias
+        unclamped = positions
+        positions, clamped, unit = clamp_to_range(positions, geo.origin, cap)  # the filter may drift beyond
+        if clamped.any():
+            skeleton[clamped] += (positions[clamped] - unclamped[clamped])[:, None, :]
+            cov[clamped] += along_ray(unit[clamped], cap**2)
+            sources = np.where(clamped & ~np.char.endswith(sources, CLAMPED), np.char.add(sources, CLAMPED), sources)
         tr = self.tracks.tracks
         return Pedestrians(
             track_ids=tr.ids[rows], ages=tr.hits[rows], positions=positions, velocities=velocities,
             covariances=cov, keypoints=det.keypoints, confidences=det.confidences, boxes=det.boxes,
-            keypoints_3d=skeleton, distances=np.linalg.norm(positions - geo.origin, axis=1), sources=meas.sources)
+            keypoints_3d=skeleton, distances=np.linalg.norm(positions - geo.origin, axis=1), sources=sources)
 
     def _check(self, frame: Frame) -> Detections:
         if not isinstance(frame, Frame):

@@ -18,8 +18,40 @@ from pedenv.errors import InputError, check_array
 from pedenv.skeleton import NUM_KEYPOINTS
 
 
+#: How far outside the image a detection's pixels may lie, in image sizes (widths for u,
+#: heights for v): a keypoint or box edge beyond ``-k * width`` or ``(1 + k) * width`` (and
+#: likewise for v) is refused by :class:`Frame` as corrupt input. Pose networks clip to the
+#: image and a person partly outside it reaches at most a few image sizes beyond it, so 10
+#: only refuses absurd values (1e155 px overflowed the geometry). Must be in [1, 1000];
+#: raising it admits wilder keypoints.
+MAX_PIXEL_OFFSET_IMAGE_SIZES = 10.0
+
+
 def _frozen_set(obj, name: str, value) -> None:
     object.__setattr__(obj, name, value)
+
+
+def check_pixels_in_bounds(where: str, detections: "Detections", width: int, height: int,
+                           image_sizes: float | None = None) -> None:
+    """Raise InputError if a finite keypoint or a box edge of ``detections`` lies more than
+    ``image_sizes`` (default :data:`MAX_PIXEL_OFFSET_IMAGE_SIZES`) image sizes outside the
+    ``width`` x ``height`` image. NaN keypoints are data (confidence 0) and pass."""
+    k = MAX_PIXEL_OFFSET_IMAGE_SIZES if image_sizes is None else image_sizes
+    if isinstance(k, bool) or not isinstance(k, (int, float)) or not 1.0 <= k <= 1000.0:
+        raise InputError(f"MAX_PIXEL_OFFSET_IMAGE_SIZES must be a number in [1, 1000], got {k!r}")
+    low = np.array([-k * width, -k * height])
+    high = np.array([(1.0 + k) * width, (1.0 + k) * height])
+    kp = detections.keypoints
+    # keypoints with confidence 0 (NaN turned into data) still must not be absurd
+    bad_kp = ((kp < low) | (kp > high)).any(axis=(1, 2))
+    boxes = detections.boxes.reshape(-1, 2, 2)
+    bad_box = ((boxes < low) | (boxes > high)).any(axis=(1, 2))
+    bad = np.flatnonzero(bad_kp | bad_box)
+    if len(bad):
+        i = int(bad[0])
+        raise InputError(f"{where}: detection {i} has pixels absurdly far outside the {width}x{height} image "
+                         f"(allowed: u in [{low[0]:g}, {high[0]:g}], v in [{low[1]:g}, {high[1]:g}]; "
+                         f"MAX_PIXEL_OFFSET_IMAGE_SIZES = {k:g}); {len(bad)} detection(s) affected")
 
 
 @dataclass(frozen=True)
@@ -265,6 +297,8 @@ class Frame:
                 raise InputError(f"frame {self.index}: {name} must be a {kind.__name__}, got {type(getattr(self, name)).__name__}")
         if self.detections is not None and not isinstance(self.detections, Detections):
             raise InputError(f"frame {self.index}: detections must be Detections, got {type(self.detections).__name__}")
+        if self.detections is not None:
+            check_pixels_in_bounds(f"frame {self.index}", self.detections, self.camera.width, self.camera.height)
         if self.image_path is not None:
             _frozen_set(self, "image_path", Path(self.image_path))
 

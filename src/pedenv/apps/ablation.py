@@ -37,5 +37,5 @@ def run_ablation(dataset: Dataset, *, scenes: Sequence[str] | None = None, confi
     if output_dir:
         Path(output_dir).mkdir(parents=True, exist_ok=True)
         data = {name: m.to_dict()["overall"] for name, m in rows}
-        (Path(output_dir) / "ablation.json").write_text(json.dumps(strict_json(data), indent=2) + "\n")
+        (Path(output_dir) / "ablation.json").write_text(json.dumps(strict_json(data), indent=2, allow_nan=False) + "\n")
     return comparison_table(rows, f"Ablation ({dataset.name}), as the paper's Sec. IV-D")

@@ -13,6 +13,7 @@ import numpy as np
 
 from pedenv.body import standing_body, world_keypoints
 from pedenv.config import Config
+from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -43,6 +44,8 @@ def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera:
 
 def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config | None = None) -> list[dict]:
     """Tracking ms/frame and position ms/pedestrian of the model for each pedestrian count."""
+    if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
+        raise InputError(f"the number of frames to time must be an integer >= 1, got {n_frames!r}")
     rows = []
     for n in pedestrian_counts:
         frames = bench_frames(n, n_frames)

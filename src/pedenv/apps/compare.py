@@ -18,6 +18,7 @@ from typing import Sequence
 
 from rich.table import Table
 
+from pedenv.errors import InputError
 from pedenv.config import Config
 from pedenv.localization import METHODS, configure
 from pedenv.io.datasets import Dataset
@@ -41,7 +42,7 @@ def compare_methods(dataset: Dataset, *, methods: Sequence[str] = ("paper", "fus
     methods = list(methods)
     unknown = [m for m in methods if m not in METHODS]
     if unknown or not methods or len(set(methods)) != len(methods):
-        raise ValueError(f"methods must be distinct names from {', '.join(METHODS)}, got {methods}")
+        raise InputError(f"methods must be distinct names from {', '.join(METHODS)}, got {methods}")
     config = config or Config()
     spec = pose_backend or dataset.default_pose_backend
     backend = create_pose_backend(spec) if isinstance(spec, str) else spec
@@ -69,7 +70,7 @@ def write_comparison(results: dict[str, EvaluationResult], output_dir: Path) -> 
                                         f"{first.get('pose_backend', '')})")
     metrics = output_dir / "metrics.json"
     data = {"methods": {m: r.metrics.to_dict() for m, r in results.items()}}
-    metrics.write_text(json.dumps(strict_json(data), indent=2) + "\n")
+    metrics.write_text(json.dumps(strict_json(data), indent=2, allow_nan=False) + "\n")
     return {"error_by_distance": plot, "metrics": metrics}
 
 

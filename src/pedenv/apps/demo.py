@@ -4,8 +4,9 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Sequence
+from typing import Iterator, Sequence
 
+from pedenv.errors import InputError
 from pedenv.config import Config
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.io.outputs import write_outputs
@@ -14,25 +15,41 @@ from pedenv.evaluation.result import EvaluationResult
 from pedenv.records import Scene
 
 
+#: The most scenes ``builtin_scenes`` / ``pedenv simulate --scenes`` makes in one go (each
+#: is 15-20 s of frames; 1000 of them take about an hour and some GB on disk).
+MAX_SCENES = 1000
+
+
 def builtin_scenes(seed: int = 0, count: int | None = None, *, terrain: bool = False,
                    frame_rate_hz: float = 10.0) -> list[Scene]:
     """``count`` built-in scenes (all scenarios once by default; more repeat them with new seeds).
 
     Scenes beyond the first round are named ``<scenario>-<k>``.
     """
+    return list(iter_builtin_scenes(seed, count, terrain=terrain, frame_rate_hz=frame_rate_hz))
+
+
+def iter_builtin_scenes(seed: int = 0, count: int | None = None, *, terrain: bool = False,
+                        frame_rate_hz: float = 10.0) -> Iterator[Scene]:
+    """The scenes of :func:`builtin_scenes`, made one at a time as they are asked for
+    (each scene depends only on its seed and scenario, so the scenes are the same).
+    ``count`` must be in [1, :data:`MAX_SCENES`]."""
     from pedenv.synthetic import SCENARIOS, generate_scenes
 
-    n = len(SCENARIOS) if count is None else int(count)
-    if n < 1:
-        raise ValueError(f"the number of scenes must be at least 1, got {n}")
-    scenes: list[Scene] = []
-    round_ = 0
-    while len(scenes) < n:
-        names = list(SCENARIOS[: n - len(scenes)])
-        batch = generate_scenes(seed + round_, names, terrain=terrain, frame_rate_hz=frame_rate_hz)
-        scenes.extend(batch if round_ == 0 else [rename_scene(s, f"{s.name}-{round_}") for s in batch])
-        round_ += 1
-    return scenes
+    n = len(SCENARIOS) if count is None else count
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_SCENES:
+        raise InputError(f"the number of scenes must be an integer in [1, {MAX_SCENES}], got {count!r}")
+    generate_scenes(seed, [], terrain=terrain, frame_rate_hz=frame_rate_hz)  # checks the options up front
+    return _scene_stream(seed, n, terrain, frame_rate_hz, list(SCENARIOS))
+
+
+def _scene_stream(seed: int, n: int, terrain: bool, frame_rate_hz: float, scenarios: list[str]) -> Iterator[Scene]:
+    from pedenv.synthetic import generate_scenes
+
+    for k in range(n):
+        round_, name = divmod(k, len(scenarios))
+        (scene,) = generate_scenes(seed + round_, [scenarios[name]], terrain=terrain, frame_rate_hz=frame_rate_hz)
+        yield scene if round_ == 0 else rename_scene(scene, f"{scene.name}-{round_}")
 
 
 def rename_scene(scene: Scene, name: str) -> Scene:
@@ -54,6 +71,23 @@ def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = N
 
 def scenes_summary(scenes: Sequence[Scene]) -> str:
     """One line: scenes, frames and labelled pedestrians."""
-    frames = sum(len(s) for s in scenes)
-    peds = sum(len(f.ground_truth) for s in scenes for f in s.frames if f.ground_truth is not None)
-    return f"{len(scenes)} scenes, {frames} frames, {peds} visible pedestrians"
+    counter = SceneCounter()
+    for scene in scenes:
+        counter.add(scene)
+    return counter.summary()
+
+
+class SceneCounter:
+    """Counts scenes, frames and labelled pedestrians as scenes stream past."""
+
+    def __init__(self) -> None:
+        self.scenes = self.frames = self.pedestrians = 0
+
+    def add(self, scene: Scene) -> Scene:
+        self.scenes += 1
+        self.frames += len(scene)
+        self.pedestrians += sum(len(f.ground_truth) for f in scene.frames if f.ground_truth is not None)
+        return scene
+
+    def summary(self) -> str:
+        return f"{self.scenes} scenes, {self.frames} frames, {self.pedestrians} visible pedestrians"

@@ -24,8 +24,21 @@ def progress_bar(console: Console | None = None, *, enabled: bool = True) -> Pro
 def progress_callback(description: str, console: Console | None = None) -> Iterator[Callable[[int, int], None]]:
     """A :func:`progress_bar` with one task, handed out as a ``progress(done, total)`` callback.
 
+    The bar opens at the first call, so an error while loading the input stays one line.
     ``total`` 0 means not known yet (the bar then shows no time left).
     """
-    with progress_bar(console) as bar:
-        task = bar.add_task(description, total=None)
-        yield lambda done, total: bar.update(task, completed=done, total=total or None)
+    bar = progress_bar(console)
+    task = None
+
+    def progress(done: int, total: int) -> None:
+        nonlocal task
+        if task is None:
+            bar.start()
+            task = bar.add_task(description, total=None)
+        bar.update(task, completed=done, total=total or None)
+
+    try:
+        yield progress
+    finally:
+        if task is not None:
+            bar.stop()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ import numpy as np
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.io.jsonl import EnvironmentWriter
+from pedenv.io.output_dir import prepare_output_dir
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.visualize.plots import plot_birds_eye
 from pedenv.pose.base import create_pose_backend
@@ -21,7 +23,7 @@ from pedenv.visualize.overlay import draw_environment, write_image
 
 def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
-                  video_out: bool = False, progress=None) -> dict:
+                  video_out: bool = False, overwrite: bool = False, progress=None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
@@ -29,6 +31,10 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     ``overlay.mp4`` (``video_out``) with skeletons, track ids and distances, and
     ``birds_eye.png`` of the last frame. A bad frame stops the run with an InputError; what
     was computed before it stays on disk. ``progress(done, total)`` is called per frame.
+    ``output`` must be empty or new, unless ``overwrite`` (then an earlier pedenv run there is
+    deleted once the inputs are checked: :func:`pedenv.io.output_dir.prepare_output_dir`).
+    A video that ends before the frame count its header gives is warned about and
+    ``run.json`` says so in ``ended_early``.
     ``pose_input_size`` (``onnx``): None picks 384x640 for wide cameras, else 640.
     Returns the summary also saved as ``run.json``.
     """
@@ -38,8 +44,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     if pose_backend == "onnx" and pose_input_size is None and pose_model is None:
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
-    out = Path(output)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
     summary = {"recording": rec.name, "pose_backend": describe, "frames_total": len(rec), "frames_done": 0,
@@ -62,12 +67,16 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                 summary["frames_done"] += 1
                 if progress is not None:
                     progress(summary["frames_done"], summary["frames_total"])
+        if rec.video is not None and summary["frames_done"] < summary["frames_total"]:
+            summary["ended_early"] = (f"{rec.video}: the video ended after {summary['frames_done']} of the "
+                                      f"{summary['frames_total']} frames its header announces (cut or damaged?)")
+            warnings.warn(summary["ended_early"], stacklevel=2)
     finally:
         if writer_video is not None:
             writer_video.release()
         if last is not None:
             summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
-        (out / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
+        (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
 
 

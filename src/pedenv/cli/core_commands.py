@@ -41,11 +41,14 @@ def demo(
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
     config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
     method: Optional[str] = typer.Option(None, "--method", help="paper (default) or fused."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
     from pedenv.apps.demo import run_demo
+    from pedenv.io.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
+    prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend)
     _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
     for name, path in result.extras["paths"].items():
@@ -61,16 +64,20 @@ def simulate(
     fmt: str = typer.Option("synthetic", "--format", help="synthetic, nuscenes or carla."),
     terrain: bool = typer.Option(False, "--terrain/--flat"),
     frame_rate: Optional[float] = typer.Option(None, "--frame-rate", help="Hz; default 10 (12 for nuscenes)."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
-    """Write the built-in synthetic scenes to disk in one of the supported formats."""
+    """Write the built-in synthetic scenes to disk in one of the supported formats, each as it is made."""
+    from pedenv.apps.demo import SceneCounter, iter_builtin_scenes
     from pedenv.io.datasets import scene_writer
-    from pedenv.apps.demo import builtin_scenes, scenes_summary
+    from pedenv.io.output_dir import prepare_output_dir
 
     write = scene_writer(fmt)
-    rate = frame_rate or (12.0 if fmt == "nuscenes" else 10.0)
-    data = builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
-    write(data, output)
-    _out.print(f"wrote {scenes_summary(data)} as {fmt} to {output}", highlight=False)
+    rate = frame_rate if frame_rate is not None else (12.0 if fmt == "nuscenes" else 10.0)
+    stream = iter_builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
+    prepare_output_dir(output, overwrite=overwrite, command="pedenv simulate")
+    counter = SceneCounter()
+    write((counter.add(scene) for scene in stream), output)
+    _out.print(f"wrote {counter.summary()} as {fmt} to {output}", highlight=False)
 
 
 @app.command()
@@ -87,6 +94,7 @@ def evaluate(
     ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
     method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.io.datasets import open_dataset
@@ -98,6 +106,9 @@ def evaluate(
     cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
+    from pedenv.io.output_dir import prepare_output_dir
+
+    prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
     if method == "both":
         from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 

@@ -40,13 +40,16 @@ def detect(
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
     pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
+    from pedenv.io.output_dir import prepare_output_dir
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
     from pedenv.visualize.overlay import annotate_images
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
+    prepare_output_dir(output, overwrite=overwrite, command="pedenv detect")
     path = annotate_images(images=images, output=output, backend=backend)
     typer.echo(str(path))
 
@@ -65,6 +68,7 @@ def run(
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
     start_time: Optional[float] = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
     from pedenv.apps.progress import progress_callback
@@ -74,5 +78,5 @@ def run(
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
-            fps=fps, start_time=start_time, video_out=video_out, progress=progress)
+            fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, progress=progress)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

@@ -104,7 +104,7 @@ class Metrics:
         }
 
     def save(self, path: str | Path) -> None:
-        Path(path).write_text(json.dumps(strict_json(self.to_dict()), indent=2) + "\n")
+        Path(path).write_text(json.dumps(strict_json(self.to_dict()), indent=2, allow_nan=False) + "\n")
 
 
 def strict_json(value):

@@ -18,6 +18,7 @@ Each frame gets the pose interpolated at its timestamp (linear position, slerp r
 from __future__ import annotations
 
 import csv
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterator
@@ -58,15 +59,20 @@ def load_calibration(path: str | Path) -> Camera:
     """The :class:`Camera` described by a calibration YAML file (format in the module doc)."""
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
     except OSError as exc:
         raise InputError(f"{path}: cannot read the calibration: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: the calibration is not UTF-8 text (a binary file?)") from None
     except yaml.YAMLError as exc:
         raise InputError(f"{path}: not valid YAML: {exc}") from None
     if not isinstance(data, dict):
         raise InputError(f"{path}: calibration must be a YAML mapping of fields")
     if "intrinsics" in data:
         k = _numbers(data["intrinsics"], "intrinsics", path, (3, 3))
+        if not np.array_equal(k[2], [0.0, 0.0, 1.0]):
+            raise InputError(f"{path}: calibration field 'intrinsics' must have the last row [0, 0, 1], got "
+                             f"{k[2].tolist()} (a scaled matrix would scale every distance)")
     else:
         fx, fy, cx, cy = (float(_numbers(_field(data, f, path), f, path, ())) for f in ("fx", "fy", "cx", "cy"))
         k = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
@@ -140,10 +146,12 @@ def load_ego_poses(path: str | Path) -> EgoTrajectory:
     """The ego poses of a CSV file (format in the module doc); rows must be sorted by time."""
     path = Path(path)
     try:
-        with path.open(newline="") as f:
+        with path.open(newline="", encoding="utf-8-sig") as f:  # -sig: a byte-order mark is accepted
             rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
     except OSError as exc:
         raise InputError(f"{path}: cannot read the ego poses: {exc.strerror}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path}: the ego poses are not a UTF-8 CSV text file (a binary file?): {exc}") from None
     header = tuple(c.strip().lower() for c in rows[0]) if rows else ()
     if header not in POSE_HEADERS:
         raise InputError(f"{path}: ego poses header must be {' or '.join(','.join(h) for h in POSE_HEADERS)}, "
@@ -174,7 +182,25 @@ def load_ego_poses(path: str | Path) -> EgoTrajectory:
     else:
         trans = np.column_stack([values[:, 1:3], np.zeros(len(values))])
         quats = Rotation.from_euler("z", values[:, 3:4]).as_quat(canonical=True, scalar_first=True)
+    _warn_implausible_speed(path, ts, trans)
     return EgoTrajectory(ts, trans, quats, str(path))
+
+
+#: Ego speeds above this (m/s, about 300 km/h) between two pose rows are warned about:
+#: a jump in the poses (a wrong row, a reset) makes every pedestrian seem to race.
+MAX_PLAUSIBLE_EGO_SPEED_MPS = 85.0
+
+
+def _warn_implausible_speed(path: Path, ts: np.ndarray, trans: np.ndarray) -> None:
+    if len(ts) < 2:
+        return
+    speeds = np.linalg.norm(np.diff(trans, axis=0), axis=1) / np.diff(ts)
+    fast = np.flatnonzero(speeds > MAX_PLAUSIBLE_EGO_SPEED_MPS)
+    if len(fast):
+        i = int(fast[0])
+        warnings.warn(f"{path}: the ego moves at {speeds[i]:.0f} m/s between rows {i + 1} and {i + 2} (lines {i + 2}-"
+                      f"{i + 3}), above the plausible {MAX_PLAUSIBLE_EGO_SPEED_MPS:g} m/s; {len(fast)} such step(s): "
+                      f"check the poses (positions must be metres, timestamps seconds)", stacklevel=3)
 
 
 def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[tuple[Path, float]]:
@@ -186,14 +212,19 @@ def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[t
         return [(p, start_time + i / fps) for i, p in enumerate(images)]
     if not table.is_file():
         raise InputError(f"{folder}: no timestamps.csv (filename,timestamp) in the folder; give --fps instead")
-    with table.open(newline="") as f:
-        rows = [r for r in csv.reader(f) if r]
+    try:
+        with table.open(newline="", encoding="utf-8-sig") as f:
+            rows = [r for r in csv.reader(f) if r]
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{table}: not a UTF-8 CSV text file (a binary file?): {exc}") from None
     if not rows or [c.strip().lower() for c in rows[0]] != ["filename", "timestamp"]:
         raise InputError(f"{table}: header must be filename,timestamp")
     stamps = {}
     for n, row in enumerate(rows[1:], start=1):
         try:
             stamps[row[0].strip()] = float(row[1])
+            if not np.isfinite(stamps[row[0].strip()]):
+                raise ValueError
         except (IndexError, ValueError):
             raise InputError(f"{table}: row {n} must be filename,timestamp (seconds), got {','.join(row)}") from None
     missing = [p.name for p in images if p.name not in stamps]
@@ -282,8 +313,8 @@ def load_recording(*, calibration: str | Path, ego_poses: str | Path, images: st
     """
     if (images is None) == (video is None):
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
-    if fps is not None and not fps > 0:
-        raise ValueError(f"fps must be > 0, got {fps}")
+    if fps is not None and not (np.isfinite(fps) and fps > 0):
+        raise InputError(f"fps must be a finite number > 0, got {fps}")
     camera = load_calibration(calibration)
     trajectory = load_ego_poses(ego_poses)
     start = float(trajectory.timestamps[0] if start_time is None else start_time)

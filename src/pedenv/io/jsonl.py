@@ -10,6 +10,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from pedenv.errors import InputError
+from pedenv.io.output_dir import writable_file
 from pedenv.state import EnvironmentState
 
 
@@ -22,16 +24,20 @@ class EnvironmentWriter:
         self._file = None
 
     def __enter__(self) -> "EnvironmentWriter":
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = self.path.open("w")
+        path = writable_file(self.path, "environment model")
+        try:
+            self._file = path.open("w")
+        except OSError as exc:
+            raise InputError(f"environment model {path} cannot be written: {exc.strerror or exc}") from None
         return self
 
     def write(self, state: EnvironmentState) -> None:
-        self._file.write(json.dumps(state.to_dict(self.decimals), separators=(",", ":")) + "\n")
+        self._file.write(json.dumps(state.to_dict(self.decimals), separators=(",", ":"), allow_nan=False) + "\n")
         self._file.flush()
 
     def __exit__(self, *exc) -> None:
-        self._file.close()
+        if self._file is not None:
+            self._file.close()
 
 
 def read_environment(path: str | Path) -> list[dict]:

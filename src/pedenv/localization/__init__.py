@@ -7,6 +7,7 @@ its class; it is the one list of method names (``Config`` checks against it).
 
 from __future__ import annotations
 
+from pedenv.errors import InputError
 from pedenv.config import Config
 from pedenv.localization.base import FrameGeometry, Locator, Measurement
 from pedenv.localization.fused.locator import FusedLocator
@@ -22,7 +23,7 @@ METHODS: tuple[str, ...] = tuple(LOCATORS)
 
 def _check(name: str) -> type:
     if name not in LOCATORS:
-        raise ValueError(f"unknown position method {name!r}; valid: {', '.join(LOCATORS)}")
+        raise InputError(f"unknown position method {name!r}; valid: {', '.join(LOCATORS)}")
     return LOCATORS[name]
 
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.config import Config, PaperConfig
-from pedenv.geometry import closest_points
+from pedenv.geometry import closest_points, unit_vectors
 from pedenv.localization.base import FrameGeometry, Measurement
 from pedenv.tracking.table import ColumnGroup
 
@@ -135,8 +135,7 @@ def pinhole_distance(pixel_heights: np.ndarray, intrinsics: np.ndarray, config: 
 def mean_directions(rays: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Unit mean (N, 3) of the rays (N, K, 3) under ``mask`` (N, K); all rays where none."""
     mask = mask | ~mask.any(axis=1, keepdims=True)
-    d = np.where(mask[..., None], rays, 0.0).sum(axis=1)
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
+    return unit_vectors(np.where(mask[..., None], rays, 0.0).sum(axis=1))
 
 
 def pixel_heights(keypoints: np.ndarray, seen: np.ndarray) -> np.ndarray:
@@ -235,6 +234,7 @@ class PaperLocator:
 
     def __init__(self, config: Config) -> None:
         self.config = config.paper
+        self.max_range_m = config.paper.max_distance_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = PaperMemory()
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib
 from typing import Protocol, runtime_checkable
 
+from pedenv.errors import InputError
 from pedenv.records import Detections, Frame
 
 
@@ -37,6 +38,6 @@ def create_pose_backend(name: str, **options) -> PoseBackend:
     Raises ValueError naming the valid backends for an unknown name.
     """
     if name not in POSE_BACKENDS:
-        raise ValueError(f"unknown pose backend {name!r}; valid: {', '.join(POSE_BACKENDS)}")
+        raise InputError(f"unknown pose backend {name!r}; valid: {', '.join(POSE_BACKENDS)}")
     module, cls = POSE_BACKENDS[name].split(":")
     return getattr(importlib.import_module(module), cls)(**options)

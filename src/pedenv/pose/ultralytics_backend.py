@@ -36,15 +36,12 @@ class UltralyticsPose:
         self.score_threshold = _check_unit("score_threshold", score_threshold)
         self.iou_threshold = _check_unit("iou_threshold", iou_threshold)
         if isinstance(max_detections, bool) or not isinstance(max_detections, int) or max_detections < 1:
-            raise ValueError(f"max_detections must be an integer >= 1, got {max_detections!r}")
+            raise InputError(f"max_detections must be an integer >= 1, got {max_detections!r}")
         self.max_detections = max_detections
         self.input_size = parse_input_size(input_size)
         self.weights = models.find_weights(weights)
         self.device = device
-        try:
-            from ultralytics import YOLO
-        except ImportError as exc:
-            raise InputError(f"the 'ultralytics' pose backend needs ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
+        YOLO = models.yolo_class()  # loads the .pt with weights_only=True
         try:
             self._model = YOLO(str(self.weights), task="pose")
         except Exception as exc:

@@ -65,7 +65,7 @@ class DetectorModel:
                  false_positives_per_frame: float = 0.05, box_noise_fraction: float = 0.03,
                  box_min_confidence: float = 0.3) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-            raise ValueError(f"DetectorModel seed must be an integer, got {seed!r}")
+            raise InputError(f"DetectorModel seed must be an integer, got {seed!r}")
         self.seed = int(seed)
         self.noise_px_large = _check("noise_px_large", noise_px_large, 0.0, 50.0)
         self.noise_px_small = _check("noise_px_small", noise_px_small, 0.0, 50.0)

@@ -12,6 +12,7 @@ from typing import Sequence
 import numpy as np
 
 from pedenv.body import world_keypoints
+from pedenv.errors import InputError
 from pedenv.records import Camera, Frame, GroundTruth, Scene
 from pedenv.synthetic.ego_motion import ego_poses, integrate_track
 from pedenv.synthetic.population import Pedestrians
@@ -50,17 +51,17 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
     Raises ValueError for an unknown name or an out-of-range option.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ValueError(f"seed must be an integer, got {seed!r}")
+        raise InputError(f"seed must be an integer, got {seed!r}")
     if isinstance(names, str):
         names = [names]
     names = list(SCENARIOS if names is None else names)
     unknown = [n for n in names if n not in SCENARIOS]
     if unknown:
-        raise ValueError(f"unknown scenario {unknown[0]!r}; valid: {', '.join(SCENARIOS)}")
+        raise InputError(f"unknown scenario {unknown[0]!r}; valid: {', '.join(SCENARIOS)}")
     if isinstance(frame_rate_hz, bool) or not 0.5 <= frame_rate_hz <= 100.0:
-        raise ValueError(f"frame_rate_hz must be in [0.5, 100], got {frame_rate_hz}")
+        raise InputError(f"frame_rate_hz must be in [0.5, 100], got {frame_rate_hz}")
     if duration_s is not None and not 1.0 <= duration_s <= 600.0:
-        raise ValueError(f"duration_s must be in [1, 600] seconds, got {duration_s}")
+        raise InputError(f"duration_s must be in [1, 600] seconds, got {duration_s}")
     return [generate_scene(seed, name, frame_rate_hz=frame_rate_hz,
                            duration_s=default_duration(name) if duration_s is None else float(duration_s),
                            terrain=terrain) for name in names]

@@ -13,6 +13,7 @@ from typing import Callable
 
 import numpy as np
 
+from pedenv.errors import InputError
 from pedenv.synthetic.ego_motion import Profile, integrate_track, smooth_step
 from pedenv.synthetic.population import Pedestrians, concat
 from pedenv.synthetic.streets import Road, crossers, plaza_walkers, sidewalk_walkers, standing_group
@@ -159,5 +160,5 @@ def default_duration(name: str) -> float:
 def build_scenario(name: str, rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
     """The plan of scenario ``name``; raises ValueError listing the valid names."""
     if name not in _RECIPES:
-        raise ValueError(f"unknown scenario {name!r}; valid: {', '.join(SCENARIOS)}")
+        raise InputError(f"unknown scenario {name!r}; valid: {', '.join(SCENARIOS)}")
     return _RECIPES[name][0](rng, duration_s)

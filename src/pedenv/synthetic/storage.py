@@ -30,6 +30,8 @@ holds an image array is an error.
 from __future__ import annotations
 
 import json
+import zipfile
+import zlib
 from pathlib import Path
 from typing import Iterable
 
@@ -99,7 +101,7 @@ def write_scenes(scenes: Iterable[Scene], output_dir: str | Path) -> None:
                 "num_frames": len(scene.frames),
                 "image_paths": [None if f.image_path is None else str(f.image_path) for f in scene.frames],
                 "frame_scenes": [f.scene for f in scene.frames]}
-        (folder / "scene.json").write_text(json.dumps(meta, indent=1) + "\n")
+        (folder / "scene.json").write_text(json.dumps(meta, indent=1, allow_nan=False) + "\n")
 
 
 def read_metadata(folder: str | Path) -> dict:
@@ -127,10 +129,10 @@ def read_scene(folder: str | Path) -> Scene:
     if not path.is_file():
         raise InputError(f"{path}: missing (every scene folder holds frames.npz)")
     try:
-        with np.load(path) as data:
+        with np.load(path) as data:  # allow_pickle stays off: object arrays are refused
             a = {k: data[k] for k in data.files}
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path}: cannot read: {exc}") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        raise InputError(f"{path}: cannot read (truncated or corrupted?): {type(exc).__name__}: {exc}") from None
     needed = ["index", "timestamp", "ego_translation", "ego_rotation", "intrinsics", "image_size", "cam_to_vehicle",
               "has_gt", "has_detections", "gt_offsets", "gt_ids", "gt_positions", "gt_boxes", "det_offsets"]
     needed += [f"gt_{n}" for n in _OPTIONAL] + [f"gt_has_{n}" for n in _OPTIONAL] + [f"det_{n}" for n in _DETECTIONS]

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pedenv.errors import InputError
+
 
 @dataclass(frozen=True)
 class Terrain:
@@ -65,9 +67,9 @@ def random_terrain(rng: np.random.Generator, *, max_grade: float = 0.05, compone
     divided by its wavenumber, so the summed bound equals ``0.98 * max_grade``.
     """
     if not 0.0 <= max_grade <= 0.3:
-        raise ValueError(f"max_grade must be in [0, 0.3], got {max_grade}")
+        raise InputError(f"max_grade must be in [0, 0.3], got {max_grade}")
     if components < 1:
-        raise ValueError(f"components must be >= 1, got {components}")
+        raise InputError(f"components must be >= 1, got {components}")
     wavelengths = rng.uniform(*wavelength_range_m, components)
     angles = rng.uniform(0.0, 2.0 * np.pi, components)
     k = 2.0 * np.pi / wavelengths

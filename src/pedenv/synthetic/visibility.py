@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.records import Camera
 
@@ -42,14 +43,14 @@ class VisibilityRules:
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m < self.max_distance_m:
-            raise ValueError(f"need 0 <= min_distance_m < max_distance_m, got {self.min_distance_m}, {self.max_distance_m}")
+            raise InputError(f"need 0 <= min_distance_m < max_distance_m, got {self.min_distance_m}, {self.max_distance_m}")
         if self.min_height_px < 0:
-            raise ValueError(f"min_height_px must be >= 0, got {self.min_height_px}")
+            raise InputError(f"min_height_px must be >= 0, got {self.min_height_px}")
         for name in ("min_inside_fraction", "max_occluded_fraction"):
             if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"{name} must be in [0, 1], got {getattr(self, name)}")
+                raise InputError(f"{name} must be in [0, 1], got {getattr(self, name)}")
         if self.min_depth_m <= 0:
-            raise ValueError(f"min_depth_m must be > 0, got {self.min_depth_m}")
+            raise InputError(f"min_depth_m must be > 0, got {self.min_depth_m}")
 
 
 @dataclass(frozen=True)

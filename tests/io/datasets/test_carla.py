@@ -199,3 +199,36 @@ def test_bad_roots_and_scenes(tmp_path):
         list(ds.frames("scene9"))
     with pytest.raises(InputError, match="no frame files"):
         list(ds.frames("scene3"))
+
+
+class _RunsCommand:
+    """A pickled object that runs a shell command when unpickled (the issue's payload)."""
+
+    def __init__(self, command: str) -> None:
+        self.command = command
+
+    def __reduce__(self):
+        import os
+
+        return os.system, (self.command,)
+
+
+def test_pickle_payload_is_refused_and_never_runs(tmp_path, monkeypatch):
+    """A data_<n>.npy whose pickle calls os.system: one InputError naming the file, no command run."""
+    monkeypatch.chdir(tmp_path)
+    path = _write(tmp_path, np.array(_RunsCommand("touch PWNED"), dtype=object))
+    with pytest.raises(InputError, match=r"data_5\.npy: .*refusing to load (posix|nt)\.system"):
+        list(CarlaDataset(tmp_path).frames("scene1"))
+    assert not (tmp_path / "PWNED").exists()
+    # the same payload inside a dict, as a recording's frame would carry it
+    np.save(path, {**_good_record(), "2d_skel": [_RunsCommand("touch PWNED")]}, allow_pickle=True)
+    with pytest.raises(InputError, match=r"data_5\.npy: .*refusing to load"):
+        load_record(path)
+    assert not (tmp_path / "PWNED").exists()
+
+
+def test_ragged_arrays_name_the_file(tmp_path):
+    record = _good_record()
+    _write(tmp_path, {**record, "bbox_2d": [np.zeros(4), np.zeros(3)] + list(record["bbox_2d"])[2:]})
+    with pytest.raises(InputError, match=r"data_5\.npy: 'bbox_2d' must have shape \(N, 4\); entry 1 has shape \(3,\)"):
+        list(CarlaDataset(tmp_path).frames("scene1"))

@@ -141,3 +141,22 @@ def test_bad_input(exported, tmp_path):
     with pytest.raises(InputError, match=r"side\.json: sample_data t entry 0: needs instance_token, keypoints, visible"):
         NuScenesDataset(root, skeletons=bad_side)
     assert (root / SIDE_FILE_NAME).is_file()
+
+
+@pytest.mark.parametrize("table, field, value, message", [
+    ("ego_pose", "rotation", [0.0, 0.0, 0.0, 0.0], "a zero quaternion"),
+    ("ego_pose", "translation", [float("nan"), 0.0, 0.0], "ego translation contains NaN or inf"),
+    ("calibrated_sensor", "camera_intrinsic", [[0.0, 0, 0], [0, 0, 0], [0, 0, 1]], "intrinsics must be an invertible"),
+])
+def test_nan_and_zero_table_values_name_the_tables(exported, tmp_path, table, field, value, message):
+    """Issue 10.8: NaN or zero values in the tables gave messages naming no file."""
+    scenes, root, ds = exported
+    copy = tmp_path / "copy"
+    shutil.copytree(root, copy)
+    path = copy / "v1.0-mini" / f"{table}.json"
+    records = json.loads(path.read_text())
+    for record in records:
+        record[field] = value
+    path.write_text(json.dumps(records))  # json writes NaN as the token NaN, as a broken export might
+    with pytest.raises(InputError, match=r"v1\.0-mini: scene scene-0001, frame 0 \(sample_data .*\): .*" + message):
+        next(NuScenesDataset(copy).frames("scene-0001"))

@@ -10,6 +10,7 @@ import importlib
 from pathlib import Path
 from typing import Iterator, Protocol
 
+from pedenv.errors import InputError
 from pedenv.records import Frame
 
 
@@ -44,7 +45,7 @@ SCENE_WRITERS: dict[str, str] = {
 
 def _load(table: dict[str, str], kind: str, name: str):
     if name not in table:
-        raise ValueError(f"unknown {kind} {name!r}; valid: {', '.join(table)}")
+        raise InputError(f"unknown {kind} {name!r}; valid: {', '.join(table)}")
     module, attr = table[name].split(":")
     return getattr(importlib.import_module(module), attr)
 

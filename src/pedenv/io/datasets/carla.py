@@ -23,6 +23,7 @@ import numpy as np
 
 from pedenv.io.datasets.carla_axes import cam_to_world_from_unreal, ego_from_unreal, points_from_unreal
 from pedenv.io.datasets.carla_bones import NUM_BONES, bones_to_coco, visible_keypoints
+from pedenv.io.safe_npy import load_npy
 from pedenv.errors import InputError, check_array
 from pedenv.geometry import invert_transform
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
@@ -100,12 +101,12 @@ def _warn_gaps(scene: str, files: list[tuple[int, Path]]) -> None:
 
 
 def load_record(path: Path) -> dict:
-    """The frame dict stored in ``path``, checked for :data:`REQUIRED_KEYS`."""
-    try:
-        record = np.load(path, allow_pickle=True)
-        record = record.item() if isinstance(record, np.ndarray) and record.shape == () else record
-    except Exception as exc:  # noqa: BLE001 - any unreadable file is bad input naming the file
-        raise InputError(f"{path}: not a readable .npy frame file ({type(exc).__name__}: {exc})") from None
+    """The frame dict stored in ``path``, checked for :data:`REQUIRED_KEYS`.
+
+    The pickle inside is read by a restricted unpickler (numpy arrays, dtypes and plain
+    containers only); a file naming anything else is refused with an InputError.
+    """
+    record = load_npy(path)  # never runs code from the file: see pedenv.io.safe_npy
     if not isinstance(record, dict):
         raise InputError(f"{path}: expected a pickled dict with keys {', '.join(REQUIRED_KEYS)}, got {type(record).__name__}")
     missing = [k for k in REQUIRED_KEYS if k not in record]
@@ -121,7 +122,15 @@ def _stack(path: Path, record: dict, key: str, shape: tuple) -> np.ndarray:
     items = record[key]
     if not isinstance(items, (list, tuple, np.ndarray)):
         raise InputError(f"{path}: '{key}' must be a list, got {type(items).__name__}")
-    array = np.asarray([np.asarray(v, float) for v in items]) if len(items) else np.zeros((0, *shape))
+    wanted = "(N, " + ", ".join(map(str, shape)) + ")"
+    try:
+        rows = [np.asarray(v, float) for v in items]
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{path}: '{key}' holds a non-numeric entry ({exc})") from None
+    bad = next((i for i, r in enumerate(rows) if r.shape != shape), None)
+    if bad is not None:
+        raise InputError(f"{path}: '{key}' must have shape {wanted}; entry {bad} has shape {rows[bad].shape}")
+    array = np.stack(rows) if rows else np.zeros((0, *shape))
     return check_array(f"{path}: '{key}'", array, (None, *shape))
 
 

@@ -9,9 +9,10 @@ Images are blank PNGs. The layout is 10 Hz: scenes must be generated at 10 Hz.
 
 from __future__ import annotations
 
+import itertools
 import re
 from pathlib import Path
-from typing import Sequence
+from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
@@ -27,17 +28,23 @@ from pedenv.records import Frame, Scene
 FIRST_FRAME_NUMBER = 1000
 
 
-def write_carla(scenes: Sequence[Scene], output_dir: str | Path, *, first_frame: int = FIRST_FRAME_NUMBER) -> list[Path]:
+def write_carla(scenes: Iterable[Scene], output_dir: str | Path, *, first_frame: int = FIRST_FRAME_NUMBER) -> list[Path]:
     """Write ``scenes`` as ``<output_dir>/scene<N>/{data,rgb}/`` and return the scene folders.
 
     Scenes already named ``scene<N>`` keep their name, the others become ``scene<i>`` by position.
+    A list is checked as a whole (its names kept only if all are ``scene<N>``); any other
+    iterable (a generator) is written scene by scene as it comes, named ``scene<i>``, so
+    only one scene is held in memory.
     Every frame needs ground truth with ``keypoints_3d`` (or none at all: an empty frame), and
     timestamps on a 10 Hz grid; otherwise :class:`InputError` names the scene and frame.
     """
     if first_frame <= 0:
-        raise ValueError(f"first_frame must be positive (CARLA frame numbers do not start at 0), got {first_frame}")
+        raise InputError(f"first_frame must be positive (CARLA frame numbers do not start at 0), got {first_frame}")
     output_dir = Path(output_dir)
-    folders = _folder_names(scenes)
+    if isinstance(scenes, Sequence):
+        folders: Iterable[str] = _folder_names(scenes)
+    else:
+        folders = (f"scene{i}" for i in itertools.count())
     written = []
     for scene, folder_name in zip(scenes, folders):
         folder = output_dir / folder_name

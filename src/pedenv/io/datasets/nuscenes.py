@@ -90,7 +90,13 @@ class NuScenesDataset:
                           f"{len(chain)} CAM_FRONT images missing); image-based pose backends will fail on those frames",
                           stacklevel=2)
         for index, sd in enumerate(chain):
-            yield self._frame(sd, index, scene)
+            try:
+                with np.errstate(invalid="ignore", divide="ignore"):  # NaN is refused below, naming the record
+                    frame = self._frame(sd, index, scene)
+            except (InputError, ValueError, TypeError, KeyError, ZeroDivisionError) as exc:
+                raise InputError(f"{self.root / self.version}: scene {scene}, frame {index} (sample_data {sd['token']}, "
+                                 f"ego_pose, calibrated_sensor and sample_annotation tables): {exc}") from None
+            yield frame
 
     def _chain(self, scene: str) -> list[dict]:
         if scene not in self._scenes:

@@ -13,12 +13,13 @@ belong to and are left out. One scene gets one log; every frame its own ego pose
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
 import logging
 import re
 import warnings
 from pathlib import Path
-from typing import Sequence
+from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
@@ -54,7 +55,7 @@ def token(*parts) -> str:
     return hashlib.md5("/".join(map(str, parts)).encode()).hexdigest()
 
 
-def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str = "v1.0-mini", *,
+def write_nuscenes(scenes: Iterable[Scene], output_dir: str | Path, version: str = "v1.0-mini", *,
                    jpeg_quality: int = 80) -> Path:
     """Write ``scenes`` under ``output_dir`` (the dataroot) and return the table folder.
 
@@ -64,7 +65,7 @@ def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str
     yaw from the shoulders' line where the 3D skeleton is known, one instance per (scene, id).
     """
     if not 1 <= jpeg_quality <= 100:
-        raise ValueError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
+        raise InputError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
     root = Path(output_dir)
     tables: dict[str, list[dict]] = {name: [] for name in (
         "category", "attribute", "visibility", "instance", "sensor", "calibrated_sensor", "ego_pose",
@@ -78,7 +79,8 @@ def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str
     for folder in ("samples/CAM_FRONT", "sweeps/CAM_FRONT", "maps", version):
         (root / folder).mkdir(parents=True, exist_ok=True)
     skeletons: dict[str, list[dict]] = {}
-    names = _scene_names(scenes)
+    # a generator is written scene by scene (its images at once, only table rows kept)
+    names = _scene_names(scenes) if isinstance(scenes, Sequence) else (f"scene-{i + 1:04d}" for i in itertools.count())
     for scene, name in zip(scenes, names):
         _write_scene(scene, name, root, tables, skeletons, sensor_token, jpeg_quality)
     map_file = "maps/pedenv_blank.png"
@@ -86,7 +88,7 @@ def write_nuscenes(scenes: Sequence[Scene], output_dir: str | Path, version: str
     tables["map"] = [{"token": token("map"), "category": "semantic_prior", "filename": map_file,
                       "log_tokens": [r["token"] for r in tables["log"]]}]
     for name, records in tables.items():
-        (root / version / f"{name}.json").write_text(json.dumps(records, indent=0))
+        (root / version / f"{name}.json").write_text(json.dumps(records, indent=0, allow_nan=False))
     write_side_file(root / SIDE_FILE_NAME, skeletons)
     return root / version
 

@@ -53,7 +53,7 @@ def skeleton_entry(instance_token: str, keypoints: np.ndarray, visible: np.ndarr
 
 def write_side_file(path: Path, entries: dict[str, list[dict]]) -> None:
     """Write ``{sample_data token: [entry, ...]}`` as a side file at ``path``."""
-    path.write_text(json.dumps({"format": FORMAT, "version": 1, "layout": "coco-17", "sample_data": entries}))
+    path.write_text(json.dumps({"format": FORMAT, "version": 1, "layout": "coco-17", "sample_data": entries}, allow_nan=False))
 
 
 def read_side_file(path: Path) -> dict[str, list[Skeleton]]:

@@ -101,6 +101,7 @@ class FusedLocator:
 
     def __init__(self, config: Config) -> None:
         self.config = config
+        self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = self.history = TrackHistory(config.fused.history_length)
         self._sources: dict = {}
 
