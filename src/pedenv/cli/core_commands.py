@@ -132,6 +132,7 @@ def evaluate(
 def bench(
     frames: int = typer.Option(100, "--frames", help="Frames per measurement."),
     pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
+    samples: Optional[Path] = typer.Option(Path("../shared/samples/real"), "--samples", help="Real samples for the detection modes' recall (skipped if absent)."),
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.apps.bench import bench_core, format_bench
@@ -148,3 +149,8 @@ def bench(
         except (ImportError, InputError) as exc:
             console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
     _out.print(format_bench(rows, pose_rows))
+    if pose and pose_rows:
+        from pedenv.apps.bench import bench_detection_modes, format_detection_modes
+
+        root = samples if samples is not None and samples.is_dir() else None
+        _out.print(format_detection_modes(bench_detection_modes(root)))
