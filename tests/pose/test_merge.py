@@ -35,6 +35,13 @@ def test_a_half_person_cut_by_a_seam_is_dropped_in_favour_of_the_whole_one():
     assert len(merged) == 1 and merged.boxes[0, 3] > 140
 
 
+def test_a_cut_fragment_nested_in_a_whole_person_goes_even_if_its_keypoints_differ():
+    whole = person(100, 50, 0.5, scale=1.6)
+    fragment = person(130, 60, 0.9, scale=0.8)  # nested, other keypoints, but cut by a seam
+    merged = merge_detections([(whole, np.array([False])), (fragment, np.array([True]))])
+    assert len(merged) == 1 and merged.scores[0] == pytest.approx(0.5)
+
+
 def test_two_people_one_behind_the_other_stay_two():
     front = person(100, 50, 0.9, scale=1.6)
     behind = person(112, 60, 0.8, scale=0.8)  # nested in the front box, different skeleton

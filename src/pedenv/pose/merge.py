@@ -4,8 +4,9 @@ A person seen twice (in the whole-frame pass and a tile, or in two overlapping t
 one person if the two boxes overlap much (IoU) or one box lies mostly inside the other and
 their keypoints agree (object keypoint similarity, OKS). The keypoint test keeps two
 people standing one behind the other apart although their boxes nest. Detections cut by
-an inner tile edge rank after whole ones, so a person cut by a seam is kept from the tile
-or pass that holds them whole.
+an inner tile edge rank after whole ones and are dropped when nested in a kept person
+(their keypoints, squeezed into the visible part, need not agree), so a person cut by a
+seam is kept from the tile or pass that holds them whole.
 """
 
 from __future__ import annotations
@@ -96,7 +97,8 @@ def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeCo
             iou, contained = _iou_and_containment(boxes[i], boxes[k])
             oks = keypoint_similarity(kps[i], confs[i], kps[k], confs[k], boxes[i], boxes[k],
                                       config.keypoint_min_confidence)
-            duplicate = (iou > config.iou) | ((contained > config.containment) & (oks > config.oks))
+            # a cut person nested in a kept one is a fragment of them, whatever its keypoints say
+            duplicate = (iou > config.iou) | ((contained > config.containment) & ((oks > config.oks) | cut[i]))
             if duplicate.any():
                 continue
         keep.append(int(i))
