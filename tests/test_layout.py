@@ -86,7 +86,7 @@ def test_readme_module_map_matches_the_tree():
     text = README.read_text()
     block = text[text.index("## Module map"):]
     block = block[: block.index("\n## ", 4)]
-    named = {n for n in re.findall(r"`((?:[a-z_]+/)*[a-z_]+(?:\.py|/))`", block) if not n.startswith(("src/", "tests/"))}
+    named = {n for n in re.findall(r"`((?:[a-z0-9_]+/)*[a-z0-9_]+(?:\.py|/))`", block) if not n.startswith(("src/", "tests/"))}
     tree = {str(p.relative_to(SRC / "pedenv")) for p in (SRC / "pedenv").rglob("*.py") if p.name != "__init__.py"}
     tree |= {str(p.relative_to(SRC / "pedenv")) + "/" for p in (SRC / "pedenv").rglob("*") if p.is_dir()
              and (p / "__init__.py").exists()}

@@ -95,6 +95,7 @@ def evaluate(
     method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
+    detection: Optional[str] = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.io.datasets import open_dataset
@@ -102,6 +103,14 @@ def evaluate(
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
+    if detection is not None or pose_backend == "onnx":
+        from pedenv.pose.base import create_pose_backend
+
+        from pedenv.errors import InputError
+
+        if (pose_backend or data.default_pose_backend) != "onnx":
+            raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
+        pose_backend = create_pose_backend("onnx", detection=detection or "far")
     names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
     cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
     if cues:
@@ -136,6 +145,7 @@ def evaluate(
 def bench(
     frames: int = typer.Option(100, "--frames", help="Frames per measurement."),
     pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
+    samples: Optional[Path] = typer.Option(Path("../shared/samples/real"), "--samples", help="Real samples for the detection modes' recall (skipped if absent)."),
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.apps.bench import bench_core, format_bench
@@ -152,3 +162,8 @@ def bench(
         except (ImportError, InputError) as exc:
             console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
     _out.print(format_bench(rows, pose_rows))
+    if pose and pose_rows:
+        from pedenv.apps.bench import bench_detection_modes, format_detection_modes
+
+        root = samples if samples is not None and samples.is_dir() else None
+        _out.print(format_detection_modes(bench_detection_modes(root)))
