@@ -9,6 +9,7 @@ from typing import Sequence
 from pedenv.config import Config
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.io.outputs import write_outputs
+from pedenv.io.sinks import ExtraOutputs
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.records import Scene
@@ -41,13 +42,18 @@ def rename_scene(scene: Scene, name: str) -> Scene:
 
 
 def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = None, terrain: bool = False,
-             pose_backend: str = "detector-model", progress: bool = True) -> EvaluationResult:
-    """Generate the built-in scenes, run and evaluate the model, write every output."""
+             pose_backend: str = "detector-model", progress: bool = True,
+             extra_outputs: ExtraOutputs | None = None) -> EvaluationResult:
+    """Generate the built-in scenes, run and evaluate the model, write every output.
+
+    ``extra_outputs``: Parquet, Rerun, MCAP.
+    """
     config = config or Config()
     output_dir = Path(output_dir)
     scenes = builtin_scenes(seed, terrain=terrain)
     dataset = MemoryDataset(scenes, name="synthetic", default_pose_backend=pose_backend)
-    result = run_evaluation(dataset, config=config, output_dir=output_dir, progress=progress)
+    result = run_evaluation(dataset, config=config, output_dir=output_dir, progress=progress,
+                            extra_outputs=extra_outputs)
     result.extras["paths"] = write_outputs(result, output_dir, config)
     return result
 

@@ -25,6 +25,22 @@ def _config(path: Optional[Path], method: Optional[str] = None, **paper) -> Conf
     return configure(config, method) if method else config
 
 
+def _extra_outputs(output: Path, parquet: bool, rerun: Optional[Path], mcap: Optional[Path], *,
+                   matches: bool = False, video: bool = False):
+    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap`` flags (and the bird's-eye video)."""
+    from pedenv.io.sinks import ExtraOutputs
+
+    return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
+                        matches_parquet=output / "matches.parquet" if parquet and matches else None,
+                        rerun=rerun, mcap=mcap, birds_eye_video=output / "birds_eye.mp4" if video else None)
+
+
+#: The flags of the per-frame outputs, shared by demo and evaluate (run has them too).
+_PARQUET = typer.Option(False, "--parquet", help="Also write environment.parquet (and matches.parquet when evaluating).")
+_RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several).")
+_MCAP = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap).")
+
+
 def _print_result(metrics, title: str = "") -> None:
     from pedenv.evaluation.report import results_table, summary_lines
 
@@ -41,12 +57,16 @@ def demo(
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
     config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
     method: Optional[str] = typer.Option(None, "--method", help="paper (default) or fused."),
+    parquet: bool = _PARQUET,
+    rerun: Optional[Path] = _RERUN,
+    mcap: Optional[Path] = _MCAP,
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
     from pedenv.apps.demo import run_demo
 
     cfg = _config(config, method)
-    result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend)
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True)
+    result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
     _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
     for name, path in result.extras["paths"].items():
         _out.print(f"{name}: {path}", highlight=False)
@@ -87,6 +107,9 @@ def evaluate(
     ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
     method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
+    parquet: bool = _PARQUET,
+    rerun: Optional[Path] = _RERUN,
+    mcap: Optional[Path] = _MCAP,
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.io.datasets import open_dataset
@@ -112,7 +135,7 @@ def evaluate(
 
         cfg = configure(cfg, method)
     metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
-                               progress=True)
+                               progress=True, extra_outputs=_extra_outputs(output, parquet, rerun, mcap, matches=True))
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
     if ablation:
         from pedenv.apps.ablation import run_ablation
