@@ -1,5 +1,7 @@
 """Two short built-in scenes evaluated once with every per-frame output switched on."""
 
+import warnings
+
 import pytest
 from sink_runs import FailingModel, outputs_in, short_scenes
 
@@ -15,7 +17,10 @@ def evaluated(tmp_path_factory):
     folder = tmp_path_factory.mktemp("outputs")
     scenes = short_scenes(with_image=True)
     dataset = MemoryDataset(scenes, name="synthetic", default_pose_backend="detector-model")
-    result = run_evaluation(dataset, config=Config(), output_dir=folder, extra_outputs=outputs_in(folder))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run_evaluation(dataset, config=Config(), output_dir=folder, extra_outputs=outputs_in(folder))
+    result.extras["warnings"] = [str(w.message) for w in caught]
     return folder, result, scenes
 
 

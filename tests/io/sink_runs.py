@@ -23,7 +23,8 @@ def short_scenes(with_image: bool = False) -> list[Scene]:
 
 
 def outputs_in(folder) -> ExtraOutputs:
-    return ExtraOutputs(parquet=folder / "environment.parquet", matches_parquet=folder / "matches.parquet")
+    return ExtraOutputs(parquet=folder / "environment.parquet", matches_parquet=folder / "matches.parquet",
+                        rerun=folder / "run.rrd")
 
 
 class FailingModel(PedestrianEnvironmentModel):
