@@ -58,6 +58,21 @@ MATCHES_SCHEMA = pa.schema([
 ])
 
 
+def _arrow(values, kind: pa.DataType) -> pa.Array:
+    """``values`` as an Arrow array of ``kind``; (n, a[, b]) numpy arrays become nested fixed-size lists."""
+    if not pa.types.is_fixed_size_list(kind):
+        return pa.array(values, type=kind)
+    flat = np.ascontiguousarray(values, dtype=np.float64)
+    inner = kind.value_type
+    n = flat.shape[0]
+    if pa.types.is_fixed_size_list(inner):
+        leaves = pa.array(flat.reshape(-1), type=inner.value_type)
+        return pa.FixedSizeListArray.from_arrays(pa.FixedSizeListArray.from_arrays(leaves, inner.list_size),
+                                                 kind.list_size) if n else pa.array([], type=kind)
+    return pa.FixedSizeListArray.from_arrays(pa.array(flat.reshape(-1), type=inner), kind.list_size) if n \
+        else pa.array([], type=kind)
+
+
 class _IncrementalTable:
     """Buffers per-frame column dicts and writes a row group every ``frames_per_row_group`` frames."""
 
@@ -70,23 +85,25 @@ class _IncrementalTable:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.every = int(frames_per_row_group)
         self._writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
-        self._pending: list[dict] = []
+        self._pending: list[pa.RecordBatch] = []
+        self._frames = 0
         self.rows = 0
 
     def _add(self, columns: dict) -> None:
-        self._pending.append(columns)
-        if len(self._pending) >= self.every:
+        """One frame's rows: column name -> array (numpy arrays of (n, ...) go to fixed-size lists)."""
+        self._pending.append(pa.record_batch([_arrow(columns[f.name], f.type) for f in self.schema], schema=self.schema))
+        self._frames += 1
+        if self._frames >= self.every:
             self.flush()
 
     def flush(self) -> None:
         """Write the buffered frames as one row group."""
-        pending = [c for c in self._pending if len(c["scene"])]
-        self._pending = []
+        pending = [b for b in self._pending if b.num_rows]
+        self._pending, self._frames = [], 0
         if not pending:
             return
-        merged = {name: [v for c in pending for v in c[name]] for name in self.schema.names}
-        table = pa.table(merged, schema=self.schema)
-        self._writer.write_table(table)
+        table = pa.Table.from_batches(pending, schema=self.schema).combine_chunks()
+        self._writer.write_table(table, row_group_size=table.num_rows)
         self.rows += table.num_rows
 
     def close(self) -> None:
@@ -123,8 +140,8 @@ class EnvironmentTableWriter(_IncrementalTable):
             "source": [str(s) for s in p.sources],
             "ego_x": [float(ego.translation[0])] * n, "ego_y": [float(ego.translation[1])] * n,
             "ego_yaw": [ego.yaw] * n,
-            "box": p.boxes.tolist(), "keypoints_2d": p.keypoints.tolist(),
-            "keypoint_confidence": p.confidences.tolist(), "keypoints_3d": p.keypoints_3d.tolist(),
+            "box": p.boxes, "keypoints_2d": p.keypoints,
+            "keypoint_confidence": p.confidences, "keypoints_3d": p.keypoints_3d,
         })
 
 
