@@ -24,7 +24,7 @@ def short_scenes(with_image: bool = False) -> list[Scene]:
 
 def outputs_in(folder) -> ExtraOutputs:
     return ExtraOutputs(parquet=folder / "environment.parquet", matches_parquet=folder / "matches.parquet",
-                        rerun=folder / "run.rrd", mcap=folder / "run.mcap")
+                        rerun=folder / "run.rrd", mcap=folder / "run.mcap", birds_eye_video=folder / "birds_eye.mp4")
 
 
 class FailingModel(PedestrianEnvironmentModel):

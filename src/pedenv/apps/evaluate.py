@@ -79,7 +79,8 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
     info = {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method,
             "scenes": names}
     metrics = Metrics.from_samples(samples, tracking.summary(), model.timer.per_stage_ms(), info)
-    return EvaluationResult(metrics, samples, busiest)
+    files = sinks.files + ([pairs.path] if pairs else [])
+    return EvaluationResult(metrics, samples, busiest, extras={"files": files})
 
 
 def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,

@@ -26,13 +26,14 @@ def _config(path: Optional[Path], method: Optional[str] = None, **paper) -> Conf
 
 
 def _extra_outputs(output: Path, parquet: bool, rerun: Optional[Path], mcap: Optional[Path], *,
-                   matches: bool = False, video: bool = False):
+                   matches: bool = False, video_scene: Optional[str] = None):
     """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap`` flags (and the bird's-eye video)."""
     from pedenv.io.sinks import ExtraOutputs
 
     return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
                         matches_parquet=output / "matches.parquet" if parquet and matches else None,
-                        rerun=rerun, mcap=mcap, birds_eye_video=output / "birds_eye.mp4" if video else None)
+                        rerun=rerun, mcap=mcap,
+                        birds_eye_video=output / "birds_eye.mp4" if video_scene else None, birds_eye_scene=video_scene)
 
 
 #: The flags of the per-frame outputs, shared by demo and evaluate (run has them too).
@@ -65,12 +66,16 @@ def demo(
     from pedenv.apps.demo import run_demo
 
     cfg = _config(config, method)
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True)
+    from pedenv.apps.demo import VIDEO_SCENE
+
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
     _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
     for name, path in result.extras["paths"].items():
         _out.print(f"{name}: {path}", highlight=False)
     _out.print(f"environment: {output / 'environment.jsonl'}", highlight=False)
+    for path in result.extras.get("files", []):
+        _out.print(f"{path.suffix[1:]}: {path}", highlight=False)
 
 
 @app.command()

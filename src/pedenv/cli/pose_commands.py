@@ -66,9 +66,15 @@ def run(
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
     start_time: Optional[float] = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+    parquet: bool = typer.Option(False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."),
+    rerun: Optional[Path] = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
+    mcap: Optional[Path] = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
     from pedenv.apps.run import run_recording
+    from pedenv.io.sinks import ExtraOutputs
+
+    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap)
 
     columns = (TextColumn("frames"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
     with Progress(*columns, console=console, transient=False) as bar:
@@ -76,6 +82,6 @@ def run(
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
-            fps=fps, start_time=start_time, video_out=video_out,
+            fps=fps, start_time=start_time, video_out=video_out, extra_outputs=extra,
             progress=lambda done, total: bar.update(task, completed=done, total=total or None))
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

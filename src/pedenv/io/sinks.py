@@ -43,6 +43,7 @@ class Sinks:
 
     def __init__(self, sinks: list[FrameSink] | None = None) -> None:
         self.sinks = list(sinks or [])
+        self.files: list[Path] = []  # what the sinks wrote, known after close()
 
     def write(self, state: EnvironmentState, frame: Frame) -> None:
         for sink in self.sinks:
@@ -52,10 +53,12 @@ class Sinks:
         """Close every sink, even when one of them fails (the first failure is raised)."""
         first = None
         for sink in self.sinks:
+            self.files.extend(getattr(sink, "files", None) or [sink.path])
             try:
                 sink.close()
             except Exception as exc:  # noqa: BLE001 - close the others first
                 first = first or exc
+        self.files = list(dict.fromkeys(self.files))
         self.sinks = []
         if first is not None:
             raise first
@@ -79,6 +82,7 @@ class ExtraOutputs:
     rerun: a Rerun ``.rrd`` recording (rerun-sdk); several scenes give ``<stem>-<scene>.rrd``.
     mcap: a Foxglove MCAP file (foxglove-sdk).
     birds_eye_video: an mp4 of every frame from above (OpenCV, always installed).
+    birds_eye_scene: the one scene the video shows (None: every scene, one after the other).
     """
 
     parquet: Path | None = None
@@ -86,6 +90,7 @@ class ExtraOutputs:
     rerun: Path | None = None
     mcap: Path | None = None
     birds_eye_video: Path | None = None
+    birds_eye_scene: str | None = None
 
     def check(self) -> None:
         """Refuse missing extras before the run starts (one line each, see :func:`require_extra`)."""
@@ -116,7 +121,7 @@ class ExtraOutputs:
             if self.birds_eye_video:
                 from pedenv.visualize.birds_eye_video import BirdsEyeVideo
 
-                sinks.append(BirdsEyeVideo(self.birds_eye_video))
+                sinks.append(BirdsEyeVideo(self.birds_eye_video, scene=self.birds_eye_scene))
         except BaseException:
             Sinks(sinks).close()
             raise
