@@ -25,7 +25,10 @@ def prepare(
 ) -> None:
     """Export the pose weights to ONNX (square and rectangular input) into the cache and print the paths."""
     os.environ["YOLO_OFFLINE"] = "1"
+    from pedenv.errors import require_extra
     from pedenv.pose.models import cache_dir, prepare_models
+
+    require_extra("ultralytics", "ultralytics", "pedenv models prepare")  # the ONNX export runs on torch
 
     sizes = [imgsz] + ([rect] if rect else [])
     for model in prepare_models(weights=weights, input_sizes=sizes, force=force):

@@ -8,26 +8,13 @@ the install command (:func:`require_extra`).
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
-from pedenv.errors import InputError
+from pedenv.errors import require_extra
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
-
-
-class MissingExtra(InputError):
-    """An output was asked for whose optional dependency is not installed."""
-
-
-def require_extra(module: str, extra: str, flag: str) -> None:
-    """Import ``module`` or raise :class:`MissingExtra` naming ``pip install -e ".[extra]"``."""
-    try:
-        importlib.import_module(module)
-    except ImportError:
-        raise MissingExtra(f'{flag} needs the {extra} extra: pip install -e ".[{extra}]"') from None
 
 
 class FrameSink(Protocol):
