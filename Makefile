@@ -13,7 +13,7 @@ FULL   := $(VENV)/.pedenv-full
 
 $(CORE): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --disable-pip-version-check -e .
+	$(BIN)/pip install --quiet --disable-pip-version-check --no-compile -e .
 	touch $(CORE)
 
 $(FULL): $(CORE)
