@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import typer
@@ -20,9 +21,18 @@ console = Console(stderr=True, soft_wrap=True)
 
 
 def main() -> None:
-    """Entry point of the ``pedenv`` console script."""
+    """Entry point of the ``pedenv`` console script.
+
+    SIGTERM (``kill``, ``timeout``) stops a run as Ctrl-C does (exit code 130): through the
+    writers' ``close()``, so the outputs stay valid up to the last finished frame.
+    """
+    signal.signal(signal.SIGTERM, _stop)
     try:
         app()
     except (InputError, FileNotFoundError, ValueError) as exc:
         console.print(f"error: {exc}", style="red", highlight=False, markup=False)
         sys.exit(2)
+
+
+def _stop(signum, _frame) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
