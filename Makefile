@@ -1,39 +1,46 @@
 # The two commands of the README:  make demo  and  make test.
-# make test-fast: the tests without the slow end-to-end runs and the pose network (under a minute).
-# make lint: ruff and mypy (CI runs it after the tests).
-# Both create the virtual environment .venv with everything pedenv needs (the
-# ultralytics/torch extra included, to export the pose network to ONNX offline).
+#   make demo  installs only what the demo needs (pedenv's core, no torch) and runs it.
+#   make test  installs everything (every extra: ultralytics/torch to export the pose network
+#              to ONNX offline, nuscenes-devkit, the viz writers) and prepares the ONNX models.
+#   make test-fast  the tests without the slow end-to-end runs and the pose network.
+#   make lint  ruff and mypy (CI runs it after the tests).
 
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.pedenv-setup
+CORE   := $(VENV)/.pedenv-core
+FULL   := $(VENV)/.pedenv-full
 
-.PHONY: setup demo test test-fast lint bench clean
+.PHONY: setup setup-all demo test test-fast lint bench clean
 
-$(STAMP): pyproject.toml
+$(CORE): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e ".[all]"
+	$(BIN)/pip install --quiet --disable-pip-version-check --no-compile -e .
+	touch $(CORE)
+
+$(FULL): $(CORE)
+	$(BIN)/pip install --quiet --disable-pip-version-check -e ".[all]"
 	YOLO_OFFLINE=1 $(BIN)/pedenv models prepare
-	touch $(STAMP)
+	touch $(FULL)
 
-setup: $(STAMP)
+setup: $(CORE)
 
-demo: setup
+setup-all: $(FULL)
+
+demo: $(CORE)
 	$(BIN)/pedenv demo --output output/demo
 
-test: setup
+test: $(FULL)
 	$(BIN)/python -m pytest
 
-test-fast: setup
+test-fast: $(FULL)
 	$(BIN)/python -m pytest -q -m "not slow and not ultralytics and not onnx_model"
 
-lint: setup
+lint: $(FULL)
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy
 
-bench: setup
+bench: $(FULL)
 	$(BIN)/pedenv bench
 
 clean:

@@ -2,12 +2,13 @@
 
 import json
 
+import cv2
 import numpy as np
 import pytest
 
 from pedenv.config import Config
 from pedenv.io.datasets.memory import MemoryDataset
-from pedenv.apps.demo import builtin_scenes, run_demo
+from pedenv.apps.demo import VIDEO_SCENE, builtin_scenes, run_demo
 from pedenv.apps.evaluate import run_evaluation
 from golden import assert_golden
 
@@ -59,4 +60,6 @@ def test_demo_writes_every_output(tmp_path):
     assert {"track_id", "position", "velocity", "skeleton"} <= set(last["pedestrians"][0])
     for name in ("birds_eye.png", "error_by_distance.png", "config.json"):
         assert (tmp_path / name).stat().st_size > 1000 or name == "config.json"
+    crowd = sum(json.loads(line)["scene"] == VIDEO_SCENE for line in lines)
+    assert cv2.VideoCapture(str(tmp_path / "birds_eye.mp4")).get(cv2.CAP_PROP_FRAME_COUNT) == crowd == 150
     assert np.isfinite(result.metrics.overall.rel_error_pct)

@@ -2,11 +2,25 @@
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 
 
 class InputError(ValueError):
     """Bad input data: the message names the file, frame or field at fault."""
+
+
+class MissingExtra(InputError):
+    """Something was asked for whose optional dependency (a pyproject extra) is not installed."""
+
+
+def require_extra(module: str, extra: str, flag: str) -> None:
+    """Import ``module`` or raise :class:`MissingExtra` naming ``pip install -e ".[extra]"``."""
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        raise MissingExtra(f'{flag} needs the {extra} extra: pip install -e ".[{extra}]"') from None
 
 
 def check_array(name: str, value, shape: tuple, *, dtype=np.float64, finite: bool = True) -> np.ndarray:

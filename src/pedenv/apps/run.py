@@ -13,6 +13,7 @@ from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.io.jsonl import EnvironmentWriter
 from pedenv.io.output_dir import prepare_output_dir
+from pedenv.io.sinks import ExtraOutputs
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.visualize.plots import plot_birds_eye
 from pedenv.pose.base import create_pose_backend
@@ -24,14 +25,16 @@ from pedenv.visualize.overlay import draw_environment, write_image
 def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
                   video_out: bool = False, overwrite: bool = False, progress=None,
-                  detection: str | None = "far") -> dict:
+                  detection: str | None = "far", extra_outputs: ExtraOutputs | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
     ``run.json`` (pose backend, recording, frames done), ``overlays/<index>.png`` or
     ``overlay.mp4`` (``video_out``) with skeletons, track ids and distances, and
-    ``birds_eye.png`` of the last frame. A bad frame stops the run with an InputError; what
-    was computed before it stays on disk. ``progress(done, total)`` is called per frame.
+    ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the
+    ``extra_outputs`` asked for (Parquet, Rerun, MCAP; refused before the run when their extra
+    is missing). A bad frame stops the run with an InputError; what was computed before it
+    stays on disk. ``progress(done, total)`` is called per frame.
     ``output`` must be empty or new, unless ``overwrite`` (then an earlier pedenv run there is
     deleted once the inputs are checked: :func:`pedenv.io.output_dir.prepare_output_dir`).
     A video that ends before the frame count its header gives is warned about and
@@ -42,6 +45,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     Returns the summary also saved as ``run.json``.
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
+    extra = extra_outputs or ExtraOutputs()
+    extra.check()
     rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
                          start_time=start_time)
     if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
@@ -54,12 +59,14 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                "environment": str(out / "environment.jsonl")}
     model = PedestrianEnvironmentModel(cfg)
     writer_video, last = None, None
+    sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
-        with EnvironmentWriter(out / "environment.jsonl") as writer:
+        with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
             for frame in rec.frames():
                 frame = dataclasses.replace(frame, detections=backend(frame))
                 state = model.update(frame)
                 writer.write(state)
+                sinks.write(state, frame)
                 drawn = draw_environment(frame.image, state)
                 if video_out:
                     writer_video = writer_video or _open_video(out / "overlay.mp4", rec, drawn.shape)
@@ -79,6 +86,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
             writer_video.release()
         if last is not None:
             summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
+        summary["files"] = [str(p) for p in sinks.files]
         (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
 

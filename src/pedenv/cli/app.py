@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 import warnings
 
@@ -26,8 +27,13 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 
 def main() -> None:
     """Entry point of the ``pedenv`` console script: bad input (InputError) is one ``error:`` line,
-    warnings one ``warning:`` line each."""
+    warnings one ``warning:`` line each.
+
+    SIGTERM (``kill``, ``timeout``) stops a run as Ctrl-C does (exit code 130): through the
+    writers' ``close()``, so the outputs stay valid up to the last finished frame.
+    """
     previous, warnings.formatwarning = warnings.formatwarning, _one_line_warning
+    signal.signal(signal.SIGTERM, _stop)
     try:
         app()
     except InputError as exc:  # bad input only: any other exception is a bug and keeps its traceback
@@ -35,3 +41,7 @@ def main() -> None:
         sys.exit(2)
     finally:
         warnings.formatwarning = previous
+
+
+def _stop(signum, _frame) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")

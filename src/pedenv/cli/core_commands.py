@@ -25,6 +25,24 @@ def _config(path: Optional[Path], method: Optional[str] = None, **paper) -> Conf
     return configure(config, method) if method else config
 
 
+def _extra_outputs(output: Path, parquet: bool, rerun: Optional[Path], mcap: Optional[Path], *,
+                   matches: bool = False, video_scene: Optional[str] = None):
+    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap`` flags (and the bird's-eye video)."""
+    from pedenv.io.sinks import ExtraOutputs
+
+    return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
+                        matches_parquet=output / "matches.parquet" if parquet and matches else None,
+                        rerun=rerun, mcap=mcap,
+                        birds_eye_video=output / "birds_eye.mp4" if video_scene else None, birds_eye_scene=video_scene)
+
+
+#: The flags of the per-frame outputs, shared by demo and evaluate (run has them too).
+_PARQUET = typer.Option(False, "--parquet", help="Also write environment.parquet (and matches.parquet when evaluating).")
+_RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several).")
+_MCAP = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap).")
+_OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output.")
+
+
 def _print_result(metrics, title: str = "") -> None:
     from pedenv.evaluation.report import results_table, summary_lines
 
@@ -41,19 +59,27 @@ def demo(
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
     config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
     method: Optional[str] = typer.Option(None, "--method", help="paper (default) or fused."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
+    overwrite: bool = _OVERWRITE,
+    parquet: bool = _PARQUET,
+    rerun: Optional[Path] = _RERUN,
+    mcap: Optional[Path] = _MCAP,
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
     from pedenv.apps.demo import run_demo
     from pedenv.io.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
+    from pedenv.apps.demo import VIDEO_SCENE
+
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
-    result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend)
+    result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
     _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
     for name, path in result.extras["paths"].items():
         _out.print(f"{name}: {path}", highlight=False)
     _out.print(f"environment: {output / 'environment.jsonl'}", highlight=False)
+    for path in result.extras.get("files", []):
+        _out.print(f"{path.suffix[1:]}: {path}", highlight=False)
 
 
 @app.command()
@@ -94,8 +120,11 @@ def evaluate(
     ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
     method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
+    overwrite: bool = _OVERWRITE,
     detection: Optional[str] = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
+    parquet: bool = _PARQUET,
+    rerun: Optional[Path] = _RERUN,
+    mcap: Optional[Path] = _MCAP,
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.io.datasets import open_dataset
@@ -132,7 +161,7 @@ def evaluate(
 
         cfg = configure(cfg, method)
     metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
-                               progress=True)
+                               progress=True, extra_outputs=_extra_outputs(output, parquet, rerun, mcap, matches=True))
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
     if ablation:
         from pedenv.apps.ablation import run_ablation

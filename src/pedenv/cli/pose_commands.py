@@ -23,8 +23,10 @@ def prepare(
 ) -> None:
     """Export the pose weights to ONE ONNX model with a dynamic input shape (any input or tile size) into the cache."""
     os.environ["YOLO_OFFLINE"] = "1"
+    from pedenv.errors import require_extra
     from pedenv.pose.models import DYNAMIC, cache_dir, prepare_models
 
+    require_extra("ultralytics", "ultralytics", "pedenv models prepare")  # the ONNX export runs on torch
     sizes = [DYNAMIC] + list(fixed or [])
     for model in prepare_models(weights=weights, input_sizes=sizes, force=force):
         state = "exported" if model.exported else "cached"
@@ -71,15 +73,21 @@ def run(
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."),
+    parquet: bool = typer.Option(False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."),
+    rerun: Optional[Path] = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
+    mcap: Optional[Path] = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
+    from pedenv.io.sinks import ExtraOutputs
+
+    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap)
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            progress=progress)
+            extra_outputs=extra, progress=progress)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

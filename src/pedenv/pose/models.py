@@ -20,7 +20,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from pedenv.errors import InputError
+from pedenv.errors import InputError, require_extra
 from pedenv.pose.postprocess import OUTPUT_ROWS, parse_input_size
 
 DEFAULT_WEIGHTS_NAME = "yolo11n-pose.pt"
@@ -177,6 +177,7 @@ def check_onnx_file(path: Path) -> tuple[int | None, int | None]:
     Returns the fixed input (height, width), with None for dynamic sides.
     Raises :class:`InputError` naming the file and the shape found.
     """
+    require_extra("onnxruntime", "pose", "checking an ONNX pose model")
     import onnxruntime as ort
 
     try:

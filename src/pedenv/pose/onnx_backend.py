@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pedenv.errors import InputError
+from pedenv.errors import InputError, require_extra
 from pedenv.pose import models
 from pedenv.pose.multipass import detect_multipass
 from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
@@ -49,6 +49,7 @@ class OnnxPose:
     def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
                  iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2,
                  detection: str | DetectionConfig | None = None) -> None:
+        require_extra("onnxruntime", "pose", "the onnx pose backend")
         import onnxruntime as ort
 
         self.score_threshold = _check_unit("score_threshold", score_threshold)

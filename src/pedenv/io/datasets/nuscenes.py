@@ -59,6 +59,9 @@ class NuScenesDataset:
         missing = [t for t in TABLES if not (tables / f"{t}.json").is_file()]
         if missing:
             raise InputError(f"{tables}: missing nuScenes table(s) {', '.join(t + '.json' for t in missing)}")
+        from pedenv.errors import require_extra
+
+        require_extra("nuscenes", "nuscenes", "--dataset nuscenes")
         from nuscenes.nuscenes import NuScenes  # the optional devkit, imported only here
 
         try:
