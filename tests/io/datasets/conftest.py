@@ -10,16 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pedenv.body import standing_body
 from pedenv.geometry import invert_transform, project, rotation_from_ypr, rotation_z
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth, Scene, boxes_from_keypoints
 
-#: COCO-17 template of a 1.75 m person facing +x, left = +y, metres above the ground point.
-TEMPLATE = np.array([
-    [0.10, 0.0, 1.62], [0.08, 0.035, 1.66], [0.08, -0.035, 1.66], [0.0, 0.08, 1.63], [0.0, -0.08, 1.63],
-    [0.0, 0.20, 1.45], [0.0, -0.20, 1.45], [0.02, 0.25, 1.15], [0.02, -0.25, 1.15],
-    [0.05, 0.25, 0.88], [0.05, -0.25, 0.88], [0.0, 0.10, 0.95], [0.0, -0.10, 0.95],
-    [0.02, 0.10, 0.50], [0.02, -0.10, 0.50], [0.0, 0.10, 0.08], [0.0, -0.10, 0.08],
-])
+#: The body template's COCO-17 person 1.75 m tall, in its body frame (facing +x, left = +y), metres.
+TEMPLATE = standing_body([1.75])[0]
 
 #: Pedestrians: id, start (x, y) in the world, velocity (vx, vy) m/s.
 PEDESTRIANS = (

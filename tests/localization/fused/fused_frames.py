@@ -5,25 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from pedenv.body import standing_body, world_keypoints
 from pedenv.geometry import invert_transform, project, rotation_from_ypr
 from pedenv.records import Camera, Detections, EgoPose, Frame
-from pedenv.skeleton import CocoKeypoint as K
-
-#: (keypoint, forward, left, up) of an upright person facing +x, as shares of body height.
-_BODY = [(K.NOSE, 0.05, 0.0, 0.920), (K.LEFT_EYE, 0.04, 0.02, 0.933), (K.RIGHT_EYE, 0.04, -0.02, 0.933),
-         (K.LEFT_EAR, 0.0, 0.044, 0.915), (K.RIGHT_EAR, 0.0, -0.044, 0.915), (K.LEFT_SHOULDER, 0.0, 0.11, 0.818),
-         (K.RIGHT_SHOULDER, 0.0, -0.11, 0.818), (K.LEFT_ELBOW, 0.0, 0.125, 0.632), (K.RIGHT_ELBOW, 0.0, -0.125, 0.632),
-         (K.LEFT_WRIST, 0.0, 0.13, 0.485), (K.RIGHT_WRIST, 0.0, -0.13, 0.485), (K.LEFT_HIP, 0.0, 0.058, 0.530),
-         (K.RIGHT_HIP, 0.0, -0.058, 0.530), (K.LEFT_KNEE, 0.0, 0.058, 0.285), (K.RIGHT_KNEE, 0.0, -0.058, 0.285),
-         (K.LEFT_ANKLE, 0.0, 0.058, 0.046), (K.RIGHT_ANKLE, 0.0, -0.058, 0.046)]
-
 
 def upright_skeletons(ground: np.ndarray, heights: np.ndarray) -> np.ndarray:
-    """(N, 17, 3) world keypoints of upright people standing on ``ground`` (N, 3), facing +x."""
-    body = np.zeros((17, 3))
-    for k, fwd, left, up in _BODY:
-        body[k] = (fwd, left, up)
-    return np.asarray(ground, float)[:, None, :] + body[None] * np.asarray(heights, float)[:, None, None]
+    """(N, 17, 3) world keypoints of upright people (the body template) standing on ``ground`` (N, 3), facing +x."""
+    ground = np.asarray(ground, float)
+    return world_keypoints(ground, np.zeros(len(ground)), standing_body(heights))
 
 
 def make_frame(ground: np.ndarray, heights=None, *, pitch: float = 0.0, roll: float = 0.0, yaw: float = 0.0,
