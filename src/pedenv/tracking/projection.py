@@ -1,10 +1,12 @@
 """Ground positions and the image: what the tracker needs of the camera (beyond the paper).
 
-The tracker compares a track's Kalman-predicted ground position with a detection's box
-in two ways: the prediction projected into the image next to the box's foot point
-(:func:`project_ground`), and the foot point cut with the road plane next to the
-prediction on the ground (:func:`foot_on_ground`). Both are linearized with the same
-Jacobian of the ground-to-pixel map, so a covariance moves between the two frames.
+The tracker compares a track's Kalman-predicted ground position with a detection's box:
+the prediction and its covariance are projected into the image (linearized with the
+Jacobian of the ground-to-pixel map) and compared with the box's foot point
+(:func:`pixel_distances`). Under that linearization this squared Mahalanobis distance is
+the same as the one between the foot point cut with the road and the prediction on the
+ground, with the foot point's pixel spread carried to the ground; in the image, the
+spread of the road's height and a box cut by the image's edge are simple to state.
 """
 
 from __future__ import annotations
@@ -127,33 +129,3 @@ def pixel_distances(view: CameraView, boxes: np.ndarray, xy: np.ndarray, cov_xy:
     S = cov[None] + foot_covariance(boxes, view.height)[:, None]
     d2 = np.einsum("nti,ntij,ntj->nt", e, inverse_2x2(S), e)
     return np.where(front[None], d2, np.inf)
-
-
-def foot_on_ground(view: CameraView, boxes: np.ndarray):
-    """Where the foot points of ``boxes`` (N, 4) meet the road: world x-y (N, 2), metres,
-    their covariance (N, 2, 2) m^2 from the foot point's pixel spread, and whether the ray
-    meets the road in front of the camera (N,) bool."""
-    K_inv = np.linalg.inv(view.intrinsics)
-    uv1 = np.column_stack([foot_points(boxes), np.ones(len(boxes))])
-    rays = (uv1 @ K_inv.T) @ view.cam_to_world[:3, :3].T  # (N, 3) world
-    origin = view.cam_to_world[:3, 3]
-    n = view.ground_normal
-    along = rays @ n
-    height = float(n @ origin) - view.ground_offset
-    meets = along < -1e-6
-    scale = np.where(meets, height / np.where(meets, -along, 1.0), 0.0)
-    xy = origin[:2] + scale[:, None] * rays[:, :2]
-    _, J, front = view.jacobian(xy)
-    ok = meets & front & (np.abs(np.linalg.det(J)) > 1e-12)
-    J_inv = inverse_2x2(np.where(ok[:, None, None], J, np.eye(2)))
-    cov = J_inv @ foot_covariance(boxes, view.height) @ np.transpose(J_inv, (0, 2, 1))
-    return xy, cov, ok
-
-
-def ground_distances(z: np.ndarray, r: np.ndarray, xy: np.ndarray, cov_xy: np.ndarray) -> np.ndarray:
-    """(N, T) squared Mahalanobis distances between measured ground points ``z`` (N, 2)
-    (covariance ``r`` (N, 2, 2)) and predicted positions ``xy`` (T, 2) (``cov_xy`` (T, 2, 2)),
-    world, metres."""
-    e = z[:, None, :] - xy[None]
-    S = r[:, None] + cov_xy[None]
-    return np.einsum("nti,ntij,ntj->nt", e, inverse_2x2(S), e)

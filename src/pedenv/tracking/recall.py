@@ -4,8 +4,8 @@
   low-score ones, which may only continue a track.
 * :func:`ground_terms`: a gate and a cost from each track's Kalman-predicted ground
   position projected into the image (two people side by side keep their ids).
-* :func:`recall_remembered`: a lost track's predicted ground position against a new
-  detection's foot point on the road, so a person back from an occlusion gets their id.
+* :func:`recall_remembered`: a lost (or just missed) track's predicted ground position
+  against a new detection's foot point, so a person back from an occlusion gets their id.
 
 Each is off in the paper's configuration (see :class:`~pedenv.config.TrackingConfig`).
 """
@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from pedenv.config import TrackingConfig
-from pedenv.tracking.projection import CameraView, foot_on_ground, ground_distances, pixel_distances
+from pedenv.tracking.projection import CameraView, pixel_distances
 from pedenv.tracking.table import FilterColumns
 
 #: Mean of a chi-square distance with 2 degrees of freedom: the cost of a track whose
@@ -65,16 +65,17 @@ def recall_remembered(view: CameraView, boxes: np.ndarray, filters: FilterColumn
                       gate: float) -> np.ndarray:
     """Give remembered tracks their people back.
 
-    boxes: (N, 4) pixels, detections no live track took. rows: (R,) table rows of the
-    remembered (lost) tracks. Each detection's foot point is cut with the road and compared
-    with each track's predicted position (squared Mahalanobis distance, both covariances);
-    pairs within ``gate`` are assigned by the Hungarian algorithm on that distance.
+    boxes: (N, 4) pixels, detections no live track took in the image. rows: (R,) table
+    rows of the candidate tracks (remembered ones, and live ones missed in this frame).
+    Each track's predicted ground position is compared with each detection's foot point
+    (squared Mahalanobis distance, :func:`~pedenv.tracking.projection.pixel_distances`,
+    equal to the one on the ground under the linearization); pairs within ``gate`` are
+    assigned by the Hungarian algorithm on that distance.
     Returns matches (M, 2) ``[detection index into boxes, index into rows]`` int64.
     """
-    z, r, ok = foot_on_ground(view, boxes)
     xy, cov, started = predicted_ground(filters, rows)
-    d2 = ground_distances(z, r, xy, cov)
-    allowed = ok[:, None] & started[None] & (d2 <= gate)
+    d2 = pixel_distances(view, boxes, xy, cov)
+    allowed = started[None] & (d2 <= gate)
     if not allowed.any():
         return np.zeros((0, 2), np.int64)
     det, trk = linear_sum_assignment(np.where(allowed, d2, 2.0 * gate + 1.0))

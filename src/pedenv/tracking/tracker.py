@@ -125,10 +125,13 @@ class Tracker:
                 fresh = first[unmatched]
             free = free[free_rows]
         remembered = np.flatnonzero(tr.lost)
-        if view is not None and cfg.memory_s > 0 and len(fresh) and len(remembered):
-            m = recall_remembered(view, boxes[fresh], self.table.filter, remembered, cfg.memory_gate)
-            pairs.append(np.column_stack([fresh[m[:, 0]], remembered[m[:, 1]]]))
+        if view is not None and cfg.memory_s > 0 and len(fresh) and len(remembered) + len(free):
+            # the remembered tracks and the live ones the image left without a detection
+            candidates = np.concatenate([free, remembered])
+            m = recall_remembered(view, boxes[fresh], self.table.filter, candidates, cfg.memory_gate)
+            pairs.append(np.column_stack([fresh[m[:, 0]], candidates[m[:, 1]]]))
             fresh = np.delete(fresh, m[:, 0])
+            free = free[~np.isin(free, candidates[m[:, 1]])]
         matches = np.concatenate(pairs).astype(np.int64)
 
         missed = free  # live tracks without a detection
