@@ -87,6 +87,7 @@ def evaluate(
     ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
     method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
+    detection: Optional[str] = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.io.datasets import open_dataset
@@ -94,6 +95,12 @@ def evaluate(
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
+    if detection is not None or pose_backend == "onnx":
+        from pedenv.pose.base import create_pose_backend
+
+        if (pose_backend or data.default_pose_backend) != "onnx":
+            raise ValueError("--detection applies to the onnx pose backend; add --pose-backend onnx")
+        pose_backend = create_pose_backend("onnx", detection=detection or "far")
     names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
     cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
     if cues:
