@@ -46,16 +46,22 @@ class TrackingConfig:
     predict_motion: beyond the paper, off by default: move each track's box by its
         smoothed image velocity before association (as SORT does), so people who cross
         each other in the image keep their ids. The ``fused`` preset turns it on.
-    low_score_threshold: beyond the paper, off (0) by default: a two-stage association as
+    low_score_threshold: beyond the paper, off (0) by default: a two-band association as
         in ByteTrack. Detections scoring below ``start_score_threshold`` but at least this
-        are associated, after the surer ones, with the tracks still free and may only
-        continue a track, never start one; detections below it are ignored. Needs a pose
+        may only continue a track, never start one; detections below it are ignored. Both
+        bands go into one assignment, the low band paying ``low_score_cost`` extra, so a
+        sure detection still wins a track over a weak one, but a weak detection of a
+        half-hidden neighbour keeps a sure one from taking the neighbour's track (KITTI
+        0016 frame 7; ByteTrack's strictly sequential stages swap those two). Needs a pose
         backend that reports them (``OnnxPose(score_threshold=0.1)``). Lowering it keeps
         more occluded people's tracks alive, and lets more clutter continue a track.
         The ``fused`` preset uses 0.1.
     start_score_threshold: with the two-stage association on, only detections scoring at
         least this start a track or are associated in the first stage (0.25, the pose
         backends' usual threshold). Raising it starts fewer, surer tracks.
+    low_score_cost: what a low-band detection adds to the association cost (0..2; GIoU
+        lies in [-1, 1]). Raising it makes the low band take only tracks no sure detection
+        overlaps.
     ground_gate: beyond the paper, off (0) by default: each track's Kalman-predicted ground
         position is projected into the image; a detection whose box foot point lies
         farther than this squared Mahalanobis distance (2 dof, pixels) from it cannot be
@@ -86,6 +92,7 @@ class TrackingConfig:
     predict_motion: bool = False
     low_score_threshold: float = 0.0
     start_score_threshold: float = 0.25
+    low_score_cost: float = 0.5
     ground_gate: float = 0.0
     ground_cost_weight: float = 1.0
     memory_s: float = 0.0
@@ -101,6 +108,7 @@ class TrackingConfig:
         if self.low_score_threshold != 0.0:
             _check_range("tracking.low_score_threshold (0 = off)", self.low_score_threshold, 0.0,
                          self.start_score_threshold, low_open=True)
+        _check_range("tracking.low_score_cost", self.low_score_cost, 0.0, 2.0)
         _check_range("tracking.ground_gate (0 = off)", self.ground_gate, 0.0, 1000.0)
         _check_range("tracking.ground_cost_weight", self.ground_cost_weight, 0.0, 10.0)
         _check_range("tracking.memory_s (0 = off)", self.memory_s, 0.0, 60.0)

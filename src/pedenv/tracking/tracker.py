@@ -112,18 +112,18 @@ class Tracker:
         if cfg.predict_motion and len(tr.ids):
             tr.boxes = tr.boxes + tr.velocities  # constant velocity in the image (kept tracks too)
         first, second = split_by_score(scores, len(boxes), cfg)
+        stage = np.concatenate([first, second])  # one assignment; the low band pays its cost
         live = np.flatnonzero(~tr.lost)
         allowed, extra = ground_terms(boxes, self.table.filter, view, cfg)
-        pairs, free = [], live
-        for stage in (first, second):
-            sub = np.ix_(stage, free)
-            m, free_rows, unmatched = associate(boxes[stage], tr.boxes[free], cfg.giou_threshold, cfg.max_height_ratio,
-                                                None if allowed is None else allowed[sub],
-                                                None if extra is None else extra[sub])
-            pairs.append(np.column_stack([stage[m[:, 0]], free[m[:, 1]]]))
-            if stage is first:
-                fresh = first[unmatched]
-            free = free[free_rows]
+        sub = np.ix_(stage, live)
+        extra = None if extra is None else extra[sub]
+        if len(second):
+            extra = (0.0 if extra is None else extra) + np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[:, None]
+            extra = np.broadcast_to(extra, (len(stage), len(live)))
+        m, free_rows, unmatched = associate(boxes[stage], tr.boxes[live], cfg.giou_threshold, cfg.max_height_ratio,
+                                            None if allowed is None else allowed[sub], extra)
+        pairs, free = [np.column_stack([stage[m[:, 0]], live[m[:, 1]]])], live[free_rows]
+        fresh = stage[unmatched[unmatched < len(first)]]  # a weak detection never starts a track
         remembered = np.flatnonzero(tr.lost)
         if view is not None and cfg.memory_s > 0 and len(fresh) and len(remembered) + len(free):
             # the remembered tracks and the live ones the image left without a detection
