@@ -98,6 +98,13 @@ class TrackingConfig:
     memory_s: float = 0.0
     memory_gate: float = 9.21
 
+    @property
+    def pose_score_threshold(self) -> float | None:
+        """The person score threshold a pose network should run at so the low band reaches
+        the tracker: ``low_score_threshold`` while the two-band association is on, else
+        None (the backend's own threshold; the paper's input stays as it was)."""
+        return self.low_score_threshold if self.low_score_threshold > 0 else None
+
     def __post_init__(self) -> None:
         _check_range("tracking.giou_threshold", self.giou_threshold, -1.0, 1.0, high_open=True)
         if self.max_height_ratio != 0.0:

@@ -146,3 +146,13 @@ def test_lost_rows_are_carried_with_every_column():
 def test_identity_fields_are_checked(field, value):
     with pytest.raises(ValueError, match=f"tracking.{field}"):
         TrackingConfig(**{field: value})
+
+
+def test_the_low_band_reaches_the_tracker_only_when_it_is_on():
+    from pedenv.pose.models import backend_options
+
+    assert TrackingConfig().pose_score_threshold is None
+    assert TrackingConfig(low_score_threshold=0.1).pose_score_threshold == 0.1
+    assert "score_threshold" not in backend_options("onnx")  # the paper's input: the backend's own 0.25
+    assert backend_options("onnx", score_threshold=0.1)["score_threshold"] == 0.1
+    assert backend_options("ultralytics", score_threshold=0.1)["score_threshold"] == 0.1
