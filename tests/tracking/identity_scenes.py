@@ -11,8 +11,6 @@ from __future__ import annotations
 import sys
 from dataclasses import replace
 
-import numpy as np
-
 from pedenv.config import Config
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
 from pedenv.localization import configure

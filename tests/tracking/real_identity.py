@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+from shared_paths import REAL_SAMPLES
 
 from pedenv.config import Config
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
@@ -23,8 +24,6 @@ from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
 from pedenv.tracking.tracker import Tracker
-
-from shared_paths import REAL_SAMPLES
 
 KITTI_TRAINING = REAL_SAMPLES / "kitti" / "tracking_mini" / "training"
 KITTI_CAMERA_HEIGHT_M = 1.65
@@ -99,9 +98,9 @@ def _summary(acc: TrackingAccumulator) -> dict:
 
 
 def main() -> None:
-    from pedenv.pose import create_pose_backend
-
     from identity_scenes import fused_configs
+
+    from pedenv.pose import create_pose_backend
 
     configs = {"paper": Config(), **fused_configs()}
     backends = {threshold: create_pose_backend("onnx", score_threshold=threshold) for threshold in (0.25, 0.1)}

@@ -13,7 +13,7 @@ CAM_HEIGHT_M, PERSON_M = 1.5, 1.7
 #: optical camera (x right, y down, z forward) -> world (x forward, y left, z up), 1.5 m up
 CAM_TO_WORLD = np.array([[0.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 0.0], [0.0, -1.0, 0.0, CAM_HEIGHT_M],
                          [0.0, 0.0, 0.0, 1.0]])
-FUSED = dict(max_height_ratio=1.5, predict_motion=True, ground_gate=4.0, memory_s=2.0)
+FUSED = {"max_height_ratio": 1.5, "predict_motion": True, "ground_gate": 4.0, "memory_s": 2.0}
 
 
 def view(t: float) -> CameraView:

@@ -2,14 +2,12 @@
 backend, and the real KITTI 0016 frames with the ONNX network. Bounds are the measured
 numbers with a small margin (the scripts identity_scenes.py and real_identity.py print them)."""
 
-import numpy as np
 import pytest
+from identity_scenes import fused_configs, identity_metrics
 
 from pedenv.config import Config
 from pedenv.pose import create_pose_backend
 from pedenv.synthetic import SCENARIOS, generate_scenes
-
-from identity_scenes import fused_configs, identity_metrics
 
 
 @pytest.mark.slow

@@ -54,7 +54,7 @@ class CameraView:
     timestamp: float
 
     @classmethod
-    def of(cls, frame) -> "CameraView":
+    def of(cls, frame) -> CameraView:
         """The view of a :class:`~pedenv.records.Frame`; the road is the vehicle's plane."""
         normal = frame.ego.rotation[:, 2]
         cam_to_world = frame.cam_to_world

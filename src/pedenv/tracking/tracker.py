@@ -25,7 +25,6 @@ from pedenv.tracking.projection import CameraView
 from pedenv.tracking.recall import ground_terms, recall_remembered, split_by_score
 from pedenv.tracking.table import TrackTable
 
-
 #: Weight of the newest displacement in a track's image velocity (exponential smoothing).
 MOTION_SMOOTHING = 0.5
 
