@@ -8,11 +8,13 @@ One frame, as the paper's Fig. 2: the tracker compensates the ego's yaw and asso
 the skeletons with the tracks in the image (:mod:`pedenv.tracking`); the position method
 measures each tracked skeleton's world position (:mod:`pedenv.localization`); a
 constant-velocity Kalman filter smooths it on the ground plane (:mod:`pedenv.kalman`).
-Every per-track row lives in one :class:`~pedenv.tracking.table.TrackTable`.
+Every per-track row lives in one :class:`~pedenv.tracking.table.TrackTable`. The filter
+predicts before the tracker associates, so the tracker may gate with the prediction.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from functools import lru_cache
 
@@ -27,6 +29,7 @@ from pedenv.records import Detections, Frame
 from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.stage_timer import StageTimer
 from pedenv.tracking.egomotion import yaw_change, yaw_shift_pixels
+from pedenv.tracking.projection import CameraView
 from pedenv.tracking.table import TrackTable
 from pedenv.tracking.tracker import Tracker
 
@@ -59,13 +62,23 @@ class PedestrianEnvironmentModel:
         """
         det = self._check(frame)
         t0 = time.perf_counter()
-        step = self.tracker.update(det.boxes, self._yaw_shift(frame))
+        self._predict(frame)  # first: the tracker may gate with the prediction (beyond the paper)
+        step = self.tracker.update(det.boxes, self._yaw_shift(frame), det.scores, self._view(frame))
         t1 = time.perf_counter()
-        self._predict(frame)
-        peds = self._locate(frame, det, step.detection_rows) if len(det) else Pedestrians.empty()
+        rows = step.detection_rows
+        if (rows < 0).any():  # low-score detections that continued no track are not pedestrians
+            keep = rows >= 0
+            det, rows = Detections(det.keypoints[keep], det.confidences[keep], det.boxes[keep], det.scores[keep]), rows[keep]
+            frame = dataclasses.replace(frame, detections=det)
+        peds = self._locate(frame, det, rows) if len(det) else Pedestrians.empty()
         self.timer.add(t1 - t0, time.perf_counter() - t1, len(det))
         self._last = frame
         return EnvironmentState(frame.index, frame.timestamp, frame.ego, peds, frame.scene)
+
+    def _view(self, frame: Frame) -> CameraView | None:
+        """The camera view the tracker's ground gate and memory need; None while both are off."""
+        cfg = self.config.tracking
+        return CameraView.of(frame) if cfg.ground_gate > 0 or cfg.memory_s > 0 else None
 
     def _yaw_shift(self, frame: Frame) -> float:
         if self._last is None or not self.config.tracking.yaw_compensation:

@@ -224,15 +224,19 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     return (384, 640) if width / height >= 1.6 else (640, 640)
 
 
-def backend_options(backend: str, model=None, input_size=None, detection=None) -> dict:
+def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None) -> dict:
     """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size
     and detection mode (``fast`` or ``far``, onnx only).
 
     ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, else the
     dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
+    score_threshold: the network's person score threshold (onnx, ultralytics); None keeps
+    the backend's own (0.25). The tracker's low-score band needs it lowered
+    (``TrackingConfig.pose_score_threshold``).
     """
+    scores = {} if score_threshold is None else {"score_threshold": score_threshold}
     if backend == "onnx":
-        return {"model_path": model, "input_size": input_size, "detection": detection}
+        return {"model_path": model, "input_size": input_size, "detection": detection, **scores}
     if backend == "ultralytics":
-        return {"weights": model, "input_size": input_size or 640}
+        return {"weights": model, "input_size": input_size or 640, **scores}
     return {}

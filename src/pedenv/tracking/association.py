@@ -9,7 +9,8 @@ from pedenv.boxes import giou_matrix
 
 
 def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3,
-              max_height_ratio: float = 0.0):
+              max_height_ratio: float = 0.0, allowed: np.ndarray | None = None,
+              extra_cost: np.ndarray | None = None):
     """Assign detections to tracks as the paper does.
 
     Detections overlapping no track (GIoU <= ``threshold`` with all) start new tracks and
@@ -20,6 +21,9 @@ def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: f
     detection_boxes: (N, 4), track_boxes: (T, 4) float, pixels.
     max_height_ratio: when > 0, pairs whose box heights differ by more than this factor
         do not overlap whatever their GIoU (beyond the paper; 0 keeps the paper's rule).
+    allowed: optional (N, T) bool, beyond the paper: pairs marked False do not overlap
+        (e.g. outside a gate around the track's predicted ground position).
+    extra_cost: optional (N, T) float added to the negative GIoU of overlapping pairs.
     Returns ``(matches (M, 2) [detection, track], unmatched_tracks (U,),
     unmatched_detections (V,))`` as int64 arrays; empty input gives empty outputs.
     """
@@ -32,9 +36,12 @@ def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: f
         hd = np.maximum(detection_boxes[:, 3] - detection_boxes[:, 1], 1e-6)[:, None]
         ht = np.maximum(track_boxes[:, 3] - track_boxes[:, 1], 1e-6)[None, :]
         overlap &= np.maximum(hd / ht, ht / hd) <= max_height_ratio
+    if allowed is not None:
+        overlap &= allowed
+    cost, apart = (-giou, 10.0) if extra_cost is None else (extra_cost - giou, 10.0 + np.abs(extra_cost).max())
     # Pairs that do not overlap cost more than any overlapping pair, so the assignment
     # among overlapping rows and columns is the paper's; such pairs are split below.
-    rows, cols = linear_sum_assignment(np.where(overlap, -giou, 10.0))
+    rows, cols = linear_sum_assignment(np.where(overlap, cost, apart))
     good = overlap[rows, cols]
     matches = np.column_stack([rows[good], cols[good]]).astype(np.int64)
     det_free = np.ones(n, bool)

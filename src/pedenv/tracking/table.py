@@ -49,7 +49,10 @@ class ColumnGroup:
 class TrackColumns(ColumnGroup):
     """The tracker's columns: ``ids (T,)`` int64; ``boxes (T, 4)`` pixels of the latest frame
     (ego-yaw compensated); ``misses (T,)`` consecutive frames without a detection; ``hits
-    (T,)`` detections so far; ``velocities (T, 4)`` pixels per frame of the box edges."""
+    (T,)`` detections so far; ``velocities (T, 4)`` pixels per frame of the box edges;
+    ``lost (T,)`` bool, a track missed too often and only remembered (``tracking.memory_s``:
+    it takes no part in the association in the image); ``last_seen (T,)`` seconds, the
+    timestamp of its latest detection (kept only while a camera view is given)."""
 
     ids: np.ndarray
     boxes: np.ndarray
@@ -59,7 +62,8 @@ class TrackColumns(ColumnGroup):
 
     def __init__(self) -> None:
         super().__init__({"ids": ((), np.int64), "boxes": ((4,), np.float64), "misses": ((), np.int64),
-                          "hits": ((), np.int64), "velocities": ((4,), np.float64)})
+                          "hits": ((), np.int64), "velocities": ((4,), np.float64), "lost": ((), bool),
+                          "last_seen": ((), np.float64)})
 
 
 class FilterColumns(ColumnGroup):

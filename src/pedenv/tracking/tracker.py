@@ -4,6 +4,12 @@ Each frame it associates the detections with the tracks of the :class:`TrackTabl
 decides the next table (matched, kept and new tracks) and carries every per-track
 column there at once (:meth:`TrackTable.carry`), the Kalman filter's and the position
 method's included.
+
+Beyond the paper, each switched on by a :class:`~pedenv.config.TrackingConfig` value (the
+``fused`` preset turns them on; :mod:`pedenv.tracking.recall`): a second association
+stage for low-score detections (ByteTrack), a gate and cost from each track's Kalman
+prediction projected into the image, and a memory of lost tracks that gives a person
+their old id back after an occlusion.
 """
 
 from __future__ import annotations
@@ -12,11 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.tracking.association import associate
 from pedenv.config import TrackingConfig
+from pedenv.tracking.association import associate
 from pedenv.tracking.egomotion import shift_u
+from pedenv.tracking.projection import CameraView
+from pedenv.tracking.recall import ground_terms, recall_remembered, split_by_score
 from pedenv.tracking.table import TrackTable
-
 
 #: Weight of the newest displacement in a track's image velocity (exponential smoothing).
 MOTION_SMOOTHING = 0.5
@@ -43,10 +50,12 @@ class IdCounter:
 class TrackerStep:
     """What one tracker update did.
 
-    detection_rows: (N,) row of each detection in the new track table.
+    detection_rows: (N,) row of each detection in the new track table; -1 for a low-score
+        detection that continued no track (it is left out of the frame's pedestrians).
     previous_rows: (T,) for each row of the new table, its row in the previous table,
         or -1 for a track started in this frame.
-    dropped_ids: ids of the tracks removed in this frame.
+    dropped_ids: ids of the tracks removed in this frame (not those only lost and
+        remembered: they are dropped when their memory runs out).
     """
 
     detection_rows: np.ndarray
@@ -82,27 +91,64 @@ class Tracker:
     hits = property(lambda self: self.table.tracks.hits)
     velocities = property(lambda self: self.table.tracks.velocities)
 
-    def update(self, boxes: np.ndarray, u_shift: float = 0.0) -> TrackerStep:
+    def update(self, boxes: np.ndarray, u_shift: float = 0.0, scores: np.ndarray | None = None,
+               view: CameraView | None = None) -> TrackerStep:
         """Associate one frame's detections with the tracks and move the table on.
 
         boxes: (N, 4) float, pixels of the current frame.
         u_shift: pixels to move the tracks' stored u coordinates by before association
             (the ego-yaw compensation of Eq. 1; 0 when it is off).
+        scores: (N,) person scores in [0, 1]; needed by the two-stage association
+            (``tracking.low_score_threshold`` > 0), else unused.
+        view: the frame's camera and road; needed by the ground gate and the memory
+            (``tracking.ground_gate``, ``tracking.memory_s``), which are off without it.
+            The table's Kalman columns must hold the prediction at this frame's time.
         """
         cfg, tr = self.config, self.table.tracks
+        boxes = np.asarray(boxes, np.float64).reshape(-1, 4)
         if u_shift and len(tr.ids):
             tr.boxes = shift_u(tr.boxes, u_shift)
         if cfg.predict_motion and len(tr.ids):
             tr.boxes = tr.boxes + tr.velocities  # constant velocity in the image (kept tracks too)
-        matches, lost, fresh = associate(boxes, tr.boxes, cfg.giou_threshold, cfg.max_height_ratio)
-        alive = tr.misses[lost] + 1 < cfg.max_misses
-        kept = lost[alive]
+        first, second = split_by_score(scores, len(boxes), cfg)
+        stage = np.concatenate([first, second])  # one assignment; the low band pays its cost
+        live = np.flatnonzero(~tr.lost)
+        allowed, extra = ground_terms(boxes, self.table.filter, view, cfg)
+        sub = np.ix_(stage, live)
+        extra = None if extra is None else extra[sub]
+        if len(second):
+            extra = (0.0 if extra is None else extra) + np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[:, None]
+            extra = np.broadcast_to(extra, (len(stage), len(live)))
+        m, free_rows, unmatched = associate(boxes[stage], tr.boxes[live], cfg.giou_threshold, cfg.max_height_ratio,
+                                            None if allowed is None else allowed[sub], extra)
+        pairs, free = [np.column_stack([stage[m[:, 0]], live[m[:, 1]]])], live[free_rows]
+        fresh = stage[unmatched[unmatched < len(first)]]  # a weak detection never starts a track
+        remembered = np.flatnonzero(tr.lost)
+        if view is not None and cfg.memory_s > 0 and len(fresh) and len(remembered) + len(free):
+            # the remembered tracks and the live ones the image left without a detection
+            candidates = np.concatenate([free, remembered])
+            m = recall_remembered(view, boxes[fresh], self.table.filter, candidates, cfg.memory_gate)
+            pairs.append(np.column_stack([fresh[m[:, 0]], candidates[m[:, 1]]]))
+            fresh = np.delete(fresh, m[:, 0])
+            free = free[~np.isin(free, candidates[m[:, 1]])]
+        matches = np.concatenate(pairs).astype(np.int64)
+
+        missed = free  # live tracks without a detection
+        alive = tr.misses[missed] + 1 < cfg.max_misses
+        keep_lost = np.zeros(len(tr.ids), bool)
+        if view is not None and cfg.memory_s > 0:
+            keep_lost[missed[~alive]] = True
+            still = remembered[~np.isin(remembered, matches[:, 1])]
+            keep_lost[still[view.timestamp - tr.last_seen[still] <= cfg.memory_s]] = True
+        gone = np.setdiff1d(np.arange(len(tr.ids)), np.concatenate([matches[:, 1], missed[alive]]))
+        kept = np.concatenate([missed[alive], np.flatnonzero(keep_lost)])
+        dropped = tr.ids[gone[~keep_lost[gone]]]
         n_match, n_kept, n_new = len(matches), len(kept), len(fresh)
-        dropped = tr.ids[lost[~alive]]
         previous_box = tr.boxes[matches[:, 1]] - tr.velocities[matches[:, 1]]  # the last frame's box
+        was_lost = tr.lost[matches[:, 1]]
 
         previous_rows = np.concatenate([matches[:, 1], kept, np.full(n_new, -1, np.int64)])
-        detection_rows = np.empty(len(boxes), np.int64)
+        detection_rows = np.full(len(boxes), -1, np.int64)
         detection_rows[matches[:, 0]] = np.arange(n_match)
         detection_rows[fresh] = np.arange(n_match + n_kept, n_match + n_kept + n_new)
         self.table.carry(previous_rows)
@@ -114,7 +160,11 @@ class Tracker:
         tr.hits[new] = 1
         tr.misses[matched] = 0
         tr.misses[n_match:n_match + n_kept] += 1
+        tr.lost[matched] = False
+        tr.lost[n_match:n_match + n_kept] = tr.misses[n_match:n_match + n_kept] >= cfg.max_misses
+        if view is not None:
+            tr.last_seen[matched] = tr.last_seen[new] = view.timestamp
         if cfg.predict_motion:
-            moved = boxes[matches[:, 0]] - previous_box
+            moved = np.where(was_lost[:, None], 0.0, boxes[matches[:, 0]] - previous_box)
             tr.velocities[matched] = MOTION_SMOOTHING * moved + (1.0 - MOTION_SMOOTHING) * tr.velocities[matched]
         return TrackerStep(detection_rows, previous_rows, dropped)

@@ -1,0 +1,83 @@
+"""Identities that hold: the tracker's steps beyond the paper, as pure functions.
+
+* :func:`split_by_score`: ByteTrack's two stages; sure detections first, then the
+  low-score ones, which may only continue a track.
+* :func:`ground_terms`: a gate and a cost from each track's Kalman-predicted ground
+  position projected into the image (two people side by side keep their ids).
+* :func:`recall_remembered`: a lost (or just missed) track's predicted ground position
+  against a new detection's foot point, so a person back from an occlusion gets their id.
+
+Each is off in the paper's configuration (see :class:`~pedenv.config.TrackingConfig`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from pedenv.config import TrackingConfig
+from pedenv.tracking.projection import CameraView, pixel_distances
+from pedenv.tracking.table import FilterColumns
+
+#: Mean of a chi-square distance with 2 degrees of freedom: the cost of a track whose
+#: filter holds no state yet, so it is neither favoured nor penalized against the others.
+EXPECTED_DISTANCE_2DOF = 2.0
+
+
+def split_by_score(scores: np.ndarray | None, count: int, config: TrackingConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Detections of the first and of the second association stage, as index arrays.
+
+    scores: (count,) person scores, or None (every detection is sure). With
+    ``config.low_score_threshold`` at 0 (the paper) every detection is in the first stage;
+    else the first stage holds those scoring at least ``start_score_threshold``, the second
+    those at least ``low_score_threshold``, and the rest take part in neither.
+    """
+    every = np.arange(count, dtype=np.int64)
+    if config.low_score_threshold <= 0 or scores is None:
+        return every, every[:0]
+    scores = np.asarray(scores, np.float64).reshape(count)
+    sure = scores >= config.start_score_threshold
+    return every[sure], every[~sure & (scores >= config.low_score_threshold)]
+
+
+def predicted_ground(filters: FilterColumns, rows: np.ndarray | slice = slice(None)):
+    """Kalman-predicted ground positions (R, 2), their covariance (R, 2, 2) (world, metres)
+    and whether each filter holds a state (R,) for table ``rows``."""
+    x, P = filters.x[rows], filters.P[rows]
+    return x[:, [0, 2]], P[:, [0, 2]][:, :, [0, 2]], filters.started[rows]
+
+
+def ground_terms(boxes: np.ndarray, filters: FilterColumns, view: CameraView | None, config: TrackingConfig):
+    """The ground gate's ``(allowed (N, T) bool, extra_cost (N, T))`` for detections
+    ``boxes`` (N, 4) pixels and every track row, or ``(None, None)`` when it is off
+    (``config.ground_gate`` = 0 or no view). Tracks whose filter holds no state pass the
+    gate with the expected cost."""
+    if view is None or config.ground_gate <= 0 or not len(boxes) or not len(filters.x):
+        return None, None
+    xy, cov, started = predicted_ground(filters)
+    d2 = pixel_distances(view, boxes, xy, cov)
+    allowed = (d2 <= config.ground_gate) | ~started[None]
+    d2 = np.where(started[None], np.minimum(d2, config.ground_gate), EXPECTED_DISTANCE_2DOF)
+    return allowed, config.ground_cost_weight * d2 / config.ground_gate
+
+
+def recall_remembered(view: CameraView, boxes: np.ndarray, filters: FilterColumns, rows: np.ndarray,
+                      gate: float) -> np.ndarray:
+    """Give remembered tracks their people back.
+
+    boxes: (N, 4) pixels, detections no live track took in the image. rows: (R,) table
+    rows of the candidate tracks (remembered ones, and live ones missed in this frame).
+    Each track's predicted ground position is compared with each detection's foot point
+    (squared Mahalanobis distance, :func:`~pedenv.tracking.projection.pixel_distances`,
+    equal to the one on the ground under the linearization); pairs within ``gate`` are
+    assigned by the Hungarian algorithm on that distance.
+    Returns matches (M, 2) ``[detection index into boxes, index into rows]`` int64.
+    """
+    xy, cov, started = predicted_ground(filters, rows)
+    d2 = pixel_distances(view, boxes, xy, cov)
+    allowed = started[None] & (d2 <= gate)
+    if not allowed.any():
+        return np.zeros((0, 2), np.int64)
+    det, trk = linear_sum_assignment(np.where(allowed, d2, 2.0 * gate + 1.0))
+    good = allowed[det, trk]
+    return np.column_stack([det[good], trk[good]]).astype(np.int64)

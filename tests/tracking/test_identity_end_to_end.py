@@ -1,0 +1,46 @@
+"""Seeded end-to-end identity figures: the synthetic terrain scenes with the detector-model
+backend, and the real KITTI 0016 frames with the ONNX network. Bounds are the measured
+numbers with a small margin (the scripts identity_scenes.py and real_identity.py print them)."""
+
+import pytest
+from identity_scenes import fused_configs, identity_metrics
+
+from pedenv.config import Config
+from pedenv.pose import create_pose_backend
+from pedenv.synthetic import SCENARIOS, generate_scenes
+
+
+@pytest.mark.slow
+def test_identity_changes_halve_the_id_switches_on_the_synthetic_scenes():
+    scenes = generate_scenes(0, SCENARIOS, terrain=True, duration_s=8.0)
+    configs = fused_configs()
+    before, after = (identity_metrics(scenes, configs[name]) for name in ("before", "after"))
+    # measured (seed 0, 8 s of each of the 7 scenes): 888 switches in 7048 matches (12.60 per 100),
+    # IDF1 0.462, MOTA 0.573 before; 463 in 7472 (6.20 per 100), IDF1 0.625, MOTA 0.609 after
+    assert before["switches_per_100"] > 12.0
+    assert after["switches_per_100"] < 6.5
+    assert after["switches_per_100"] < 0.52 * before["switches_per_100"]
+    assert after["idf1"] > 0.60 and before["idf1"] < 0.48
+    assert after["mota"] > before["mota"] + 0.02
+    assert after["matches"] > before["matches"]
+
+
+@pytest.mark.slow
+@pytest.mark.onnx_model
+def test_side_by_side_walkers_of_kitti_0016_keep_their_ids():
+    from real_identity import kitti_frames, track_kitti
+
+    frames = kitti_frames("0016")
+    config = fused_configs()["after"]
+    backend = create_pose_backend("onnx", score_threshold=config.tracking.pose_score_threshold)
+    found, summary = track_kitti(frames, config, backend)
+    # walkers 5 and 6 go side by side; in frame 7 the network sees 6 only at score 0.17
+    assert [(ids.get(5), ids.get(6)) for ids in found] == [(found[0][5], found[0][6])] * 3
+    assert found[0][5] != found[0][6]
+    # measured: 0 switches, 20 matches, IDF1 0.851, MOTA 0.708; the fused preset before the
+    # identity changes: 2 switches (walkers 22 and 23), 18 matches, IDF1 0.735; the paper's
+    # tracker: 3 switches, 17 matches, IDF1 0.694, and walkers 5 and 6 swap in frame 12
+    assert summary["id_switches"] == 0
+    assert summary["matches"] >= 19
+    paper, _ = track_kitti(frames, Config(), create_pose_backend("onnx"))
+    assert paper[2].get(5) != paper[0].get(5) or paper[2].get(6) != paper[0].get(6)  # the swap this fixes
