@@ -1,0 +1,44 @@
+"""Shared helpers for the real-data readers: numbered lines, numeric fields, clear errors."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from pedenv.errors import InputError
+
+
+def read_lines(path: str | Path) -> Iterator[tuple[int, str]]:
+    """``(line number from 1, stripped text)`` of every non-empty line of ``path``."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read: {exc}") from None
+    for number, line in enumerate(text.splitlines(), start=1):
+        line = line.strip()
+        if line:
+            yield number, line
+
+
+def numbers(path: Path, line: int, fields: list[str], what: str) -> np.ndarray:
+    """The ``fields`` as float64 (finite); an unparsable one raises InputError naming file and line."""
+    try:
+        values = np.array([float(f) for f in fields], dtype=np.float64)
+    except ValueError:
+        raise InputError(f"{path}:{line}: {what} must be numbers, got {' '.join(fields)!r}") from None
+    if not np.all(np.isfinite(values)):
+        raise InputError(f"{path}:{line}: {what} contains NaN or inf")
+    return values
+
+
+def frozen_arrays(obj, **arrays) -> None:
+    """Set read-only array fields on a frozen dataclass instance."""
+    for name, value in arrays.items():
+        value = np.asarray(value)
+        value.setflags(write=False)
+        object.__setattr__(obj, name, value)
