@@ -1,0 +1,91 @@
+"""Run the real pose network once over the real samples and cache its raw detections.
+
+The cache (an ``.npz`` outside the repository: the samples' licences forbid shipping
+anything derived image by image) holds, per image, the persons the network scores above
+``--min-score`` (0.05 by default, below the backend's 0.25, so confidence thresholds can be
+studied afterwards): keypoints (N, 17, 2) px, keypoint confidences (N, 17), boxes (N, 4) px
+and person scores (N,). :mod:`fit_detector_model` reads it.
+
+Mode ``single``: today's whole-frame pass, the input chosen by
+:func:`pedenv.pose.models.choose_input_size` (384x640 for frames at least 16:10 wide, else
+640x640), i.e. the cached input closest to the frame's aspect. ``--input HxW`` forces one.
+
+    PYTHONPATH=src python benchmarks/real_detections.py --out /work/cache-h7/det-single.npz
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
+
+
+def sample_images(samples: Path) -> list[tuple[str, Path]]:
+    """(key, image path) of every real sample image: ``mot17/<SEQ>/<frame>``, ``kitti/<seq>/<frame>``,
+    ``kitti-object/<id>``, ``nuscenes/<CAM>``."""
+    from pedenv.io.real import kitti, mot17, nuscenes_cameras
+
+    out = []
+    for folder in mot17.sequence_folders(samples / "mot17"):
+        seq = mot17.read_sequence(folder)
+        out += [(f"mot17/{folder.name}/{f}", seq.image_path(f)) for f in seq.frames]
+    training = samples / "kitti" / "tracking_mini" / "training"
+    for name in kitti.tracking_sequence_names(training):
+        seq = kitti.read_tracking_sequence(training, name)
+        out += [(f"kitti/{name}/{f}", seq.image_path(f)) for f in seq.frames]
+    for p in sorted((samples / "kitti" / "object_samples" / "training" / "image_2").glob("*.png")):
+        out.append((f"kitti-object/{p.stem}", p))
+    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
+        out.append((f"nuscenes/{cam.camera}", cam.image_path))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
+    parser.add_argument("--out", type=Path, required=True, help="the .npz cache to write (keep it out of the repository)")
+    parser.add_argument("--mode", choices=["single"], default="single")
+    parser.add_argument("--input", default=None, help="force one network input HxW (default: per image)")
+    parser.add_argument("--min-score", type=float, default=0.05)
+    parser.add_argument("--threads", type=int, default=1)
+    args = parser.parse_args(argv)
+
+    import cv2
+
+    from pedenv.pose import create_pose_backend
+    from pedenv.pose.models import choose_input_size
+
+    backends: dict = {}
+    arrays: dict[str, np.ndarray] = {}
+    inputs = []
+    t0 = time.perf_counter()
+    for key, path in sample_images(args.samples):
+        bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        if bgr is None:
+            raise SystemExit(f"{path}: not a readable image")
+        rgb = np.ascontiguousarray(bgr[..., ::-1])
+        size = args.input or "{}x{}".format(*choose_input_size(rgb.shape[1], rgb.shape[0]))
+        if size not in backends:
+            backends[size] = create_pose_backend("onnx", input_size=size, score_threshold=args.min_score,
+                                                 threads=args.threads)
+        det = backends[size].detect(rgb)
+        for name in ("keypoints", "confidences", "boxes", "scores"):
+            arrays[f"{key}|{name}"] = np.asarray(getattr(det, name), np.float32)
+        inputs.append(f"{key}={size}")
+        print(f"{key}: {len(det)} persons (input {size})", file=sys.stderr)
+    arrays["_meta|inputs"] = np.array(inputs)
+    arrays["_meta|mode"] = np.array([args.mode])
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(args.out, **arrays)
+    print(f"{len(inputs)} images in {time.perf_counter() - t0:.0f} s -> {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
