@@ -238,11 +238,29 @@ def finite(obj):
     return None if isinstance(obj, float) and not np.isfinite(obj) else obj
 
 
+def check_synthetic(result: dict) -> None:
+    """Print the real recall per height bin next to the fitted model's on the synthetic scenes."""
+    from pedenv.synthetic import generate_scenes
+    from pedenv.synthetic.detector import DetectorModel
+    from pedenv.synthetic.detector_fit import recall_by_bin, synthetic_recall
+
+    fit = {k: v for k, v in result["fit"].items() if k != "height_measure"}
+    frames = [f for scene in generate_scenes(0) for f in scene.frames[::3]]
+    heights, detected = synthetic_recall(frames, DetectorModel(seed=0, **fit), result["span_over_box_height"]["median"])
+    synthetic = recall_by_bin(heights, detected)
+    print("bin px     real   synthetic", file=sys.stderr)
+    for (lo, hi), row, s in zip(BINS, result["recall_by_box_height"]["all"], synthetic):
+        print(f"{lo:>4.0f}-{hi:<5.0f} {row['mean']:6.3f} {s:9.3f}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--detections", type=Path, required=True, help="cache written by real_detections.py")
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
     parser.add_argument("--out", type=Path, default=None, help="JSON to write (default: print only)")
+    parser.add_argument("--check-synthetic", action="store_true",
+                        help="also run the fitted detector model on the built-in synthetic scenes (seed 0) and print "
+                             "its recall by height next to the real network's")
     args = parser.parse_args(argv)
     dets = load(args.detections)
     mode = str(dets.pop("_meta")["mode"][0])
@@ -251,6 +269,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.out:
         args.out.write_text(text + "\n")
     print(text)
+    if args.check_synthetic:
+        check_synthetic(result)
     return 0
 
 

@@ -89,3 +89,33 @@ def fit_noise_law(heights_px: np.ndarray, noise_px: np.ndarray) -> tuple[float, 
         return float(ms[0]), float(ms[0])
     b, log_a = np.polyfit(np.log(mh), np.log(ms), 1, w=np.sqrt(n))
     return float(np.exp(log_a) * 30.0**b), float(np.exp(log_a) * 300.0**b)
+
+
+def recall_by_bin(heights_px: np.ndarray, detected: np.ndarray) -> list[float | None]:
+    """Share detected (None for an empty bin) per :data:`BINS` entry. heights_px, detected: (N,)."""
+    idx, detected = bin_index(heights_px), np.asarray(detected, bool)
+    return [float(detected[idx == b].mean()) if (idx == b).any() else None for b in range(len(BINS))]
+
+
+def synthetic_recall(frames, model, span_over_box: float) -> tuple[np.ndarray, np.ndarray]:
+    """Run the detector ``model`` on ``frames`` (with ground-truth skeletons) and match like the
+    real benchmark (IoU >= 0.5, greedy by score). Returns ``(heights (N,) px, detected (N,) bool)``.
+
+    The synthetic ground-truth boxes are the keypoints' hull; a real annotated box reaches from
+    the head's top to the soles, so each person's height is given in that convention: keypoint
+    extent / ``span_over_box`` (the measured ratio of the two on real images).
+    """
+    heights, detected = [], []
+    for frame in frames:
+        gt = frame.ground_truth
+        if gt is None or len(gt) == 0:
+            continue
+        det = model(frame)
+        pairs = greedy_match(iou_matrix(det.boxes, gt.boxes), det.scores, 0.5)
+        got = np.zeros(len(gt), bool)
+        got[[g for _, g in pairs]] = True
+        heights.append(np.ptp(gt.keypoints[..., 1], axis=1) / span_over_box)
+        detected.append(got)
+    if not heights:
+        return np.zeros(0), np.zeros(0, bool)
+    return np.concatenate(heights), np.concatenate(detected)
