@@ -9,6 +9,9 @@ and person scores (N,). :mod:`fit_detector_model` reads it.
 Mode ``single``: today's whole-frame pass, the input chosen by
 :func:`pedenv.pose.models.choose_input_size` (384x640 for frames at least 16:10 wide, else
 640x640), i.e. the cached input closest to the frame's aspect. ``--input HxW`` forces one.
+Mode ``native``: the whole frame at its own resolution (sides rounded up to 32 px) with a
+dynamic-input model (``--model``): what the network sees without downscaling, a reference
+for the tiled modes.
 
     PYTHONPATH=src python benchmarks/real_detections.py --out /work/cache-h7/det-single.npz
 """
@@ -50,10 +53,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
     parser.add_argument("--out", type=Path, required=True, help="the .npz cache to write (keep it out of the repository)")
-    parser.add_argument("--mode", choices=["single"], default="single")
+    parser.add_argument("--mode", choices=["single", "native"], default="single")
+    parser.add_argument("--model", type=Path, default=None,
+                        help="ONNX model; mode native needs one with a dynamic input (ultralytics export dynamic=True)")
     parser.add_argument("--input", default=None, help="force one network input HxW (default: per image)")
     parser.add_argument("--min-score", type=float, default=0.05)
     parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--only", default="", help="comma-separated key prefixes to run (e.g. kitti,nuscenes)")
     args = parser.parse_args(argv)
 
     import cv2
@@ -65,15 +71,23 @@ def main(argv: list[str] | None = None) -> int:
     arrays: dict[str, np.ndarray] = {}
     inputs = []
     t0 = time.perf_counter()
+    prefixes = tuple(p for p in args.only.split(",") if p)
     for key, path in sample_images(args.samples):
+        if prefixes and not key.startswith(prefixes):
+            continue
         bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
         if bgr is None:
             raise SystemExit(f"{path}: not a readable image")
         rgb = np.ascontiguousarray(bgr[..., ::-1])
-        size = args.input or "{}x{}".format(*choose_input_size(rgb.shape[1], rgb.shape[0]))
+        if args.input:
+            size = args.input
+        elif args.mode == "native":  # the whole frame at its own resolution, sides rounded up to the stride
+            size = "{}x{}".format(*(-(-np.array(rgb.shape[:2]) // 32) * 32))
+        else:
+            size = "{}x{}".format(*choose_input_size(rgb.shape[1], rgb.shape[0]))
         if size not in backends:
-            backends[size] = create_pose_backend("onnx", input_size=size, score_threshold=args.min_score,
-                                                 threads=args.threads)
+            backends[size] = create_pose_backend("onnx", model_path=args.model, input_size=size,
+                                                 score_threshold=args.min_score, threads=args.threads)
         det = backends[size].detect(rgb)
         for name in ("keypoints", "confidences", "boxes", "scores"):
             arrays[f"{key}|{name}"] = np.asarray(getattr(det, name), np.float32)

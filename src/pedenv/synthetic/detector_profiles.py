@@ -14,6 +14,14 @@ network in that mode finds almost nobody below 150 px box height (50 % at 220 px
 keypoint noise is the frame-to-frame jitter on MOT17 (measured above 100 px box height only;
 the power law below is extrapolated); jitter between near-identical consecutive frames is a
 lower bound of the error against the truth. False positives: MOT17 and KITTI frames.
+
+``yolo11n-pose-native``: the same network over the whole frame at the frame's own
+resolution (sides rounded up to 32 px; a dynamic-input ONNX export), the reference for the
+tiled ``far`` detection mode: 50 % at 109 px box height, 85 % of persons 100-200 px tall
+found. Tables: ``benchmarks/results/detector_yolo11n-pose-native.json``.
+
+False positives: detections lying mostly outside every annotated person and ignore region
+(MOT17's amodal boxes would otherwise count half-hidden people found as false).
 """
 
 from __future__ import annotations
@@ -31,8 +39,12 @@ PROFILES = MappingProxyType({
     "default": MappingProxyType(_DEFAULT),
     "yolo11n-pose-single": MappingProxyType({
         **_DEFAULT,
-        "half_detection_height_px": 180.0, "detection_slope_px": 15.3, "false_positives_per_frame": 0.19,
+        "half_detection_height_px": 180.0, "detection_slope_px": 15.3, "false_positives_per_frame": 0.042,
         "noise_px_small": 0.085, "noise_px_large": 0.87}),
+    "yolo11n-pose-native": MappingProxyType({
+        **_DEFAULT,
+        "half_detection_height_px": 88.7, "detection_slope_px": 12.4, "false_positives_per_frame": 0.125,
+        "noise_px_small": 0.175, "noise_px_large": 0.83}),
 })
 
 
