@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
@@ -12,18 +13,21 @@ from pedenv.cli import app
 pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model]
 
 
-def test_models_prepare_exports_once_offline(tmp_path, monkeypatch):
+def test_models_prepare_exports_one_dynamic_model_once_offline(tmp_path, monkeypatch):
     monkeypatch.setenv("PEDENV_CACHE", str(tmp_path / "cache"))
     monkeypatch.setenv("YOLO_OFFLINE", "1")
-    first = CliRunner().invoke(app, ["models", "prepare", "--rect", "384x640"])
+    first = CliRunner().invoke(app, ["models", "prepare"])
     assert first.exit_code == 0, first.output
     lines = [line.split("\t") for line in first.stdout.splitlines() if "\t" in line]
-    assert [(size, state) for size, state, _ in lines] == [("640x640", "exported"), ("384x640", "exported")]
-    assert all(path.startswith(str(tmp_path / "cache" / "models")) and path.endswith(f"_{size}.onnx")
-               for size, _, path in lines)
+    assert [(size, state) for size, state, _ in lines] == [("dynamic", "exported")]
+    path = lines[0][2]
+    assert path.startswith(str(tmp_path / "cache" / "models")) and path.endswith("_dynamic.onnx")
     assert "AutoUpdate" not in first.output and "pip install" not in first.output
-    again = CliRunner().invoke(app, ["models", "prepare", "--rect", ""])
-    assert again.exit_code == 0 and "640x640\tcached" in again.stdout and "384x640" not in again.stdout
+    from pedenv.pose.models import check_onnx_file
+
+    assert check_onnx_file(Path(path)) == (None, None)  # any input size runs without re-exporting
+    again = CliRunner().invoke(app, ["models", "prepare"])
+    assert again.exit_code == 0 and "dynamic\tcached" in again.stdout
 
 
 def test_detect_writes_json_and_images(tmp_path, use_pose_cache, photo):

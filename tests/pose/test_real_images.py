@@ -22,7 +22,7 @@ def onnx_square(pose_cache):
     from pedenv.pose.models import find_onnx_model
     from pedenv.pose.onnx_backend import OnnxPose
 
-    return OnnxPose(find_onnx_model(640, cache=pose_cache))
+    return OnnxPose(find_onnx_model(640, cache=pose_cache), input_size=640)  # one 640x640 pass
 
 
 @pytest.mark.parametrize("name, persons", PHOTOS.items())

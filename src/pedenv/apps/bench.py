@@ -108,3 +108,57 @@ def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
     rows.append({"stage": "end to end (onnx 384x640 + model)", "ms": float(np.mean(times[2:])),
                  "pedestrians": len(state.pedestrians), "paper_key": "total"})
     return rows
+
+
+def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2) -> list[dict]:
+    """``fast`` and ``far`` side by side: ms per 1600x900 frame and recall on the real samples.
+
+    The time is the mean over ``repeats`` runs on a 1600x900 nuScenes-like street frame
+    seen by a level camera 1.5 m high (the far band applies). Recall is measured on the
+    calibrated samples under ``samples_root`` (KITTI and nuScenes: 14 images, 44 people)
+    when given, else left out. Rows: ``mode``, ``ms``, ``passes``, ``recall``,
+    ``recall_40_80``, ``recall_80_up``.
+    """
+    from pedenv.apps.evaluate_detections import evaluate_detections
+    from pedenv.evaluation.detections import kitti_samples, nuscenes_samples
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.tiling import CameraGeometry
+    from pedenv.pose.timing import benchmark_image
+
+    image = benchmark_image()
+    geometry = CameraGeometry.level(Camera.from_fov().intrinsics, 1.5)
+    rows = []
+    for mode in ("fast", "far"):
+        pose = OnnxPose(detection=mode, threads=threads)
+        pose.detect(image, geometry)
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            pose.detect(image, geometry)
+            times.append(1e3 * (time.perf_counter() - start))
+        row = {"mode": mode, "ms": float(np.mean(times)), "passes": len(pose.plan(1600, 900, geometry)[0])}
+        if samples_root is not None:
+            from pathlib import Path
+
+            root = Path(samples_root)
+            picked = kitti_samples(root / "kitti") + nuscenes_samples(root / "nuscenes-0061")
+            report = evaluate_detections(root, backend=pose, threads=threads, samples=picked)
+            block = report["summary"]["all"]
+            goals = {b["bin"]: b["recall"] for b in block["by_goal_height"]}
+            row.update(recall=block["recall"], recall_40_80=goals["40-80"], recall_80_up=goals[">=80"])
+        rows.append(row)
+    return rows
+
+
+def format_detection_modes(rows: list[dict]):
+    """A rich table of :func:`bench_detection_modes` rows."""
+    from rich.table import Table
+
+    table = Table(title="detection modes: ms per 1600x900 frame (this CPU) and recall on the KITTI + nuScenes samples")
+    for col in ("mode", "passes", "ms / frame", "recall", "recall 40-80 px", "recall >= 80 px"):
+        table.add_column(col, justify="left" if col == "mode" else "right")
+    pct = lambda x: "-" if x is None else f"{100 * x:.0f} %"  # noqa: E731
+    for r in rows:
+        table.add_row(r["mode"], str(r["passes"]), f"{r['ms']:.0f}", pct(r.get("recall")), pct(r.get("recall_40_80")),
+                      pct(r.get("recall_80_up")))
+    return table

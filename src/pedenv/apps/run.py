@@ -21,7 +21,7 @@ from pedenv.visualize.overlay import draw_environment, write_image
 
 def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
-                  video_out: bool = False, progress=None) -> dict:
+                  video_out: bool = False, progress=None, detection: str | None = "far") -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
@@ -29,15 +29,17 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     ``overlay.mp4`` (``video_out``) with skeletons, track ids and distances, and
     ``birds_eye.png`` of the last frame. A bad frame stops the run with an InputError; what
     was computed before it stays on disk. ``progress(done, total)`` is called per frame.
-    ``pose_input_size`` (``onnx``): None picks 384x640 for wide cameras, else 640.
+    ``detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
+    ``fast`` (one pass fitted to the camera's aspect); None with ``pose_input_size`` None
+    picks 384x640 for wide cameras, else 640 (one pass).
     Returns the summary also saved as ``run.json``.
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
     rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
                          start_time=start_time)
-    if pose_backend == "onnx" and pose_input_size is None and pose_model is None:
+    if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
     out = Path(output)
     out.mkdir(parents=True, exist_ok=True)
     cfg.save(out / "config.json")

@@ -9,6 +9,7 @@ from pedenv.cli.app import app, main
 
 # Importing the modules registers their commands on ``app``.
 from pedenv.cli import core_commands  # noqa: E402,F401
+from pedenv.cli import detection_commands  # noqa: E402,F401
 from pedenv.cli import pose_commands  # noqa: E402,F401
 
 __all__ = ["app", "main"]

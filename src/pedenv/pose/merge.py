@@ -1,0 +1,106 @@
+"""Merge the detections of several passes (whole frame, tiles) with a skeleton-aware NMS.
+
+A person seen twice (in the whole-frame pass and a tile, or in two overlapping tiles) is
+one person if the two boxes overlap much (IoU) or one box lies mostly inside the other and
+their keypoints agree (object keypoint similarity, OKS). The keypoint test keeps two
+people standing one behind the other apart although their boxes nest. Detections cut by
+an inner tile edge rank after whole ones and are dropped when nested in a kept person
+(their keypoints, squeezed into the visible part, need not agree), so a person cut by a
+seam is kept from the tile or pass that holds them whole.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pedenv.records import Detections
+
+#: COCO keypoint sigmas (nose, eyes, ears, shoulders, elbows, wrists, hips, knees, ankles).
+COCO_SIGMAS = np.array([0.026, 0.025, 0.025, 0.035, 0.035, 0.079, 0.079, 0.072, 0.072, 0.062, 0.062,
+                        0.107, 0.107, 0.087, 0.087, 0.089, 0.089])
+
+
+@dataclass(frozen=True)
+class MergeConfig:
+    """Thresholds of the skeleton-aware NMS.
+
+    iou: two boxes with IoU above this are one person (0..1; default 0.5).
+    containment: a box whose area lies this fraction inside another's (0..1; 0.7) is the
+        same person when the keypoints also agree.
+    oks: keypoint similarity above which nested boxes are one person (0..1; 0.3).
+    keypoint_min_confidence: keypoints below this confidence are not compared (0..1; 0.3).
+    """
+
+    iou: float = 0.5
+    containment: float = 0.7
+    oks: float = 0.3
+    keypoint_min_confidence: float = 0.3
+
+    def __post_init__(self) -> None:
+        for name in ("iou", "containment", "oks", "keypoint_min_confidence"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
+                raise ValueError(f"MergeConfig.{name} must be in [0, 1], got {value!r}")
+
+
+def _iou_and_containment(box: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    iw = np.clip(np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0]), 0.0, None)
+    ih = np.clip(np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1]), 0.0, None)
+    inter = iw * ih
+    area = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
+    areas = np.maximum((boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]), 1e-9)
+    return inter / (area + areas - inter), inter / np.minimum(area, areas)
+
+
+def keypoint_similarity(kp: np.ndarray, conf: np.ndarray, kps: np.ndarray, confs: np.ndarray, box: np.ndarray,
+                        boxes: np.ndarray, min_conf: float) -> np.ndarray:
+    """OKS of one skeleton with M others over the keypoints both see.
+
+    kp: (17, 2) px, conf: (17,); kps: (M, 17, 2), confs: (M, 17); box/boxes: (4,)/(M, 4) px.
+    The scale is the smaller of the two boxes' areas. Returns (M,) in [0, 1]; 0 where
+    fewer than 3 keypoints are seen by both.
+    """
+    both = (conf[None] >= min_conf) & (confs >= min_conf)
+    area = np.minimum((box[2] - box[0]) * (box[3] - box[1]), (boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]))
+    d2 = ((kps - kp[None]) ** 2).sum(-1)
+    e = d2 / (2.0 * np.maximum(area, 1.0)[:, None] * (2 * COCO_SIGMAS[None]) ** 2)
+    n = both.sum(1)
+    sim = np.where(both, np.exp(-e), 0.0).sum(1) / np.maximum(n, 1)
+    return np.where(n >= 3, sim, 0.0)
+
+
+def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeConfig = MergeConfig(),
+                     max_detections: int = 300) -> Detections:
+    """One :class:`Detections` from several passes' detections, duplicates removed.
+
+    parts: ``(detections in image px, cut (N,) bool)`` per pass; ``cut`` marks persons touching
+    an inner tile edge. Whole persons come first, then by score; a person is dropped when
+    it duplicates one already kept (see the module doc).
+    """
+    parts = [(d, c) for d, c in parts if len(d)]
+    if not parts:
+        return Detections.empty()
+    kps = np.concatenate([d.keypoints for d, _ in parts])
+    confs = np.concatenate([d.confidences for d, _ in parts])
+    boxes = np.concatenate([d.boxes for d, _ in parts])
+    scores = np.concatenate([d.scores for d, _ in parts])
+    cut = np.concatenate([np.asarray(c, bool) for _, c in parts])
+    order = np.lexsort((-scores, cut))  # whole before cut, then best score first
+    keep: list[int] = []
+    for i in order:
+        if len(keep) >= max_detections:
+            break
+        if keep:
+            k = np.asarray(keep)
+            iou, contained = _iou_and_containment(boxes[i], boxes[k])
+            oks = keypoint_similarity(kps[i], confs[i], kps[k], confs[k], boxes[i], boxes[k],
+                                      config.keypoint_min_confidence)
+            # a cut person nested in a kept one is a fragment of them, whatever its keypoints say
+            duplicate = (iou > config.iou) | ((contained > config.containment) & ((oks > config.oks) | cut[i]))
+            if duplicate.any():
+                continue
+        keep.append(int(i))
+    keep_sorted = sorted(keep, key=lambda j: -scores[j])
+    return Detections(kps[keep_sorted], confs[keep_sorted], boxes[keep_sorted], scores[keep_sorted])

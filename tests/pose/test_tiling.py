@@ -1,0 +1,117 @@
+"""Detection passes: the config's checks, the far band from the camera geometry, the tile plan."""
+
+import math
+
+import numpy as np
+import pytest
+
+from pedenv.errors import InputError
+from pedenv.pose.tiling import (
+    CameraGeometry,
+    DetectionConfig,
+    far_band,
+    fit_input,
+    plan_passes,
+)
+
+NUSCENES_K = np.array([[1266.4, 0, 816.3], [0, 1266.4, 491.5], [0, 0, 1]])
+KITTI_K = np.array([[707.05, 0, 604.08], [0, 707.05, 180.51], [0, 0, 1]])
+
+
+@pytest.mark.parametrize("width, height, long_side, expected", [
+    (1600, 900, 640, (384, 640)), (1224, 370, 640, (224, 640)), (1242, 375, 768, (256, 768)),
+    (640, 480, 640, (480, 640)), (900, 1600, 640, (640, 384)), (100, 100, 640, (640, 640)),
+])
+def test_fit_input_follows_the_aspect(width, height, long_side, expected):
+    assert fit_input(width, height, long_side) == expected
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("mode", "slow", "mode must be one of fast, far"),
+    ("base_long_side", 650, "multiple of 32"),
+    ("base_long_side", 64, r"base_long_side must be an integer in \[160, 2048\]"),
+    ("tile_overlap", 0.6, r"tile_overlap must be a number in \[0.0, 0.5\]"),
+    ("band_upscale", 0.5, "band_upscale"),
+    ("near_m", 200.0, "near_m .* must be below far_m"),
+    ("max_tiles", 0, "max_tiles"),
+    ("top_m", True, "top_m"),
+])
+def test_config_fields_are_checked(field, value, message):
+    with pytest.raises(ValueError, match=message):
+        DetectionConfig(**{field: value})
+
+
+def test_band_of_a_level_nuscenes_camera_matches_the_ground_at_15_and_150_m():
+    geometry = CameraGeometry.level(NUSCENES_K, 1.5)
+    config = DetectionConfig(band_margin_px=0)
+    band = far_band(geometry, 1600, 900, config)
+    f, cy = 1266.4, 491.5
+    assert band.bottom == pytest.approx(cy + f * 1.5 / 15, abs=2)  # feet at 15 m
+    assert band.top == pytest.approx(cy - f * 0.7 / 15, abs=2)  # a 2.2 m top at 15 m
+    assert band.bottom - band.top < 200
+
+
+def test_pitch_down_moves_the_band_up_and_roll_widens_it():
+    config = DetectionConfig(band_margin_px=0)
+    level = far_band(CameraGeometry.level(NUSCENES_K, 1.5), 1600, 900, config)
+    pitched = far_band(CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(3)), 1600, 900, config)
+    rolled = far_band(CameraGeometry.level(NUSCENES_K, 1.5, roll_rad=math.radians(3)), 1600, 900, config)
+    shift = 1266.4 * math.tan(math.radians(3))
+    assert pitched.top == pytest.approx(level.top - shift, abs=6)
+    assert rolled.bottom - rolled.top > level.bottom - level.top + 30
+
+
+@pytest.mark.parametrize("geometry, config, why", [
+    (None, DetectionConfig(), "no calibration"),
+    (CameraGeometry.level(NUSCENES_K, 8.0, pitch_down_rad=math.radians(35)), DetectionConfig(), "looking down"),
+    (CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-60)), DetectionConfig(), "looking at the sky"),
+    (CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-25)), DetectionConfig(), "band below the image"),
+    (CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(40)), DetectionConfig(max_pitch_down_deg=60),
+     "band above the image"),
+    (CameraGeometry.level(NUSCENES_K, -1.0), DetectionConfig(), "camera below the ground"),
+])
+def test_no_band_falls_back_to_tiling_the_whole_image(geometry, config, why):
+    assert far_band(geometry, 1600, 900, config) is None, why
+    passes, note = plan_passes(1600, 900, config, geometry)
+    assert "whole image tiled" in note
+    tiles = passes[1:]
+    assert {p.kind for p in tiles} == {"tile"}
+    covered = np.zeros((900, 1600), bool)
+    for p in tiles:
+        x0, y0, x1, y1 = p.region
+        covered[y0:y1, x0:x1] = True
+    assert covered.all()
+
+
+def test_far_plan_on_kitti_tiles_the_band_at_twice_the_resolution():
+    passes, note = plan_passes(1224, 370, DetectionConfig(), CameraGeometry.level(KITTI_K, 1.65))
+    assert passes[0].kind == "full" and passes[0].input_size == (224, 640)
+    band = passes[1:]
+    assert all(p.kind == "band" for p in band) and "band rows" in note
+    assert band[0].region[0] == 0 and band[-1].region[2] == 1224  # the whole width
+    for a, b in zip(band, band[1:]):
+        overlap = a.region[2] - b.region[0]
+        assert overlap >= 0.25 * (a.region[2] - a.region[0]) - 1  # neighbours overlap
+    assert all(p.input_size[0] % 32 == 0 and p.input_size[1] % 32 == 0 for p in passes)
+    assert all(p.input_size[1] / (p.region[2] - p.region[0]) == pytest.approx(2.0, rel=0.02) for p in band)
+
+
+def test_fast_is_one_pass():
+    passes, note = plan_passes(1600, 900, DetectionConfig(mode="fast"), CameraGeometry.level(NUSCENES_K, 1.5))
+    assert len(passes) == 1 and passes[0].input_size == (384, 640) and note == "one pass"
+
+
+@pytest.mark.parametrize("width, height", [(100, 100), (8000, 6000), (20000, 40)])
+def test_tiny_and_huge_images_get_a_bounded_plan(width, height):
+    config = DetectionConfig()
+    passes, _ = plan_passes(width, height, config)
+    assert 1 <= len(passes) <= config.max_tiles + 1
+    for p in passes:
+        x0, y0, x1, y1 = p.region
+        assert 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height
+        assert p.input_size[0] <= 2048 and p.input_size[1] <= 2048
+
+
+def test_an_image_smaller_than_8_px_is_an_input_error():
+    with pytest.raises(InputError, match="4x100 px is too small"):
+        plan_passes(4, 100, DetectionConfig())
