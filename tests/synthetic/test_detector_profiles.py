@@ -13,7 +13,8 @@ from pedenv.synthetic.detector import PROFILES, DetectorModel
 from pedenv.synthetic.detector_fit import BINS, fit_detection_curve, logistic, recall_by_bin, synthetic_recall
 
 RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"
-FITTED = {name: RESULTS / f"detector_{name}.json" for name in ("yolo11n-pose-single", "yolo11n-pose-native")}
+FITTED = {name: RESULTS / f"detector_{name}.json" for name in ("yolo11n-pose-single", "yolo11n-pose-fast",
+                                                                 "yolo11n-pose-far", "yolo11n-pose-native")}
 
 
 def measured(profile: str) -> dict:
