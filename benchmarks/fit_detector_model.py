@@ -36,8 +36,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_detections import DEFAULT_SAMPLES  # noqa: E402
 
 from pedenv.io.real import kitti, mot17, nuscenes_cameras  # noqa: E402
-from pedenv.synthetic.detector_fit import (BINS, bin_index, fit_detection_curve, fit_noise_law,  # noqa: E402
-                                           greedy_match, iou_matrix)
+from pedenv.synthetic.detector_fit import BINS, bin_index, fit_detection_curve, fit_noise_law, greedy_match, iou_matrix  # noqa: E402
 
 SCORE = 0.25
 SPAN_SCORE = 0.1  # skeleton geometry (spans) is measured on every person scoring above this
@@ -82,7 +81,8 @@ class Tables:
 
     def __init__(self) -> None:
         self.recall: list[tuple[str, float, bool]] = []  # dataset, gt height px, detected
-        self.span: list[tuple[str, float, float, float, float]] = []  # dataset, box h, span, true-height px, m (NaN), extent
+        # dataset, box h, span, true height px, true height m (NaN where unknown), extent
+        self.span: list[tuple[str, float, float, float, float, float]] = []
         self.conf: list[tuple[float, float, float]] = []  # box h, score, mean kp conf
         self.jitter: list[tuple[float, float]] = []  # height px, one-keypoint noise px
         self.fp: dict[str, list[int]] = {}
@@ -100,7 +100,8 @@ class Tables:
         for g in np.flatnonzero(counted):
             self.recall.append((dataset, float(h[g]), g in match))
             if g in match:
-                self.conf.append((float(h[g]), float(det["scores"][match[g]]), float(det["confidences"][match[g]].mean())))
+                d = match[g]
+                self.conf.append((float(h[g]), float(det["scores"][d]), float(det["confidences"][d].mean())))
         for g in np.flatnonzero(counted):
             if g in low_match:  # the skeleton's geometry, from every person the network finds at all
                 d = low_match[g]
@@ -144,7 +145,10 @@ def measure(samples: Path, dets: dict) -> Tables:
                     shift = (box[:2] + box[2:]) / 2 - (box0[:2] + box0[2:]) / 2
                     d = (kp[STEADY] - kp0[STEADY] - shift)[ok]
                     d = d - np.median(d, axis=0)  # the person's own sway and the box's annotation offset
-                    t.jitter.append((float(box[3] - box[1]), float(1.4826 * np.median(np.abs(d)) / np.sqrt(2) * np.sqrt(ok.sum() / max(ok.sum() - 1, 1)))))
+                    # robust std of one keypoint's noise: the difference of two frames holds it twice
+                    n = ok.sum()
+                    noise = 1.4826 * np.median(np.abs(d)) / np.sqrt(2) * np.sqrt(n / max(n - 1, 1))
+                    t.jitter.append((float(box[3] - box[1]), float(noise)))
             prev = now
     training = samples / "kitti" / "tracking_mini" / "training"
     for name in kitti.tracking_sequence_names(training):
@@ -155,7 +159,7 @@ def measure(samples: Path, dets: dict) -> Tables:
             z = ped.locations[:, 2]
             true_px = seq.calib.P2[0, 0] * ped.dimensions[:, 0] / z
             t.frame("kitti", dets[f"kitti/{name}/{f}"], ped.boxes, ped.occluded <= 1,
-                    np.concatenate([lab.of_type("DontCare", "Cyclist", "Person_sitting").boxes, np.zeros((0, 4))]), true_px,
+                    lab.of_type("DontCare", "Cyclist", "Person_sitting").boxes, true_px,
                     true_m=ped.dimensions[:, 0])
     obj = samples / "kitti" / "object_samples" / "training"
     for p in sorted((obj / "image_2").glob("*.png")):

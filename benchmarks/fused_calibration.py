@@ -11,7 +11,8 @@ the same detections.
 Synthetic scenes (rolling terrain, seed 0): ``compare_methods`` paper vs fused with the
 detector model of ``--profile``: relative error of both, and the fused coverage and NEES.
 
-    PYTHONPATH=src python benchmarks/fused_calibration.py --detections /work/cache-h7/det-native-3d.npz
+    PYTHONPATH=src python benchmarks/fused_calibration.py --detections /work/cache-h7/det-far.npz \
+        --profile yolo11n-pose-far
 """
 
 from __future__ import annotations
@@ -64,7 +65,8 @@ def real_frames(samples: Path) -> list[tuple[str, Frame, np.ndarray, np.ndarray]
         ego = EgoPose(cam.ego_to_global[:3, 3], cam.ego_to_global[:3, :3])
         frame = Frame(0, cam.timestamp_us * 1e-6, Camera(cam.K, cam.width, cam.height, cam.cam_to_ego), ego,
                       scene=f"nuscenes/{cam.camera}")
-        out.append((f"nuscenes/{cam.camera}", frame, cam.pedestrians.boxes, cam.pedestrians.ground_points_global[:, :2]))
+        ped = cam.pedestrians
+        out.append((f"nuscenes/{cam.camera}", frame, ped.boxes, ped.ground_points_global[:, :2]))
     return out
 
 
@@ -103,7 +105,8 @@ def real_errors(samples: Path, detections: Path, config: Config) -> dict:
             err = xy[d_idx] - gt_xy[g_idx]
             dist = np.linalg.norm(gt_xy[g_idx] - origin, axis=1)
             c = cov[d_idx]
-            maha = np.sqrt(np.einsum("ni,nij,nj->n", err, np.linalg.inv(c), err)) if method == "fused" else np.full(len(err), np.nan)
+            maha = (np.sqrt(np.einsum("ni,nij,nj->n", err, np.linalg.inv(c), err)) if method == "fused"
+                    else np.full(len(err), np.nan))
             bearing = (gt_xy[g_idx] - origin) / dist[:, None]
             along = (err * bearing).sum(1)
             across = err[:, 0] * -bearing[:, 1] + err[:, 1] * bearing[:, 0]

@@ -62,7 +62,8 @@ def sample_images(samples: Path) -> list[tuple[str, Path, object]]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--out", type=Path, required=True, help="the .npz cache to write (keep it out of the repository)")
+    parser.add_argument("--out", type=Path, required=True,
+                        help="the .npz cache to write (keep it out of the repository)")
     parser.add_argument("--mode", choices=["single", "native", "fast", "far"], default="single")
     parser.add_argument("--model", type=Path, default=None,
                         help="ONNX model; mode native needs one with a dynamic input (ultralytics export dynamic=True)")

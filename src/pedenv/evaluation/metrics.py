@@ -71,8 +71,8 @@ def calibration(mahalanobis: np.ndarray) -> dict:
     m = mahalanobis[np.isfinite(mahalanobis)]
     if len(m) == 0:
         return {"within_1sigma": float("nan"), "within_2sigma": float("nan"), "mean_nees": float("nan")}
-    return {"within_1sigma": float(np.mean(m <= SIGMA_LEVELS[0])), "within_2sigma": float(np.mean(m <= SIGMA_LEVELS[1])),
-            "mean_nees": float(np.mean(m**2))}
+    return {"within_1sigma": float(np.mean(m <= SIGMA_LEVELS[0])),
+            "within_2sigma": float(np.mean(m <= SIGMA_LEVELS[1])), "mean_nees": float(np.mean(m**2))}
 
 
 #: The mean NEES of a calibrated 2D position estimate (the dimension).

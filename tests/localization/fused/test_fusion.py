@@ -96,6 +96,7 @@ def test_bearing_floor_keeps_the_sharpest_cues_sideways_variance():
     total = lambda f: f.covariances[0] + f.bias_covariances[0]  # noqa: E731
     assert total(independent)[1, 1] < 0.03
     assert total(floored)[1, 1] == pytest.approx(0.04)
-    assert floored.covariances[0, 1, 1] == pytest.approx(0.03) and floored.bias_covariances[0, 1, 1] == pytest.approx(0.01)
+    assert floored.covariances[0, 1, 1] == pytest.approx(0.03)
+    assert floored.bias_covariances[0, 1, 1] == pytest.approx(0.01)
     np.testing.assert_allclose(total(floored)[0, 0], total(independent)[0, 0])  # along the ray: independent cues
     np.testing.assert_allclose(floored.positions, independent.positions)
