@@ -24,4 +24,6 @@ def test_error_by_distance_bins_and_calibration():
     assert rows == [{"distance_m": 1.0, "abs_error_m": 2.0, "rel_error_pct": 15.0, "count": 2},
                     {"distance_m": 5.0, "abs_error_m": 2.0, "rel_error_pct": 5.0, "count": 1}]
     c = calibration(np.array([0.5, 1.5, 2.5, 0.9]))
-    assert c == {"within_1sigma": 0.5, "within_2sigma": 0.75}
+    assert c == pytest.approx({"within_1sigma": 0.5, "within_2sigma": 0.75,
+                               "mean_nees": (0.25 + 2.25 + 6.25 + 0.81) / 4})
+    assert np.isnan(calibration(np.array([np.nan]))["mean_nees"])

@@ -60,11 +60,23 @@ def error_by_distance(distance: np.ndarray, abs_err: np.ndarray, rel_err: np.nda
 
 
 def calibration(mahalanobis: np.ndarray) -> dict:
-    """Share of errors inside the 1- and 2-sigma ellipses (ideal 0.393 and 0.865)."""
+    """How well the reported covariances describe the errors, from the errors' Mahalanobis
+    distances (N,) (NaN: no covariance).
+
+    within_1sigma, within_2sigma: share of errors inside the 1- and 2-sigma ellipses (ideal
+    0.393 and 0.865). mean_nees: mean normalized estimation error squared, the mean squared
+    Mahalanobis distance (ideal 2, the dimension, for 2D positions; above 2 the covariances
+    are too small, below too large); it weighs the tail, which the coverages do not.
+    """
     m = mahalanobis[np.isfinite(mahalanobis)]
     if len(m) == 0:
-        return {"within_1sigma": float("nan"), "within_2sigma": float("nan")}
-    return {"within_1sigma": float(np.mean(m <= SIGMA_LEVELS[0])), "within_2sigma": float(np.mean(m <= SIGMA_LEVELS[1]))}
+        return {"within_1sigma": float("nan"), "within_2sigma": float("nan"), "mean_nees": float("nan")}
+    return {"within_1sigma": float(np.mean(m <= SIGMA_LEVELS[0])),
+            "within_2sigma": float(np.mean(m <= SIGMA_LEVELS[1])), "mean_nees": float(np.mean(m**2))}
+
+
+#: The mean NEES of a calibrated 2D position estimate (the dimension).
+NEES_IDEAL_2D = 2.0
 
 
 @dataclass(frozen=True)

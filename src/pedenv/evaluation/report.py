@@ -34,7 +34,8 @@ def summary_lines(metrics: Metrics) -> list[str]:
     c = metrics.calibration
     if c.get("within_1sigma") == c.get("within_1sigma"):
         lines.append(f"uncertainty: {100 * c['within_1sigma']:.1f} % of errors within 1 sigma (ideal 39.3), "
-                     f"{100 * c['within_2sigma']:.1f} % within 2 sigma (ideal 86.5)")
+                     f"{100 * c['within_2sigma']:.1f} % within 2 sigma (ideal 86.5), "
+                     f"mean NEES {c.get('mean_nees', float('nan')):.2f} (ideal 2)")
     tm = metrics.timing_ms
     lines.append(f"runtime: tracking {tm['tracking_per_frame']:.3f} ms/frame (paper 0.35), "
                  f"position {tm['position_per_pedestrian']:.3f} ms/pedestrian (paper 0.29)")

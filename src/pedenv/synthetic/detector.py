@@ -13,6 +13,9 @@ The model imitates a YOLO-pose style network from each frame's exact skeletons:
   image border and on wrists and ankles, and low for unseen keypoints;
 * a few small skeleton-shaped false positives appear (``false_positives_per_frame``).
 
+The numbers come from a named profile (:mod:`pedenv.synthetic.detector_profiles`): the
+hand-set ``default``, or values fitted to a real network on real images.
+
 Random numbers depend only on ``(seed, scene name, frame index)``: reruns reproduce.
 """
 
@@ -26,7 +29,10 @@ from pedenv.config import _check_range
 from pedenv.errors import InputError
 from pedenv.records import Detections, Frame, boxes_from_keypoints
 from pedenv.skeleton import CocoKeypoint as K
+from pedenv.synthetic.detector_profiles import DEFAULT_PROFILE, PROFILES, profile_parameters
 from pedenv.synthetic.walker import body_keypoints
+
+__all__ = ["DEFAULT_PROFILE", "PROFILES", "DetectorModel"]
 
 _EXTREMITIES = np.array([K.LEFT_WRIST, K.RIGHT_WRIST, K.LEFT_ANKLE, K.RIGHT_ANKLE])
 _FACE = np.array([K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR])
@@ -41,6 +47,9 @@ class DetectorModel:
     """The ``detector-model`` pose backend: detections simulated from ground-truth skeletons.
 
     seed: random seed (with the scene name and frame index it fixes every draw).
+    profile: a named set of the values below (:data:`PROFILES`): ``default`` (the hand-set
+        model), or one fitted to a real network, e.g. ``yolo11n-pose-single``. A value given
+        explicitly overrides the profile's.
     noise_px_large: keypoint noise standard deviation (px) for a 300 px tall person.
     noise_px_small: the same for a 30 px tall person. Raising either makes every
         position estimate noisier; the noise follows a power law in between and beyond.
@@ -59,23 +68,32 @@ class DetectorModel:
 
     name = "detector-model"
 
-    def __init__(self, seed: int = 0, *, noise_px_large: float = 1.5, noise_px_small: float = 3.5,
-                 extremity_noise_factor: float = 1.3, unseen_noise_factor: float = 3.0,
-                 half_detection_height_px: float = 25.0, detection_slope_px: float = 14.0,
-                 false_positives_per_frame: float = 0.05, box_noise_fraction: float = 0.03,
-                 box_min_confidence: float = 0.3) -> None:
+    def __init__(self, seed: int = 0, *, profile: str | None = None, noise_px_large: float | None = None,
+                 noise_px_small: float | None = None, extremity_noise_factor: float | None = None,
+                 unseen_noise_factor: float | None = None, half_detection_height_px: float | None = None,
+                 detection_slope_px: float | None = None, false_positives_per_frame: float | None = None,
+                 box_noise_fraction: float | None = None, box_min_confidence: float | None = None) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise InputError(f"DetectorModel seed must be an integer, got {seed!r}")
         self.seed = int(seed)
-        self.noise_px_large = _check("noise_px_large", noise_px_large, 0.0, 50.0)
-        self.noise_px_small = _check("noise_px_small", noise_px_small, 0.0, 50.0)
-        self.extremity_noise_factor = _check("extremity_noise_factor", extremity_noise_factor, 1.0, 10.0)
-        self.unseen_noise_factor = _check("unseen_noise_factor", unseen_noise_factor, 1.0, 20.0)
-        self.half_detection_height_px = _check("half_detection_height_px", half_detection_height_px, 0.0, 1000.0)
-        self.detection_slope_px = _check("detection_slope_px", detection_slope_px, 0.1, 500.0)
-        self.false_positives_per_frame = _check("false_positives_per_frame", false_positives_per_frame, 0.0, 20.0)
-        self.box_min_confidence = _check("box_min_confidence", box_min_confidence, 0.0, 1.0)
-        self.box_noise_fraction = _check("box_noise_fraction", box_noise_fraction, 0.0, 1.0)
+        self.profile = profile or DEFAULT_PROFILE
+        given = {"noise_px_large": noise_px_large, "noise_px_small": noise_px_small,
+                 "extremity_noise_factor": extremity_noise_factor, "unseen_noise_factor": unseen_noise_factor,
+                 "half_detection_height_px": half_detection_height_px, "detection_slope_px": detection_slope_px,
+                 "false_positives_per_frame": false_positives_per_frame, "box_noise_fraction": box_noise_fraction,
+                 "box_min_confidence": box_min_confidence}
+        values = {**profile_parameters(self.profile), **{k: v for k, v in given.items() if v is not None}}
+        self.noise_px_large = _check("noise_px_large", values["noise_px_large"], 0.0, 50.0)
+        self.noise_px_small = _check("noise_px_small", values["noise_px_small"], 0.0, 50.0)
+        self.extremity_noise_factor = _check("extremity_noise_factor", values["extremity_noise_factor"], 1.0, 10.0)
+        self.unseen_noise_factor = _check("unseen_noise_factor", values["unseen_noise_factor"], 1.0, 20.0)
+        self.half_detection_height_px = _check("half_detection_height_px", values["half_detection_height_px"],
+                                               0.0, 1000.0)
+        self.detection_slope_px = _check("detection_slope_px", values["detection_slope_px"], 0.1, 500.0)
+        self.false_positives_per_frame = _check("false_positives_per_frame", values["false_positives_per_frame"],
+                                                0.0, 20.0)
+        self.box_min_confidence = _check("box_min_confidence", values["box_min_confidence"], 0.0, 1.0)
+        self.box_noise_fraction = _check("box_noise_fraction", values["box_noise_fraction"], 0.0, 1.0)
 
     def noise_std_px(self, height_px: np.ndarray) -> np.ndarray:
         """Keypoint noise standard deviation (px) of persons ``height_px`` (N,) pixels tall."""

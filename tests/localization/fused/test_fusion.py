@@ -84,3 +84,19 @@ def test_sources_name_used_cues_then_why_not_the_others():
     fused = fuse_cues(cues, 0.999)
     assert describe_sources(cues, fused, {}, np.array([False]))[0] == "height;ground:no-keypoints"
     assert describe_sources(cues, fused, {}, np.array([True]))[0] == "boxheight;ground:no-keypoints"
+
+
+def test_bearing_floor_keeps_the_sharpest_cues_sideways_variance():
+    # two cues 10 m ahead (camera at the origin, ray along x): sideways (y) variances 0.04 and
+    # 0.09 m^2 share the person's bearing error, so the fusion keeps 0.04, not 0.028
+    a = cue("height", [10.0, 0.0], [[1.0, 0.0], [0.0, 0.03]], bias=np.diag([0.5, 0.01]))
+    b = cue("ground", [10.2, 0.0], [[0.5, 0.0], [0.0, 0.09]])
+    independent = fuse_cues([a, b], 0.999)
+    floored = fuse_cues([a, b], 0.999, origin=np.zeros(2))
+    total = lambda f: f.covariances[0] + f.bias_covariances[0]  # noqa: E731
+    assert total(independent)[1, 1] < 0.03
+    assert total(floored)[1, 1] == pytest.approx(0.04)
+    assert floored.covariances[0, 1, 1] == pytest.approx(0.03)
+    assert floored.bias_covariances[0, 1, 1] == pytest.approx(0.01)
+    np.testing.assert_allclose(total(floored)[0, 0], total(independent)[0, 0])  # along the ray: independent cues
+    np.testing.assert_allclose(floored.positions, independent.positions)

@@ -29,8 +29,18 @@ def test_height_cue_scales_with_the_true_height_and_its_variance_holds_the_heigh
     sd_along = np.sqrt(cue.covariances[0, 0, 0] + cue.bias_covariances[0, 0, 0])
     assert sd_along > r * 0.09 / 1.72  # at least the spread of human heights
     assert sd_along < r * 0.08
-    # the spread of heights repeats for the person: it is the per-person part, all of it
-    assert np.sqrt(cue.bias_covariances[0, 0, 0]) == pytest.approx(r * 0.09 / 1.72, rel=1e-6)
+    # the spread of heights and of the keypoint span (posture) repeat for the person: they
+    # are the per-person part, all of it
+    per_person = np.hypot(0.09 / 1.72, FusedConfig().keypoint_span_std)
+    assert np.sqrt(cue.bias_covariances[0, 0, 0]) == pytest.approx(r * per_person, rel=1e-6)
+
+
+def test_a_shorter_keypoint_span_brings_the_height_cue_nearer():
+    ground = np.array([[20.0, 0.0, 0.0]])
+    exact = np.linalg.norm(run_height(make_frame(ground)).positions[0])
+    config = FusedConfig(keypoint_span_scale=0.9)
+    short = np.linalg.norm(run_height(make_frame(ground), config).positions[0])
+    assert short == pytest.approx(0.9 * exact, rel=0.03)
 
 
 def test_height_cue_without_ankles_uses_head_shoulders_and_hips():

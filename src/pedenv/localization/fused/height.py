@@ -38,6 +38,8 @@ KEYPOINT_HEIGHT_FRACTION = np.where(np.isfinite(KEYPOINT_FRACTION_STD), STANDING
 #: Spread of a lone ankle's fraction: with the other ankle unseen it may be the swing
 #: foot, lifted up to ~0.15 (of two seen ankles only the lower, the stance foot, is used).
 LONE_ANKLE_FRACTION_STD = 0.025
+#: The ankles' share of body height (where the table's span starts).
+ANKLE_FRACTION = float(KEYPOINT_HEIGHT_FRACTION[K.LEFT_ANKLE])
 #: Keypoints the height cue can use.
 HEIGHT_KEYPOINTS = np.flatnonzero(np.isfinite(KEYPOINT_HEIGHT_FRACTION))
 #: Columns of :data:`HEIGHT_KEYPOINTS` that are the ankles (left, right), and a mask of them.
@@ -114,14 +116,17 @@ def height_cue(skeletons: FrameSkeletons, focal_px: float, config: FusedConfig,
         return CueEstimate.declined(NAME, first_reason([(levels < 2, "no-keypoints"), (~enough, "short-extent")], n))
     frac_std = np.where(IS_ANKLE[None] & skeletons.lone[:, None], LONE_ANKLE_FRACTION_STD, KEYPOINT_FRACTION_STD[idx])
     used &= enough[:, None]
-    r, var_pix, var_frac = solve_range(skeletons.tangents[:, idx], np.broadcast_to(frac, used.shape), frac_std,
+    # the pose source's span is keypoint_span_scale of the table's: shrink the fractions about
+    # the ankle so that a skeleton of that span reads the right body height
+    scaled = ANKLE_FRACTION + config.keypoint_span_scale * (frac - ANKLE_FRACTION)
+    r, var_pix, var_frac = solve_range(skeletons.tangents[:, idx], np.broadcast_to(scaled, used.shape), frac_std,
                                        used, hm, skeletons.noise)
     good = enough & np.isfinite(r) & (r > MIN_RANGE_M) & np.isfinite(var_pix + var_frac)  # NaN compares False
     reasons = first_reason([(levels < 2, "no-keypoints"), (~enough, "short-extent"), (~good, "inconsistent")], n)
     r = np.where(good, r, 1.0)
     r2 = r**2
     frame_rel = np.where(good, (var_pix + var_frac) / r2, 1.0)
-    bias_rel = (hs / hm) ** 2
+    bias_rel = (hs / hm) ** 2 + config.keypoint_span_std**2  # height spread and posture, per person
     scale = r if reference_range is None else np.where(np.isfinite(reference_range), reference_range, r)
     mean_ray = np.where(used[..., None], skeletons.rays[:, idx], 0.0).sum(axis=1)
     bearing = horizontal_bearing(mean_ray)

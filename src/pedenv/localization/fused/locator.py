@@ -132,7 +132,7 @@ class FusedLocator:
         h.push(rows, rays, terms, dots, usable, origin, frame.timestamp)
         if "triangulation" in cfg.cues:
             cues.append(triangulation_cue(tri, skel, cfg))
-        fused = fuse_cues(cues, cfg.gate_probability)
+        fused = fuse_cues(cues, cfg.gate_probability, origin[:2])
         sources = describe_sources(cues, fused, self._sources, ~fused.valid)
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances

@@ -1,0 +1,164 @@
+"""How well the fused method's covariances describe its errors: real samples and synthetic scenes.
+
+Real samples with 3D ground truth (KITTI tracking 0016 frames 2/7/12, KITTI object 000000,
+the five nuScenes cameras): the network's cached detections (``benchmarks/real_detections.py``)
+scoring above 0.25 that match a ground-truth box (IoU >= 0.5) are placed by the fused method
+frame by frame (no track history: ground and height cues), and the errors in the ground plane
+are compared with the reported covariance (frame-to-frame plus per-person part): 1- and
+2-sigma coverage and mean NEES (ideal 0.393, 0.865 and 2). The paper's method is placed on
+the same detections.
+
+Synthetic scenes (rolling terrain, seed 0): ``compare_methods`` paper vs fused with the
+detector model of ``--profile``: relative error of both, and the fused coverage and NEES.
+
+    PYTHONPATH=src python benchmarks/fused_calibration.py --detections /work/cache-h7/det-far.npz \
+        --profile yolo11n-pose-far
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from real_detections import DEFAULT_SAMPLES  # noqa: E402
+
+from pedenv.config import Config  # noqa: E402
+from pedenv.evaluation.metrics import calibration  # noqa: E402
+from pedenv.io.real import kitti, nuscenes_cameras  # noqa: E402
+from pedenv.localization import configure, create_locator  # noqa: E402
+from pedenv.localization.base import FrameGeometry  # noqa: E402
+from pedenv.records import Camera, Detections, EgoPose, Frame, default_cam_to_vehicle  # noqa: E402
+from pedenv.synthetic.detector_fit import greedy_match, iou_matrix  # noqa: E402
+
+SCORE = 0.25
+#: KITTI's cameras sit about this high above the road (KITTI sensor setup).
+KITTI_CAMERA_HEIGHT_M = 1.65
+
+
+def real_frames(samples: Path) -> list[tuple[str, Frame, np.ndarray, np.ndarray]]:
+    """(key, frame without detections, GT boxes (M, 4) px, GT ground points (M, 2) world x-y m)."""
+    out = []
+
+    def kitti_frame(key, calib, labels, image_size, index):
+        ped = labels.of_type("Pedestrian")
+        k = calib.K
+        cam = Camera(k, *image_size, default_cam_to_vehicle(KITTI_CAMERA_HEIGHT_M))
+        # vehicle frame (x forward, y left, z up) with cam2 at (0, 0, height); labels are in rectified cam0
+        rel = ped.locations - calib.cam2_position
+        ground = np.column_stack([rel[:, 2], -rel[:, 0]])
+        frame = Frame(index, 0.1 * index, cam, EgoPose(np.zeros(3), np.eye(3)), scene=key)
+        out.append((key, frame, ped.boxes, ground))
+
+    training = samples / "kitti" / "tracking_mini" / "training"
+    seq = kitti.read_tracking_sequence(training, "0016")
+    for f in seq.frames:
+        kitti_frame(f"kitti/0016/{f}", seq.calib, seq.labels.in_frame(f), (1224, 370), f)
+    obj = samples / "kitti" / "object_samples" / "training"
+    kitti_frame("kitti-object/000000", kitti.read_calib(obj / "calib" / "000000.txt"),
+                kitti.read_labels(obj / "label_2" / "000000.txt"), (1224, 370), 0)
+    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
+        ego = EgoPose(cam.ego_to_global[:3, 3], cam.ego_to_global[:3, :3])
+        frame = Frame(0, cam.timestamp_us * 1e-6, Camera(cam.K, cam.width, cam.height, cam.cam_to_ego), ego,
+                      scene=f"nuscenes/{cam.camera}")
+        ped = cam.pedestrians
+        out.append((f"nuscenes/{cam.camera}", frame, ped.boxes, ped.ground_points_global[:, :2]))
+    return out
+
+
+def place(method: str, frame: Frame, config: Config):
+    """Positions (N, 2) and reported covariances (N, 2, 2) of the frame's detections by ``method``."""
+    cfg = configure(config, method)
+    locator = create_locator(cfg)
+    geo = FrameGeometry.of(frame)
+    n = len(frame.detections)
+    if getattr(locator, "columns", None) is not None:
+        locator.columns.carry(np.full(n, -1))  # a new track row for every detection
+    m = locator.locate(geo, np.arange(n))
+    cov = m.covariances + (m.bias_covariances if m.bias_covariances is not None else 0.0)
+    return m.positions[:, :2], cov, m.sources
+
+
+def real_errors(samples: Path, detections: Path, config: Config) -> dict:
+    data = np.load(detections)
+    rows = {"paper": [], "fused": []}
+    for key, frame, gt_boxes, gt_xy in real_frames(samples):
+        if f"{key}|scores" not in data.files:
+            continue
+        keep = data[f"{key}|scores"] > SCORE
+        det = Detections(data[f"{key}|keypoints"][keep].astype(float), data[f"{key}|confidences"][keep].astype(float),
+                         data[f"{key}|boxes"][keep].astype(float), data[f"{key}|scores"][keep].astype(float))
+        if len(det) == 0:
+            continue
+        pairs = greedy_match(iou_matrix(det.boxes, gt_boxes), det.scores, 0.5)
+        if not pairs:
+            continue
+        frame = Frame(frame.index, frame.timestamp, frame.camera, frame.ego, detections=det, scene=frame.scene)
+        origin = frame.cam_to_world[:2, 3]
+        d_idx, g_idx = np.array(pairs).T
+        for method in rows:
+            xy, cov, sources = place(method, frame, config)
+            err = xy[d_idx] - gt_xy[g_idx]
+            dist = np.linalg.norm(gt_xy[g_idx] - origin, axis=1)
+            c = cov[d_idx]
+            maha = (np.sqrt(np.einsum("ni,nij,nj->n", err, np.linalg.inv(c), err)) if method == "fused"
+                    else np.full(len(err), np.nan))
+            bearing = (gt_xy[g_idx] - origin) / dist[:, None]
+            along = (err * bearing).sum(1)
+            across = err[:, 0] * -bearing[:, 1] + err[:, 1] * bearing[:, 0]
+            sig_across = np.sqrt(np.einsum("ni,nij,nj->n", np.c_[-bearing[:, 1], bearing[:, 0]], c,
+                                           np.c_[-bearing[:, 1], bearing[:, 0]]))
+            for i in range(len(err)):
+                rows[method].append({"key": key, "distance_m": float(dist[i]), "along_m": float(along[i]),
+                                     "across_m": float(across[i]), "sigma_across_m": float(sig_across[i]),
+                                     "rel_error_pct": float(100 * np.linalg.norm(err[i]) / dist[i]),
+                                     "mahalanobis": float(maha[i]), "source": str(sources[d_idx[i]])})
+    out = {}
+    for method, r in rows.items():
+        maha = np.array([x["mahalanobis"] for x in r])
+        out[method] = {"count": len(r), "rel_error_pct": float(np.mean([x["rel_error_pct"] for x in r])),
+                       "mean_along_m": float(np.mean([x["along_m"] for x in r])),
+                       **(calibration(maha) if method == "fused" else {}), "persons": r}
+    return out
+
+
+def synthetic(profile: str, scenes: list[str] | None, config: Config, duration_s: float) -> dict:
+    from pedenv.apps.compare import compare_methods
+    from pedenv.io.datasets.memory import MemoryDataset
+    from pedenv.synthetic import generate_scenes
+
+    data = MemoryDataset(generate_scenes(0, scenes, terrain=True, duration_s=duration_s), name="terrain-seed0")
+    results = compare_methods(data, pose_backend=f"detector-model:{profile}", config=config)
+    return {m: {"count": r.metrics.overall.count, "rel_error_pct": r.metrics.overall.rel_error_pct,
+                **r.metrics.calibration} for m, r in results.items()}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--detections", type=Path, help="network detections cached by real_detections.py")
+    parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
+    parser.add_argument("--profile", default=None, help="detector-model profile for the synthetic scenes")
+    parser.add_argument("--scenes", default="", help="comma-separated synthetic scene names (default: all)")
+    parser.add_argument("--duration", type=float, default=8.0, help="seconds of each synthetic scene")
+    parser.add_argument("--persons", action="store_true", help="print every real person's row")
+    args = parser.parse_args(argv)
+    config = Config()
+    result = {}
+    if args.detections:
+        result["real"] = real_errors(args.samples, args.detections, config)
+        if not args.persons:
+            for m in result["real"].values():
+                m.pop("persons")
+    if args.profile:
+        result["synthetic"] = synthetic(args.profile, [s for s in args.scenes.split(",") if s] or None, config,
+                                        args.duration)
+    print(json.dumps(result, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,121 @@
+"""Fitting the detector model to a real network: matching, height bins and the two fits.
+
+Shared by ``benchmarks/fit_detector_model.py`` (which measures the network on real images)
+and the tests that check a fitted profile reproduces those measurements.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import minimize
+
+#: Person height bins (pixels, ground-truth box height): [low, high).
+BINS: tuple[tuple[float, float], ...] = ((0.0, 50.0), (50.0, 100.0), (100.0, 200.0), (200.0, float("inf")))
+
+
+def bin_index(heights_px: np.ndarray) -> np.ndarray:
+    """(N,) int: the :data:`BINS` entry of each height (N,) pixels."""
+    edges = np.array([b[1] for b in BINS[:-1]])
+    return np.searchsorted(edges, np.asarray(heights_px, float), side="right")
+
+
+def iou_matrix(a: np.ndarray, b: np.ndarray, over_first: bool = False) -> np.ndarray:
+    """(N, M) IoU of boxes a (N, 4) and b (M, 4) ``[u_min, v_min, u_max, v_max]`` pixels.
+
+    over_first: intersection over the area of ``a`` instead (how much of ``a`` lies in ``b``).
+    """
+    a, b = np.asarray(a, float).reshape(-1, 4), np.asarray(b, float).reshape(-1, 4)
+    w = np.clip(np.minimum(a[:, None, 2], b[None, :, 2]) - np.maximum(a[:, None, 0], b[None, :, 0]), 0, None)
+    h = np.clip(np.minimum(a[:, None, 3], b[None, :, 3]) - np.maximum(a[:, None, 1], b[None, :, 1]), 0, None)
+    inter = w * h
+    area_a = (a[:, 2] - a[:, 0]) * (a[:, 3] - a[:, 1])
+    area_b = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
+    denom = area_a[:, None] if over_first else area_a[:, None] + area_b[None, :] - inter
+    return inter / np.maximum(denom, 1e-9)
+
+
+def greedy_match(iou: np.ndarray, scores: np.ndarray, threshold: float = 0.5) -> list[tuple[int, int]]:
+    """(detection, ground truth) pairs: detections by falling score take their best free box
+    with IoU >= ``threshold``. iou: (N, M); scores: (N,)."""
+    pairs, taken = [], np.zeros(iou.shape[1], bool)
+    for d in np.argsort(-np.asarray(scores), kind="stable"):
+        if iou.shape[1] == 0:
+            break
+        cand = np.where(taken, -1.0, iou[d])
+        g = int(np.argmax(cand))
+        if cand[g] >= threshold:
+            taken[g] = True
+            pairs.append((int(d), g))
+    return pairs
+
+
+def logistic(heights_px: np.ndarray, half_px: float, slope_px: float) -> np.ndarray:
+    """Detection probability (N,) of the detector model's curve at heights (N,) pixels."""
+    return 1.0 / (1.0 + np.exp(-(np.asarray(heights_px, float) - half_px) / slope_px))
+
+
+def fit_detection_curve(heights_px: np.ndarray, detected: np.ndarray) -> tuple[float, float]:
+    """Maximum-likelihood ``(half_detection_height_px, detection_slope_px)`` of the logistic
+    curve from persons' heights (N,) pixels and whether each was detected (N,) bool."""
+    h, y = np.asarray(heights_px, float), np.asarray(detected, bool)
+
+    def nll(p):
+        q = np.clip(logistic(h, p[0], np.exp(p[1])), 1e-9, 1 - 1e-9)
+        return -(np.log(q[y]).sum() + np.log(1 - q[~y]).sum())
+
+    res = minimize(nll, [float(np.median(h)), np.log(20.0)], method="Nelder-Mead",
+                   options={"xatol": 1e-3, "fatol": 1e-6, "maxiter": 2000})
+    return float(res.x[0]), float(np.exp(res.x[1]))
+
+
+def fit_noise_law(heights_px: np.ndarray, noise_px: np.ndarray) -> tuple[float, float]:
+    """``(noise_px_small, noise_px_large)``: the power law ``noise = a * h^b`` through the
+    median noise of each height bin (least squares in logs over the bins with at least 5
+    persons, weighted by their counts), read at 30 and 300 px. heights_px, noise_px: (N,).
+
+    Bin medians, not single persons: the per-person noise is skewed and its spread within a
+    bin would tilt a fit over persons whose heights span only part of the range.
+    """
+    h, s = np.asarray(heights_px, float), np.asarray(noise_px, float)
+    ok = (h > 0) & (s > 0) & np.isfinite(s)
+    h, s = h[ok], s[ok]
+    idx = bin_index(h)
+    rows = [(np.median(h[idx == b]), np.median(s[idx == b]), (idx == b).sum()) for b in range(len(BINS))
+            if (idx == b).sum() >= 5]
+    if not rows:
+        raise ValueError("fit_noise_law needs at least 5 persons in one height bin")
+    mh, ms, n = map(np.array, zip(*rows))
+    if len(rows) == 1:
+        return float(ms[0]), float(ms[0])
+    b, log_a = np.polyfit(np.log(mh), np.log(ms), 1, w=np.sqrt(n))
+    return float(np.exp(log_a) * 30.0**b), float(np.exp(log_a) * 300.0**b)
+
+
+def recall_by_bin(heights_px: np.ndarray, detected: np.ndarray) -> list[float | None]:
+    """Share detected (None for an empty bin) per :data:`BINS` entry. heights_px, detected: (N,)."""
+    idx, detected = bin_index(heights_px), np.asarray(detected, bool)
+    return [float(detected[idx == b].mean()) if (idx == b).any() else None for b in range(len(BINS))]
+
+
+def synthetic_recall(frames, model, span_over_box: float) -> tuple[np.ndarray, np.ndarray]:
+    """Run the detector ``model`` on ``frames`` (with ground-truth skeletons) and match like the
+    real benchmark (IoU >= 0.5, greedy by score). Returns ``(heights (N,) px, detected (N,) bool)``.
+
+    The synthetic ground-truth boxes are the keypoints' hull; a real annotated box reaches from
+    the head's top to the soles, so each person's height is given in that convention: keypoint
+    extent / ``span_over_box`` (the measured ratio of the two on real images).
+    """
+    heights, detected = [], []
+    for frame in frames:
+        gt = frame.ground_truth
+        if gt is None or len(gt) == 0:
+            continue
+        det = model(frame)
+        pairs = greedy_match(iou_matrix(det.boxes, gt.boxes), det.scores, 0.5)
+        got = np.zeros(len(gt), bool)
+        got[[g for _, g in pairs]] = True
+        heights.append(np.ptp(gt.keypoints[..., 1], axis=1) / span_over_box)
+        detected.append(got)
+    if not heights:
+        return np.zeros(0), np.zeros(0, bool)
+    return np.concatenate(heights), np.concatenate(detected)

@@ -1,0 +1,71 @@
+"""Named parameter sets of the detector model (:class:`pedenv.synthetic.detector.DetectorModel`).
+
+``default``: the hand-set model the synthetic benchmarks were built with (50 % detection at
+25 px keypoint extent, 98 % above 80 px), kinder than any real network at small sizes.
+
+``yolo11n-pose-single``: fitted to YOLO11n-pose (onnx backend, score > 0.25) in one
+whole-frame pass at today's default input (:func:`pedenv.pose.models.choose_input_size`:
+384x640 for frames at least 16:10 wide, else 640x640) on the real samples (MOT17,
+KITTI tracking and object, nuScenes cameras) by ``benchmarks/fit_detector_model.py``; the
+measured tables are ``benchmarks/results/detector_yolo11n-pose-single.json`` and a test
+checks that these values reproduce its recall by height within 10 points. Heights here are
+the keypoint extent, which is 0.816 of a real annotated box (head top to soles). The
+network in that mode finds almost nobody below 150 px box height (50 % at 220 px). Its
+keypoint noise is the frame-to-frame jitter on MOT17 (measured above 100 px box height only;
+the power law below is extrapolated); jitter between near-identical consecutive frames is a
+lower bound of the error against the truth. False positives: MOT17 and KITTI frames.
+
+``yolo11n-pose-fast``: the onnx backend's ``fast`` detection mode (one pass, the input
+fitted to the frame's aspect), measured the same way: as blind as the single pass
+(recall 0 / 0 / 6 / 72 % in the bins <50, 50-100, 100-200, >=200 px).
+
+``yolo11n-pose-far``: the ``far`` mode (whole frame plus tiles over the band where people
+15-150 m away stand, from each sample's calibration; MOT17 has none and is tiled whole):
+recall 0 / 27 / 85 / 99 %, 50 % at 102 px box height, 0.29 false positives per frame.
+
+``yolo11n-pose-native``: the same network over the whole frame at the frame's own
+resolution (sides rounded up to 32 px; a dynamic-input ONNX export), the reference for the
+tiled ``far`` detection mode: 50 % at 109 px box height, 85 % of persons 100-200 px tall
+found. Tables: ``benchmarks/results/detector_yolo11n-pose-native.json``.
+
+False positives: detections lying mostly outside every annotated person and ignore region
+(MOT17's amodal boxes would otherwise count half-hidden people found as false).
+"""
+
+from __future__ import annotations
+
+from types import MappingProxyType
+
+DEFAULT_PROFILE = "default"
+
+_DEFAULT = {"noise_px_large": 1.5, "noise_px_small": 3.5, "extremity_noise_factor": 1.3, "unseen_noise_factor": 3.0,
+            "half_detection_height_px": 25.0, "detection_slope_px": 14.0, "false_positives_per_frame": 0.05,
+            "box_noise_fraction": 0.03, "box_min_confidence": 0.3}
+
+#: Profile name -> parameter values (read-only).
+PROFILES = MappingProxyType({
+    "default": MappingProxyType(_DEFAULT),
+    "yolo11n-pose-single": MappingProxyType({
+        **_DEFAULT,
+        "half_detection_height_px": 180.0, "detection_slope_px": 15.3, "false_positives_per_frame": 0.042,
+        "noise_px_small": 0.085, "noise_px_large": 0.87}),
+    "yolo11n-pose-fast": MappingProxyType({
+        **_DEFAULT,
+        "half_detection_height_px": 179.5, "detection_slope_px": 14.5, "false_positives_per_frame": 0.042,
+        "noise_px_small": 0.22, "noise_px_large": 0.84}),
+    "yolo11n-pose-far": MappingProxyType({
+        **_DEFAULT,
+        "half_detection_height_px": 82.1, "detection_slope_px": 16.6, "false_positives_per_frame": 0.29,
+        "noise_px_small": 0.21, "noise_px_large": 0.75}),
+    "yolo11n-pose-native": MappingProxyType({
+        **_DEFAULT,
+        "half_detection_height_px": 88.7, "detection_slope_px": 12.4, "false_positives_per_frame": 0.125,
+        "noise_px_small": 0.175, "noise_px_large": 0.83}),
+})
+
+
+def profile_parameters(name: str) -> dict[str, float]:
+    """The parameter values of profile ``name``; ValueError naming the valid profiles."""
+    if name not in PROFILES:
+        raise ValueError(f"unknown detector-model profile {name!r}; valid: {', '.join(PROFILES)}")
+    return dict(PROFILES[name])
