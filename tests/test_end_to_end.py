@@ -6,10 +6,11 @@ import cv2
 import numpy as np
 import pytest
 
-from pedenv.config import Config
-from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.apps.demo import VIDEO_SCENE, builtin_scenes, run_demo
 from pedenv.apps.evaluate import run_evaluation
+from pedenv.config import Config
+from pedenv.io.datasets.memory import MemoryDataset
+
 from golden import assert_golden
 
 PAPER_CARLA_REL_ERROR_PCT = 16.85

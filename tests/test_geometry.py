@@ -1,8 +1,18 @@
 import numpy as np
 import pytest
 
-from pedenv.geometry import (closest_points, inverse_2x2, inverse_2x2_entries, invert_transform, pixel_rays, project,
-                             quaternion_to_rotation, rotation_from_ypr, rotation_to_quaternion, rotation_z)
+from pedenv.geometry import (
+    closest_points,
+    inverse_2x2,
+    inverse_2x2_entries,
+    invert_transform,
+    pixel_rays,
+    project,
+    quaternion_to_rotation,
+    rotation_from_ypr,
+    rotation_to_quaternion,
+    rotation_z,
+)
 from pedenv.records import EgoPose, Frame
 
 

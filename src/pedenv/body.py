@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.skeleton import CocoKeypoint as K
 
 #: Heights above the ground of an upright person, shares of H: eyes, nose, ears,
 #: shoulder joints, hip joints, knees, ankles (about 0.08 m).

@@ -357,7 +357,7 @@ class Config:
         return dataclasses.asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Config":
+    def from_dict(cls, data: dict) -> Config:
         unknown = set(data) - set(SECTIONS) - {"method"}
         if unknown:
             raise InputError(f"unknown config section(s): {', '.join(sorted(unknown))}; "
@@ -374,7 +374,7 @@ class Config:
             built[name] = kind(**values)
         return cls(method=data.get("method", "paper"), **built)
 
-    def replace(self, method: str | None = None, **sections) -> "Config":
+    def replace(self, method: str | None = None, **sections) -> Config:
         """A copy with the method or some sections' fields changed:
         ``cfg.replace(paper={"refine": False})``."""
         data = self.to_dict()
@@ -390,7 +390,7 @@ class Config:
         Path(path).write_text(json.dumps(self.to_dict(), indent=2, allow_nan=False) + "\n")
 
     @classmethod
-    def load(cls, path: str | Path) -> "Config":
+    def load(cls, path: str | Path) -> Config:
         """The config saved at ``path`` (JSON); every error names the file."""
         path = Path(path)
         try:

@@ -11,6 +11,7 @@ array operations. ``tests/test_kalman.py`` checks both against filterpy's own fi
 from __future__ import annotations
 
 import numpy as np
+
 from pedenv.geometry import inverse_2x2
 
 #: Measurement matrix: the filter observes x and y.

@@ -26,8 +26,8 @@ from pedenv.errors import InputError
 from pedenv.localization import FrameGeometry, Locator, create_locator
 from pedenv.localization.bounds import CLAMPED, along_ray, bound_measurement, clamp_to_range
 from pedenv.records import Detections, Frame
-from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.stage_timer import StageTimer
+from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.tracking.egomotion import yaw_change, yaw_shift_pixels
 from pedenv.tracking.projection import CameraView
 from pedenv.tracking.table import TrackTable

@@ -17,7 +17,6 @@ import numpy as np
 from pedenv.errors import InputError, check_array
 from pedenv.skeleton import NUM_KEYPOINTS
 
-
 #: How far outside the image a detection's pixels may lie, in image sizes (widths for u,
 #: heights for v): a keypoint or box edge beyond ``-k * width`` or ``(1 + k) * width`` (and
 #: likewise for v) is refused by :class:`Frame` as corrupt input. Pose networks clip to the
@@ -31,7 +30,7 @@ def _frozen_set(obj, name: str, value) -> None:
     object.__setattr__(obj, name, value)
 
 
-def check_pixels_in_bounds(where: str, detections: "Detections", width: int, height: int,
+def check_pixels_in_bounds(where: str, detections: Detections, width: int, height: int,
                            image_sizes: float | None = None) -> None:
     """Raise InputError if a finite keypoint or a box edge of ``detections`` lies more than
     ``image_sizes`` (default :data:`MAX_PIXEL_OFFSET_IMAGE_SIZES`) image sizes outside the
@@ -97,10 +96,10 @@ class Detections:
         return self.keypoints.shape[0]
 
     @classmethod
-    def empty(cls) -> "Detections":
+    def empty(cls) -> Detections:
         return cls(np.zeros((0, NUM_KEYPOINTS, 2)), np.zeros((0, NUM_KEYPOINTS)))
 
-    def take(self, index) -> "Detections":
+    def take(self, index) -> Detections:
         """The detections at ``index`` (an int array or boolean mask)."""
         return Detections(self.keypoints[index], self.confidences[index], self.boxes[index], self.scores[index])
 
@@ -156,7 +155,7 @@ class Camera:
 
     @classmethod
     def from_fov(cls, width: int = 1600, height: int = 900, hfov_deg: float = 64.5, *,
-                 height_m: float = 1.5, forward_m: float = 0.0) -> "Camera":
+                 height_m: float = 1.5, forward_m: float = 0.0) -> Camera:
         """A camera looking straight ahead along the vehicle's x axis, principal point centred."""
         f = width / (2.0 * np.tan(np.radians(hfov_deg) / 2.0))
         k = np.array([[f, 0.0, width / 2.0], [0.0, f, height / 2.0], [0.0, 0.0, 1.0]])
@@ -212,7 +211,7 @@ class EgoPose:
         return m
 
     @classmethod
-    def from_xy_yaw(cls, x: float, y: float, yaw: float, z: float = 0.0) -> "EgoPose":
+    def from_xy_yaw(cls, x: float, y: float, yaw: float, z: float = 0.0) -> EgoPose:
         c, s = np.cos(yaw), np.sin(yaw)
         return cls(np.array([x, y, z], float), np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]))
 
@@ -257,7 +256,7 @@ class GroundTruth:
         return self.ids.shape[0]
 
     @classmethod
-    def empty(cls) -> "GroundTruth":
+    def empty(cls) -> GroundTruth:
         return cls(np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 4)))
 
 

@@ -40,7 +40,7 @@ class Pedestrians:
         return len(self.track_ids)
 
     @classmethod
-    def empty(cls) -> "Pedestrians":
+    def empty(cls) -> Pedestrians:
         z = np.zeros
         return cls(z(0, np.int64), z(0, np.int64), z((0, 3)), z((0, 3)), z((0, 2, 2)), z((0, 17, 2)),
                    z((0, 17)), z((0, 4)), z((0, 17, 3)), z(0), np.zeros(0, dtype="<U32"))

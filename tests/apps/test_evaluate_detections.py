@@ -9,10 +9,11 @@ import json
 import cv2
 import numpy as np
 import pytest
-from shared_paths import REAL_SAMPLES
 from typer.testing import CliRunner
 
 from pedenv.cli import app
+
+from shared_paths import REAL_SAMPLES
 
 pytestmark = [pytest.mark.onnx_model, pytest.mark.ultralytics, pytest.mark.slow]
 

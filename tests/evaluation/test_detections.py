@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-from shared_paths import REAL_SAMPLES
 
 from pedenv.errors import InputError
 from pedenv.evaluation.detections import (
@@ -11,6 +10,8 @@ from pedenv.evaluation.detections import (
     match_detections,
     summarize,
 )
+
+from shared_paths import REAL_SAMPLES
 
 
 @pytest.fixture(scope="module")

@@ -3,6 +3,7 @@
 from dataclasses import replace
 
 import numpy as np
+
 from pedenv.apps.demo import builtin_scenes
 from pedenv.errors import InputError
 from pedenv.io.sinks import ExtraOutputs

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from sink_runs import FRAMES, FailingModel
 
-from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.records import EgoPose
+from pedenv.state import EnvironmentState, Pedestrians
 from pedenv.visualize.birds_eye_video import BirdsEyeVideo
 
 

@@ -11,8 +11,8 @@ import pytest
 import yaml
 
 from pedenv.errors import InputError
-from pedenv.records import OPTICAL_TO_VEHICLE
 from pedenv.io.footage import load_calibration, load_ego_poses, load_recording, slerp
+from pedenv.records import OPTICAL_TO_VEHICLE
 
 CALIB = {"width": 64, "height": 48, "intrinsics": [[50, 0, 32], [0, 50, 24], [0, 0, 1]],
          "cam_to_vehicle": {"rotation": [0.5, -0.5, 0.5, -0.5], "translation": [1.5, 0.0, 1.6]}}
@@ -255,8 +255,8 @@ def pose_env(tmp_path_factory):
 @pytest.mark.onnx_model
 @pytest.mark.slow
 def test_run_on_real_images_keeps_track_ids(tmp_path, pose_env, monkeypatch):
-    from pedenv.io.jsonl import read_environment
     from pedenv.apps.run import run_recording
+    from pedenv.io.jsonl import read_environment
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
     summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out")

@@ -10,10 +10,10 @@ import sys
 import cv2
 import numpy as np
 import pytest
+from test_footage import _bus_recording, _calib, _write, pose_env  # noqa: F401 - pose_env is a fixture
 
 from pedenv.errors import InputError
 from pedenv.io.footage import MAX_PLAUSIBLE_EGO_SPEED_MPS, load_calibration, load_ego_poses, load_recording
-from test_footage import _bus_recording, _calib, _write, pose_env  # noqa: F401 - pose_env is a fixture
 
 
 def test_intrinsics_last_row_must_be_0_0_1(tmp_path):

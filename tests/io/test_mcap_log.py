@@ -15,7 +15,7 @@ TOPICS = {"/tf": "foxglove.FrameTransforms", "/pedestrians": "foxglove.SceneUpda
           "/camera/annotations": "foxglove.ImageAnnotations"}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _message_class(name: str, schema_data: bytes):
     pool = descriptor_pool.DescriptorPool()
     for proto in descriptor_pb2.FileDescriptorSet.FromString(schema_data).file:

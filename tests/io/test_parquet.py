@@ -5,10 +5,9 @@ import json
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
+from sink_runs import FRAMES, FailingModel
 
 from pedenv.io.parquet import ENVIRONMENT_SCHEMA, MATCHES_SCHEMA, EnvironmentTableWriter
-
-from sink_runs import FRAMES, FailingModel
 
 
 def test_environment_table_has_one_row_per_pedestrian_and_frame(evaluated):

@@ -5,9 +5,15 @@ import pytest
 
 from pedenv.config import Config, PaperConfig
 from pedenv.geometry import invert_transform, project
+from pedenv.localization.paper import (
+    HEIGHT_FIRST,
+    HEIGHT_PARALLEL,
+    TRIANGULATION,
+    estimate_positions,
+    keep_most_confident,
+    refine_distance,
+)
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.localization.paper import (HEIGHT_FIRST, HEIGHT_PARALLEL, TRIANGULATION, estimate_positions, keep_most_confident,
-                                      refine_distance)
 from pedenv.records import EgoPose, Frame
 
 from standing_people import frame_with_people

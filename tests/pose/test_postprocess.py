@@ -7,7 +7,14 @@ import pytest
 
 from pedenv.errors import InputError
 from pedenv.pose.postprocess import (
-    Letterbox, decode, frame_image, letterbox, parse_input_size, read_image_rgb, to_input_tensor)
+    Letterbox,
+    decode,
+    frame_image,
+    letterbox,
+    parse_input_size,
+    read_image_rgb,
+    to_input_tensor,
+)
 from pedenv.records import Camera, EgoPose, Frame
 
 

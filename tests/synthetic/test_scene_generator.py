@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from scene_checks import assert_scenes_equal
 from pedenv.geometry import invert_transform, project
 from pedenv.skeleton import CocoKeypoint as K
 from pedenv.synthetic import SCENARIOS, generate_scenes
 from pedenv.synthetic.generator import scene_terrain
+
+from scene_checks import assert_scenes_equal
 
 REQUIRED = ("red-light-crossing", "drive-30kmh-sidewalk", "drive-50kmh-sidewalk", "turn-intersection",
             "start-from-standstill", "crowd", "standing-pedestrians")

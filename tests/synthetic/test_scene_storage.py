@@ -8,12 +8,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from scene_checks import assert_scenes_equal
 from pedenv.errors import InputError
 from pedenv.records import GroundTruth, Scene
 from pedenv.synthetic import generate_scenes
 from pedenv.synthetic.detector import DetectorModel
 from pedenv.synthetic.storage import read_scene, write_scenes
+
+from scene_checks import assert_scenes_equal
 
 
 @pytest.fixture(scope="module")

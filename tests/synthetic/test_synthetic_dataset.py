@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import pytest
 
-from scene_checks import assert_scenes_equal
-from pedenv.io.datasets import open_dataset
 from pedenv.errors import InputError
+from pedenv.io.datasets import open_dataset
 from pedenv.records import Scene
 from pedenv.synthetic import generate_scenes
 from pedenv.synthetic.dataset import SyntheticDataset
 from pedenv.synthetic.storage import write_scenes
+
+from scene_checks import assert_scenes_equal
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from shared_paths import REAL_SAMPLES
 
 from pedenv.config import Config
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
@@ -24,6 +23,8 @@ from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
 from pedenv.tracking.tracker import Tracker
+
+from shared_paths import REAL_SAMPLES
 
 KITTI_TRAINING = REAL_SAMPLES / "kitti" / "tracking_mini" / "training"
 KITTI_CAMERA_HEIGHT_M = 1.65

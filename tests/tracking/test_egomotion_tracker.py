@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 
-from pedenv.config import TrackingConfig
-from pedenv.tracking.egomotion import shift_u, yaw_change, yaw_shift_pixels
+from pedenv.config import Config, TrackingConfig
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.config import Config
 from pedenv.records import EgoPose
+from pedenv.tracking.egomotion import shift_u, yaw_change, yaw_shift_pixels
 from pedenv.tracking.table import carry_rows
 from pedenv.tracking.tracker import Tracker
 

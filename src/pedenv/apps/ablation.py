@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
+from pedenv.apps.evaluate import run_evaluation
 from pedenv.config import Config
-from pedenv.io.datasets import Dataset
 from pedenv.evaluation.metrics import Metrics, strict_json
 from pedenv.evaluation.report import comparison_table
-from pedenv.apps.evaluate import run_evaluation
+from pedenv.io.datasets import Dataset
 
 #: Variant name -> paper-method settings changed from the configuration given.
 ABLATIONS: dict[str, dict] = {

@@ -13,22 +13,22 @@ and ``output_dir`` gets one ``error_by_distance.png`` with all methods and a com
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
 
 from rich.table import Table
 
-from pedenv.errors import InputError
-from pedenv.config import Config
-from pedenv.localization import METHODS, configure
-from pedenv.io.datasets import Dataset
-from pedenv.evaluation.metrics import strict_json
-from pedenv.io.outputs import write_outputs
-from pedenv.evaluation.report import fmt
 from pedenv.apps.evaluate import run_evaluation
+from pedenv.config import Config
+from pedenv.errors import InputError
+from pedenv.evaluation.metrics import strict_json
+from pedenv.evaluation.report import fmt
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.visualize.plots import plot_error_by_distance
+from pedenv.io.datasets import Dataset
+from pedenv.io.outputs import write_outputs
+from pedenv.localization import METHODS, configure
 from pedenv.pose import PoseBackend, create_pose_backend
+from pedenv.visualize.plots import plot_error_by_distance
 
 
 def compare_methods(dataset: Dataset, *, methods: Sequence[str] = ("paper", "fused"), scenes: Sequence[str] | None = None,

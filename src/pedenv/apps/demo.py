@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import replace
 from pathlib import Path
-from typing import Iterator, Sequence
 
-from pedenv.errors import InputError
+from pedenv.apps.evaluate import run_evaluation
 from pedenv.config import Config
+from pedenv.errors import InputError
+from pedenv.evaluation.result import EvaluationResult
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.io.outputs import write_outputs
 from pedenv.io.sinks import ExtraOutputs
-from pedenv.apps.evaluate import run_evaluation
-from pedenv.evaluation.result import EvaluationResult
 from pedenv.records import Scene
-
 
 #: The most scenes ``builtin_scenes`` / ``pedenv simulate --scenes`` makes in one go (each
 #: is 15-20 s of frames; 1000 of them take about an hour and some GB on disk).

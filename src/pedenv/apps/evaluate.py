@@ -2,24 +2,24 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
-from typing import Sequence
 
 import numpy as np
 
 from pedenv.apps.progress import progress_bar
 from pedenv.config import Config
-from pedenv.io.datasets import Dataset
 from pedenv.errors import InputError
-from pedenv.geometry import inverse_2x2
 from pedenv.evaluation.matching import match_to_ground_truth, position_errors
 from pedenv.evaluation.metrics import ErrorSamples, Metrics
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.io.outputs import write_outputs
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
+from pedenv.geometry import inverse_2x2
+from pedenv.io.datasets import Dataset
 from pedenv.io.jsonl import EnvironmentWriter
+from pedenv.io.outputs import write_outputs
 from pedenv.io.sinks import ExtraOutputs
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose import PoseBackend, create_pose_backend

@@ -11,15 +11,15 @@ import numpy as np
 
 from pedenv.config import Config
 from pedenv.errors import InputError
+from pedenv.io.footage import Recording, load_recording
 from pedenv.io.jsonl import EnvironmentWriter
 from pedenv.io.output_dir import prepare_output_dir
 from pedenv.io.sinks import ExtraOutputs
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.visualize.plots import plot_birds_eye
 from pedenv.pose.base import create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
-from pedenv.io.footage import Recording, load_recording
 from pedenv.visualize.overlay import draw_environment, write_image
+from pedenv.visualize.plots import plot_birds_eye
 
 
 def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,

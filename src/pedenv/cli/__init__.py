@@ -5,11 +5,12 @@ Each command group lives in its own module and registers itself on :data:`app`.
 
 from __future__ import annotations
 
-from pedenv.cli.app import app, main
-
 # Importing the modules registers their commands on ``app``.
-from pedenv.cli import core_commands  # noqa: E402,F401
-from pedenv.cli import detection_commands  # noqa: E402,F401
-from pedenv.cli import pose_commands  # noqa: E402,F401
+from pedenv.cli import (
+    core_commands,  # noqa: E402,F401
+    detection_commands,  # noqa: E402,F401
+    pose_commands,  # noqa: E402,F401
+)
+from pedenv.cli.app import app, main
 
 __all__ = ["app", "main"]

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -15,7 +14,7 @@ from pedenv.config import Config
 _out = console.__class__(width=None if sys.stdout.isatty() else 140)
 
 
-def _config(path: Optional[Path], method: Optional[str] = None, **paper) -> Config:
+def _config(path: Path | None, method: str | None = None, **paper) -> Config:
     """The config of ``--config`` (or the defaults) with the paper settings given and ``method``'s preset."""
     from pedenv.localization import configure
 
@@ -25,8 +24,8 @@ def _config(path: Optional[Path], method: Optional[str] = None, **paper) -> Conf
     return configure(config, method) if method else config
 
 
-def _extra_outputs(output: Path, parquet: bool, rerun: Optional[Path], mcap: Optional[Path], *,
-                   matches: bool = False, video_scene: Optional[str] = None):
+def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path | None, *,
+                   matches: bool = False, video_scene: str | None = None):
     """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap`` flags (and the bird's-eye video)."""
     from pedenv.io.sinks import ExtraOutputs
 
@@ -57,12 +56,12 @@ def demo(
     seed: int = typer.Option(0, "--seed", help="Seed of the built-in scenes and the detector model."),
     terrain: bool = typer.Option(False, "--terrain/--flat", help="Rolling terrain and vehicle pitch, or a flat world."),
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
-    config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
-    method: Optional[str] = typer.Option(None, "--method", help="paper (default) or fused."),
+    config: Path | None = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+    method: str | None = typer.Option(None, "--method", help="paper (default) or fused."),
     overwrite: bool = _OVERWRITE,
     parquet: bool = _PARQUET,
-    rerun: Optional[Path] = _RERUN,
-    mcap: Optional[Path] = _MCAP,
+    rerun: Path | None = _RERUN,
+    mcap: Path | None = _MCAP,
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
     from pedenv.apps.demo import run_demo
@@ -85,11 +84,11 @@ def demo(
 @app.command()
 def simulate(
     output: Path = typer.Option(..., "--output", help="Folder to write the scenes to."),
-    scenes: Optional[int] = typer.Option(None, "--scenes", help="Number of scenes (default: every scenario once)."),
+    scenes: int | None = typer.Option(None, "--scenes", help="Number of scenes (default: every scenario once)."),
     seed: int = typer.Option(0, "--seed"),
     fmt: str = typer.Option("synthetic", "--format", help="synthetic, nuscenes or carla."),
     terrain: bool = typer.Option(False, "--terrain/--flat"),
-    frame_rate: Optional[float] = typer.Option(None, "--frame-rate", help="Hz; default 10 (12 for nuscenes)."),
+    frame_rate: float | None = typer.Option(None, "--frame-rate", help="Hz; default 10 (12 for nuscenes)."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Write the built-in synthetic scenes to disk in one of the supported formats, each as it is made."""
@@ -111,31 +110,30 @@ def evaluate(
     dataset: str = typer.Option(..., "--dataset", help="synthetic, nuscenes or carla."),
     data_root: Path = typer.Option(..., "--data-root", help="The dataset's root folder."),
     output: Path = typer.Option(..., "--output", help="Folder for metrics, JSON Lines and plots."),
-    scenes: Optional[str] = typer.Option(None, "--scenes", help="Comma-separated scene names (default: all)."),
+    scenes: str | None = typer.Option(None, "--scenes", help="Comma-separated scene names (default: all)."),
     version: str = typer.Option("v1.0-mini", "--version", help="nuScenes version folder."),
-    pose_backend: Optional[str] = typer.Option(None, "--pose-backend", help="Default: the dataset's own."),
-    config: Optional[Path] = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+    pose_backend: str | None = typer.Option(None, "--pose-backend", help="Default: the dataset's own."),
+    config: Path | None = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
     no_refinement: bool = typer.Option(False, "--no-refinement", help="Ablation: skip the height refinement."),
-    initial_estimate: Optional[str] = typer.Option(None, "--initial-estimate", help="all-keypoints or midpoint."),
+    initial_estimate: str | None = typer.Option(None, "--initial-estimate", help="all-keypoints or midpoint."),
     ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
-    method: Optional[str] = typer.Option(None, "--method", help="paper, fused or both."),
-    cues: Optional[str] = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
+    method: str | None = typer.Option(None, "--method", help="paper, fused or both."),
+    cues: str | None = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
     overwrite: bool = _OVERWRITE,
-    detection: Optional[str] = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
+    detection: str | None = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
     parquet: bool = _PARQUET,
-    rerun: Optional[Path] = _RERUN,
-    mcap: Optional[Path] = _MCAP,
+    rerun: Path | None = _RERUN,
+    mcap: Path | None = _MCAP,
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
-    from pedenv.io.datasets import open_dataset
     from pedenv.apps.evaluate import evaluate_dataset
+    from pedenv.io.datasets import open_dataset
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
     if detection is not None or pose_backend == "onnx":
-        from pedenv.pose.base import create_pose_backend
-
         from pedenv.errors import InputError
+        from pedenv.pose.base import create_pose_backend
 
         if (pose_backend or data.default_pose_backend) != "onnx":
             raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
@@ -174,11 +172,10 @@ def evaluate(
 def bench(
     frames: int = typer.Option(100, "--frames", help="Frames per measurement."),
     pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
-    samples: Optional[Path] = typer.Option(Path("../shared/samples/real"), "--samples", help="Real samples for the detection modes' recall (skipped if absent)."),
+    samples: Path | None = typer.Option(Path("../shared/samples/real"), "--samples", help="Real samples for the detection modes' recall (skipped if absent)."),
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.apps.bench import bench_core, format_bench
-
     from pedenv.errors import InputError
 
     rows = bench_core(n_frames=frames)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Optional
 
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -18,8 +17,8 @@ _out = console.__class__(width=None if sys.stdout.isatty() else 200)
 def evaluate_detections_command(
     data_root: Path = typer.Option(..., "--data-root", help="Folder with kitti/, mot17/, nuscenes-0061/ (e.g. ../shared/samples/real)."),
     detection: str = typer.Option("far", "--detection", help="fast (one pass) or far (plus tiles over the far band)."),
-    output: Optional[Path] = typer.Option(None, "--output", help="Folder for detections_eval.json."),
-    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (default: the prepared dynamic model)."),
+    output: Path | None = typer.Option(None, "--output", help="Folder for detections_eval.json."),
+    pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (default: the prepared dynamic model)."),
     threads: int = typer.Option(2, "--threads", help="onnxruntime threads."),
 ) -> None:
     """Recall by person height and distance, precision and ms per frame of the onnx pose backend on real images."""

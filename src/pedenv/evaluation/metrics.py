@@ -21,7 +21,7 @@ class ErrorSummary:
     count: int
 
     @classmethod
-    def of(cls, abs_err: np.ndarray, rel_err: np.ndarray) -> "ErrorSummary":
+    def of(cls, abs_err: np.ndarray, rel_err: np.ndarray) -> ErrorSummary:
         n = len(abs_err)
         return cls(float(np.mean(abs_err)) if n else float("nan"), float(np.mean(rel_err)) if n else float("nan"), n)
 
@@ -92,7 +92,7 @@ class Metrics:
     info: dict
 
     @classmethod
-    def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking, timing_ms, info) -> "Metrics":
+    def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking, timing_ms, info) -> Metrics:
         arrays = {name: s.arrays() for name, s in per_scene.items()}
         every = {k: np.concatenate([a[k] for a in arrays.values()]) if arrays else np.zeros(0)
                  for k in ("abs_err", "rel_err", "distance", "mahalanobis")}

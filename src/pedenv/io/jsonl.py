@@ -23,7 +23,7 @@ class EnvironmentWriter:
         self.decimals = decimals
         self._file = None
 
-    def __enter__(self) -> "EnvironmentWriter":
+    def __enter__(self) -> EnvironmentWriter:
         path = writable_file(self.path, "environment model")
         try:
             self._file = path.open("w")

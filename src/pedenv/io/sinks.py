@@ -50,7 +50,7 @@ class Sinks:
         if first is not None:
             raise first
 
-    def __enter__(self) -> "Sinks":
+    def __enter__(self) -> Sinks:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -7,8 +7,8 @@ its class; it is the one list of method names (``Config`` checks against it).
 
 from __future__ import annotations
 
-from pedenv.errors import InputError
 from pedenv.config import Config
+from pedenv.errors import InputError
 from pedenv.localization.base import FrameGeometry, Locator, Measurement
 from pedenv.localization.fused.locator import FusedLocator
 from pedenv.localization.paper import PaperLocator

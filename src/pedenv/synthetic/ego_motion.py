@@ -8,8 +8,8 @@ accelerating and down when braking. On flat ground the vehicle never pitches or 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -7,7 +7,7 @@ generated on its own equals the same scenario generated with all the others.
 from __future__ import annotations
 
 import zlib
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

@@ -8,8 +8,8 @@ the ego sees during the scene, so longer scenes stay as busy.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -28,7 +28,7 @@ class Terrain:
     phases: np.ndarray
 
     @classmethod
-    def flat(cls) -> "Terrain":
+    def flat(cls) -> Terrain:
         """The plane z = 0."""
         return cls(np.zeros(0), np.zeros((0, 2)), np.zeros(0))
 

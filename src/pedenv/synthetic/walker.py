@@ -17,9 +17,26 @@ from __future__ import annotations
 
 import numpy as np
 
-from pedenv.body import (ANKLE, EAR, EAR_FORWARD, EAR_HALF_WIDTH, EYE, EYE_FORWARD, EYE_HALF_WIDTH, FOREARM, HIP,
-                         HIP_HALF_WIDTH, KNEE, NOSE, NOSE_FORWARD, SHOULDER, SHOULDER_HALF_WIDTH, UPPER_ARM)
-from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+from pedenv.body import (
+    ANKLE,
+    EAR,
+    EAR_FORWARD,
+    EAR_HALF_WIDTH,
+    EYE,
+    EYE_FORWARD,
+    EYE_HALF_WIDTH,
+    FOREARM,
+    HIP,
+    HIP_HALF_WIDTH,
+    KNEE,
+    NOSE,
+    NOSE_FORWARD,
+    SHOULDER,
+    SHOULDER_HALF_WIDTH,
+    UPPER_ARM,
+)
+from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.skeleton import CocoKeypoint as K
 
 # Thigh (hip joint to knee) and shank (knee to ankle), as shares of the body height H.
 THIGH, SHANK = HIP - KNEE, KNEE - ANKLE

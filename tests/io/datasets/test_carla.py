@@ -7,16 +7,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from shared_paths import SHARED
 
+from pedenv.errors import InputError
+from pedenv.geometry import invert_transform, project
 from pedenv.io.datasets import open_dataset
 from pedenv.io.datasets.carla import CarlaDataset, load_record, natural_key
 from pedenv.io.datasets.carla_axes import carla_rotation, carla_ypr, ego_from_unreal, ego_to_unreal
 from pedenv.io.datasets.carla_bones import BONE_NAMES, bones_to_coco
-from pedenv.errors import InputError
-from pedenv.geometry import invert_transform, project
 from pedenv.records import OPTICAL_TO_VEHICLE
 from pedenv.skeleton import CocoKeypoint as K
+
+from shared_paths import SHARED
 
 SAMPLES = SHARED / "samples" / "carla-recording"
 

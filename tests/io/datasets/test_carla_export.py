@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pedenv.errors import InputError
 from pedenv.io.datasets import scene_writer
 from pedenv.io.datasets.carla import CarlaDataset, load_record
 from pedenv.io.datasets.carla_bones import EXACT_KEYPOINTS
 from pedenv.io.datasets.carla_export import write_carla
-from pedenv.errors import InputError
 from pedenv.records import GroundTruth, Scene
 
 

@@ -6,11 +6,11 @@ from dataclasses import replace
 
 import pytest
 
+from pedenv.apps.evaluate import evaluate_dataset
 from pedenv.io.datasets.carla import CarlaDataset
 from pedenv.io.datasets.carla_export import write_carla
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.io.datasets.nuscenes_export import KEYFRAME_EVERY, write_nuscenes
-from pedenv.apps.evaluate import evaluate_dataset
 from pedenv.pose.ground_truth import GroundTruthPose
 from pedenv.records import Scene
 from pedenv.synthetic import generate_scenes

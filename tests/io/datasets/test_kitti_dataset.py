@@ -2,11 +2,12 @@
 
 import numpy as np
 import pytest
-from shared_paths import REAL_SAMPLES
 
 from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.io.datasets import open_dataset
+
+from shared_paths import REAL_SAMPLES
 
 ROOT = REAL_SAMPLES / "kitti"
 

@@ -8,11 +8,11 @@ import shutil
 import numpy as np
 import pytest
 
+from pedenv.errors import InputError
 from pedenv.io.datasets import open_dataset
 from pedenv.io.datasets.nuscenes import PAPER_SCENES, NuScenesDataset
 from pedenv.io.datasets.nuscenes_export import KEYFRAME_EVERY, write_nuscenes
 from pedenv.io.datasets.nuscenes_skeletons import SIDE_FILE_NAME
-from pedenv.errors import InputError
 from pedenv.pose.ground_truth import GroundTruthPose
 
 pytestmark = pytest.mark.nuscenes

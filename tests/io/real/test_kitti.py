@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
-from shared_paths import REAL_SAMPLES
 
 from pedenv.errors import InputError
 from pedenv.io.real import kitti
+
+from shared_paths import REAL_SAMPLES
 
 TRACKING = REAL_SAMPLES / "kitti" / "tracking_mini" / "training"
 OBJECT = REAL_SAMPLES / "kitti" / "object_samples" / "training"

@@ -2,10 +2,11 @@
 
 import numpy as np
 import pytest
-from shared_paths import REAL_SAMPLES
 
 from pedenv.errors import InputError
 from pedenv.io.real import mot17
+
+from shared_paths import REAL_SAMPLES
 
 ROOT = REAL_SAMPLES / "mot17"
 

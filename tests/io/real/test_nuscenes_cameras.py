@@ -4,10 +4,11 @@ import json
 
 import numpy as np
 import pytest
-from shared_paths import REAL_SAMPLES
 
 from pedenv.errors import InputError
 from pedenv.io.real import nuscenes_cameras as nc
+
+from shared_paths import REAL_SAMPLES
 
 ROOT = REAL_SAMPLES / "nuscenes-0061"
 

@@ -9,6 +9,7 @@ from pedenv.body import standing_body, world_keypoints
 from pedenv.geometry import invert_transform, project, rotation_from_ypr
 from pedenv.records import Camera, Detections, EgoPose, Frame
 
+
 def upright_skeletons(ground: np.ndarray, heights: np.ndarray) -> np.ndarray:
     """(N, 17, 3) world keypoints of upright people (the body template) standing on ``ground`` (N, 3), facing +x."""
     ground = np.asarray(ground, float)
@@ -39,8 +40,8 @@ def skeletons_of(frame: Frame, config=None, noise_px: float | None = None):
     from dataclasses import replace
 
     from pedenv.config import FusedConfig
-    from pedenv.localization.fused.cue import FrameSkeletons, keypoint_usable
     from pedenv.geometry import pixel_rays
+    from pedenv.localization.fused.cue import FrameSkeletons, keypoint_usable
 
     config = config or FusedConfig()
     det, focal = frame.detections, float(frame.camera.intrinsics[0, 0])

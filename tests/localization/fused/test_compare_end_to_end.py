@@ -6,13 +6,13 @@ bounds below say what they must show.
 
 import json
 
-import numpy as np
 import pytest
 
+from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 from pedenv.config import Config
 from pedenv.io.datasets.memory import MemoryDataset
-from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 from pedenv.synthetic import generate_scenes
+
 from golden import assert_golden
 
 SCENES = ["standing-pedestrians", "drive-30kmh-sidewalk"]

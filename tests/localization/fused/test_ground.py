@@ -2,12 +2,11 @@ import numpy as np
 import pytest
 
 from pedenv.config import FusedConfig
-from pedenv.localization.fused.ground import ground_cue, plane_intersection
 from pedenv.geometry import pixel_rays
+from pedenv.localization.fused.ground import ground_cue, plane_intersection
 from pedenv.skeleton import ANKLE_KEYPOINTS
 
 from fused_frames import make_frame, skeletons_of
-
 
 FAR = FusedConfig(ground_max_distance_m=60.0)
 
@@ -80,6 +79,7 @@ def test_ground_declines_with_a_reason(case, reason):
     elif case == "camera-below-road":  # the vehicle's origin (its road) lies above the camera
         frame = make_frame(np.array([[10.0, 0.0, 0.0]]), ego_xyz=(0.0, 0.0, 0.0))
         from dataclasses import replace
+
         from pedenv.records import EgoPose
         ego = EgoPose(np.array([0.0, 0.0, 2.0]), frame.ego.rotation)
         frame = replace(frame, ego=ego, camera=frame.camera)
@@ -94,6 +94,7 @@ def test_ground_declines_with_a_reason(case, reason):
 
 def test_ground_uses_the_stance_ankle_when_the_other_swings():
     from dataclasses import replace
+
     from pedenv.records import Detections
     frame = make_frame(np.array([[10.0, 1.0, 0.0]]))
     kp = frame.detections.keypoints.copy()

@@ -3,7 +3,8 @@ import pytest
 
 from pedenv.config import FusedConfig
 from pedenv.localization.fused.height import height_cue
-from pedenv.skeleton import ANKLE_KEYPOINTS, HEAD_KEYPOINTS, CocoKeypoint as K
+from pedenv.skeleton import ANKLE_KEYPOINTS, HEAD_KEYPOINTS
+from pedenv.skeleton import CocoKeypoint as K
 
 from fused_frames import make_frame, skeletons_of
 
@@ -64,6 +65,7 @@ def test_height_cue_declines_for_an_upside_down_skeleton():
     kp = frame.detections.keypoints.copy()
     kp[..., 1] = 900 - kp[..., 1]
     from dataclasses import replace
+
     from pedenv.records import Detections
     cue = run_height(replace(frame, detections=Detections(kp, frame.detections.confidences)))
     assert not cue.valid[0] and cue.reason_names[0] == "inconsistent"
@@ -72,6 +74,7 @@ def test_height_cue_declines_for_an_upside_down_skeleton():
 def lift_left_ankle(frame, share):
     """The left ankle raised by ``share`` of the skeleton's pixel height (a swing foot)."""
     from dataclasses import replace
+
     from pedenv.records import Detections
     kp = frame.detections.keypoints.copy()
     kp[:, K.LEFT_ANKLE, 1] -= share * np.ptp(kp[..., 1], axis=1)

@@ -45,6 +45,7 @@ def test_bad_input_never_gives_nan():
     conf[2, :] = 0.0
     conf[2, [9, 10]] = 1.0  # only the wrists
     from dataclasses import replace
+
     from pedenv.records import Detections
     frame = replace(frame, detections=Detections(frame.detections.keypoints, conf))
     peds = run([frame])[-1].pedestrians
@@ -79,8 +80,10 @@ def pointing_person_frames(ground, n_frames=7, speed_m_per_frame=0.8):
     """Frames of a standing person at ``ground`` (1, 3) holding both wrists 0.5 m out in
     front (towards -x, the ego), seen from an ego driving along +x; and the true skeleton."""
     from dataclasses import replace
+
     from pedenv.geometry import invert_transform, project
     from pedenv.records import Detections
+
     from fused_frames import upright_skeletons
     truth = upright_skeletons(ground, [1.72])
     truth[0, [9, 10], 0] -= 0.5  # wrists reaching towards the road

@@ -7,8 +7,9 @@ microseconds, quaternions) inside the adapter; the core sees one right-handed wo
 from __future__ import annotations
 
 import importlib
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator, Protocol
+from typing import Protocol
 
 from pedenv.errors import InputError
 from pedenv.records import Frame

@@ -16,16 +16,16 @@ from __future__ import annotations
 import re
 import struct
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 
+from pedenv.errors import InputError, check_array
+from pedenv.geometry import invert_transform
 from pedenv.io.datasets.carla_axes import cam_to_world_from_unreal, ego_from_unreal, points_from_unreal
 from pedenv.io.datasets.carla_bones import NUM_BONES, bones_to_coco, visible_keypoints
 from pedenv.io.safe_npy import load_npy
-from pedenv.errors import InputError, check_array
-from pedenv.geometry import invert_transform
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
 
 #: Simulation rate of the recordings.

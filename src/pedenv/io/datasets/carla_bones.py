@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.skeleton import CocoKeypoint as K
 
 #: The 20 bones of a recording, in the order of ``2d_skel`` / ``3d_skel``.
 BONE_NAMES: tuple[str, ...] = (

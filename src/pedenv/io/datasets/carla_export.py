@@ -11,17 +11,17 @@ from __future__ import annotations
 
 import itertools
 import re
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
 
+from pedenv.errors import InputError
+from pedenv.geometry import invert_transform
 from pedenv.io.datasets.carla import FRAME_RATE_HZ
 from pedenv.io.datasets.carla_axes import cam_to_world_to_unreal, ego_to_unreal, points_to_unreal, project_unreal
 from pedenv.io.datasets.carla_bones import coco_to_bones
-from pedenv.errors import InputError
-from pedenv.geometry import invert_transform
 from pedenv.records import Frame, Scene
 
 #: Simulator frame number of each scene's first frame (CARLA's never start at 0).

@@ -16,13 +16,13 @@ keypoints on keyframes, ready-made detections (confidence 1 where visible) on sw
 from __future__ import annotations
 
 import warnings
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 
-from pedenv.io.datasets.nuscenes_skeletons import SIDE_FILE_NAME, Skeleton, read_side_file
 from pedenv.errors import InputError
+from pedenv.io.datasets.nuscenes_skeletons import SIDE_FILE_NAME, Skeleton, read_side_file
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth
 from pedenv.skeleton import NUM_KEYPOINTS
 

@@ -18,17 +18,18 @@ import json
 import logging
 import re
 import warnings
+from collections.abc import Iterable, Sequence
 from pathlib import Path
-from typing import Iterable, Sequence
 
 import cv2
 import numpy as np
 
-from pedenv.io.datasets.nuscenes_skeletons import SIDE_FILE_NAME, skeleton_entry, write_side_file
 from pedenv.errors import InputError
 from pedenv.geometry import rotation_to_quaternion, rotation_z
+from pedenv.io.datasets.nuscenes_skeletons import SIDE_FILE_NAME, skeleton_entry, write_side_file
 from pedenv.records import Frame, Scene
-from pedenv.skeleton import COCO_BONES, CocoKeypoint as K
+from pedenv.skeleton import COCO_BONES
+from pedenv.skeleton import CocoKeypoint as K
 
 log = logging.getLogger(__name__)
 

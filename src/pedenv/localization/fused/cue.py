@@ -52,7 +52,7 @@ class CueEstimate:
         return np.asarray(REASONS, dtype=object)[self.reasons]
 
     @classmethod
-    def declined(cls, name: str, reasons: np.ndarray) -> "CueEstimate":
+    def declined(cls, name: str, reasons: np.ndarray) -> CueEstimate:
         """The cue declines for all N pedestrians with the reason codes (N,)."""
         n = len(reasons)
         eye = np.broadcast_to(np.eye(2), (n, 2, 2))
@@ -180,7 +180,7 @@ class FrameSkeletons:
         return self.rays.shape[0]
 
     @classmethod
-    def of(cls, rays: np.ndarray, origin: np.ndarray, usable: np.ndarray, angle_std: float) -> "FrameSkeletons":
+    def of(cls, rays: np.ndarray, origin: np.ndarray, usable: np.ndarray, angle_std: float) -> FrameSkeletons:
         """From keypoint rays (N, 17, 3), camera centre (3,) and usable mask (N, 17)."""
         horizontal = np.sqrt(rays[..., 0] ** 2 + rays[..., 1] ** 2)
         tangents = rays[..., 2] / np.maximum(horizontal, MIN_HORIZONTAL)

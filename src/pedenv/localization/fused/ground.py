@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import FusedConfig
+from pedenv.geometry import inverse_intrinsics
 from pedenv.localization.fused.cue import CueEstimate, FrameSkeletons, first_reason, symmetric_2x2
 from pedenv.localization.fused.height import KEYPOINT_HEIGHT_FRACTION, LONE_ANKLE_FRACTION_STD
-from pedenv.geometry import inverse_intrinsics
 from pedenv.records import Frame
 from pedenv.skeleton import ANKLE_KEYPOINTS
 

@@ -19,8 +19,15 @@ import numpy as np
 
 from pedenv.body import STANDING
 from pedenv.config import FusedConfig
-from pedenv.localization.fused.cue import CueEstimate, FrameSkeletons, first_reason, horizontal_bearing, range_bearing_covariance
-from pedenv.skeleton import ANKLE_KEYPOINTS, NUM_KEYPOINTS, CocoKeypoint as K
+from pedenv.localization.fused.cue import (
+    CueEstimate,
+    FrameSkeletons,
+    first_reason,
+    horizontal_bearing,
+    range_bearing_covariance,
+)
+from pedenv.skeleton import ANKLE_KEYPOINTS, NUM_KEYPOINTS
+from pedenv.skeleton import CocoKeypoint as K
 
 NAME = "height"
 

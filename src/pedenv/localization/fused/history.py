@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pedenv.skeleton import NUM_KEYPOINTS, CocoKeypoint as K
+from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.skeleton import CocoKeypoint as K
 from pedenv.tracking.table import ColumnGroup
 
 #: The keypoints whose triangulation places the person: shoulders and hips, the

@@ -19,14 +19,20 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import Config
-from pedenv.localization.fused.cue import (CueEstimate, FrameSkeletons, across_variance, horizontal_bearing, keypoint_usable,
-                              range_bearing_covariance)
+from pedenv.localization.base import FrameGeometry, Measurement
+from pedenv.localization.fused.cue import (
+    CueEstimate,
+    FrameSkeletons,
+    across_variance,
+    horizontal_bearing,
+    keypoint_usable,
+    range_bearing_covariance,
+)
 from pedenv.localization.fused.fusion import describe_sources, fuse_cues
 from pedenv.localization.fused.ground import ground_cue
 from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
 from pedenv.localization.fused.triangulation import Triangulated, triangulate, triangulation_cue
-from pedenv.localization.base import FrameGeometry, Measurement
 
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
 BOX_RELATIVE_STD = 0.5

@@ -24,7 +24,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.config import FusedConfig
-from pedenv.localization.fused.cue import REASON_CODE, CueEstimate, FrameSkeletons, first_reason, horizontal_bearing, symmetric_2x2
+from pedenv.localization.fused.cue import (
+    REASON_CODE,
+    CueEstimate,
+    FrameSkeletons,
+    first_reason,
+    horizontal_bearing,
+    symmetric_2x2,
+)
 from pedenv.localization.fused.history import CENTRE, CENTRE_SQ, TIME, TORSO_KEYPOINTS
 
 NAME = "triangulation"
