@@ -13,7 +13,10 @@ from pedenv.synthetic.walker import body_keypoints
 CAMERA = Camera.from_fov(1600, 900, 64.5, height_m=1.5)
 
 
-def see(xy, heights=None, rules=VisibilityRules()):
+DEFAULT_RULES = VisibilityRules()
+
+
+def see(xy, heights=None, rules=DEFAULT_RULES):
     xy = np.asarray(xy, float).reshape(-1, 2)
     n = len(xy)
     heights = np.full(n, 1.75) if heights is None else np.asarray(heights, float)

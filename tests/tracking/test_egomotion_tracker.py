@@ -47,7 +47,6 @@ def test_turning_ego_keeps_ids_only_with_compensation(compensate, same_id):
 def test_tracker_drops_after_three_misses_and_carries_rows():
     tr = Tracker(TrackingConfig(max_misses=3))
     box = np.array([[0, 0, 10, 20.0]])
-    kp = np.zeros((1, 17, 2))
     step = tr.update(box)
     assert tr.ids.tolist() == [1] and step.previous_rows.tolist() == [-1]
     for miss in (1, 2):

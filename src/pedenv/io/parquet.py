@@ -27,7 +27,10 @@ from pedenv.state import EnvironmentState
 DEFAULT_FRAMES_PER_ROW_GROUP = 50
 
 
-def _vec(n: int, kind=pa.float64()) -> pa.DataType:
+_FLOAT64 = pa.float64()
+
+
+def _vec(n: int, kind: pa.DataType = _FLOAT64) -> pa.DataType:
     return pa.list_(kind, n)
 
 

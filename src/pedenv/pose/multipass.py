@@ -16,6 +16,9 @@ from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
 from pedenv.pose.tiling import Pass
 from pedenv.records import Detections
 
+#: The default merge settings (frozen, shared).
+DEFAULT_MERGE = MergeConfig()
+
 
 def cut_by_inner_edge(boxes: np.ndarray, region: tuple[int, int, int, int], image_size: tuple[int, int],
                       margin_px: float) -> np.ndarray:
@@ -49,7 +52,7 @@ def run_pass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, step:
 
 def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass], *,
                      fixed_input: tuple[int, int] | None, score_threshold: float, iou_threshold: float,
-                     max_detections: int, edge_margin_px: float, merge: MergeConfig = MergeConfig()) -> Detections:
+                     max_detections: int, edge_margin_px: float, merge: MergeConfig = DEFAULT_MERGE) -> Detections:
     """All passes over ``image`` (H, W, 3) uint8 RGB, merged; ``fixed_input`` forces every pass's input size."""
     if len(passes) == 1:
         step = passes[0]

@@ -24,6 +24,9 @@ from pedenv.synthetic.walker import body_keypoints, gait_amplitude, stride_lengt
 #: Standing people lean about their ankles by up to this angle (radians) with this period (s).
 SWAY_RAD, SWAY_PERIOD_S = 0.012, 4.0
 
+#: The default visibility rules (frozen, shared).
+DEFAULT_VISIBILITY = VisibilityRules()
+
 
 def scenario_rng(seed: int, name: str, purpose: str = "scene") -> np.random.Generator:
     """A generator determined by ``seed``, the scene ``name`` and a ``purpose`` label."""
@@ -68,7 +71,7 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
 
 
 def generate_scene(seed: int, name: str, *, frame_rate_hz: float, duration_s: float, terrain: bool,
-                   rules: VisibilityRules = VisibilityRules()) -> Scene:
+                   rules: VisibilityRules = DEFAULT_VISIBILITY) -> Scene:
     """One scene of scenario ``name`` (see :func:`generate_scenes` for the arguments)."""
     rng = scenario_rng(seed, name)
     plan = build_scenario(name, rng, duration_s)

@@ -40,7 +40,7 @@ def test_tables_and_counts(exported):
 
 def test_chains_and_keyframe_cadence(exported):
     scenes, root, nusc = exported
-    for scene_rec, scene in zip(nusc.scene, scenes):
+    for scene_rec, _scene in zip(nusc.scene, scenes):
         sample = nusc.get("sample", scene_rec["first_sample_token"])
         sd = nusc.get("sample_data", sample["data"]["CAM_FRONT"])
         assert sd["prev"] == ""

@@ -8,8 +8,10 @@ from pedenv.skeleton import CocoKeypoint as K
 
 from fused_frames import make_frame, skeletons_of
 
+DEFAULT_FUSED = FusedConfig()
 
-def run_height(frame, config=FusedConfig(), **kw):
+
+def run_height(frame, config=DEFAULT_FUSED, **kw):
     return height_cue(skeletons_of(frame, config), float(frame.camera.intrinsics[0, 0]), config, **kw)
 
 

@@ -14,7 +14,10 @@ def observe(ground, ego_xs, times, pitch=0.0):
             for x, t in zip(ego_xs, times)]
 
 
-def run(observations, config=FusedConfig(), start=None, tri=False):
+DEFAULT_FUSED = FusedConfig()
+
+
+def run(observations, config=DEFAULT_FUSED, start=None, tri=False):
     """The triangulation cue of the last observation over the others; ``start``: (N, 2) the
     believed ground points (default: the truth is unknown, the last skeleton's mean height cut)."""
     *past, (now, t) = observations
