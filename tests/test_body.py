@@ -21,8 +21,9 @@ def test_template_is_mirror_symmetric_with_left_on_plus_y():
 
 def test_template_heights_hand_checked():
     # shares of body height; elbow and wrist hang straight: 0.818 - 0.186 and - 0.146 more
-    assert STANDING[[K.NOSE, K.LEFT_EYE, K.LEFT_EAR, K.LEFT_SHOULDER, K.LEFT_HIP, K.LEFT_KNEE, K.LEFT_ANKLE], 2].tolist() \
-        == [0.920, 0.933, 0.915, 0.818, 0.530, 0.285, 0.046]
+    assert STANDING[
+        [K.NOSE, K.LEFT_EYE, K.LEFT_EAR, K.LEFT_SHOULDER, K.LEFT_HIP, K.LEFT_KNEE, K.LEFT_ANKLE], 2
+    ].tolist() == [0.920, 0.933, 0.915, 0.818, 0.530, 0.285, 0.046]
     assert STANDING[K.LEFT_ELBOW, 2] == pytest.approx(0.632) and STANDING[K.LEFT_WRIST, 2] == pytest.approx(0.486)
     with pytest.raises(ValueError):
         STANDING[0, 0] = 1.0  # read-only: no caller can change everyone's person

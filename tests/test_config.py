@@ -9,7 +9,12 @@ def test_defaults_are_the_papers():
     c = Config()
     assert c.tracking.giou_threshold == -0.3 and c.tracking.max_misses == 3
     p = c.paper
-    assert (p.low_confidence_fraction, p.person_height_m, p.refinement_steps, p.refinement_lambda_offset) == (0.3, 1.7, 15, 5.0)
+    assert (p.low_confidence_fraction, p.person_height_m, p.refinement_steps, p.refinement_lambda_offset) == (
+        0.3,
+        1.7,
+        15,
+        5.0,
+    )
 
 
 @pytest.mark.parametrize("kind, field, value, message", [

@@ -29,7 +29,9 @@ def import_graph() -> dict[str, set[str]]:
             elif isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:
-                    base = ".".join(package.split(".")[: len(package.split(".")) - node.level + 1] + ([base] if base else []))
+                    base = ".".join(
+                        package.split(".")[: len(package.split(".")) - node.level + 1] + ([base] if base else [])
+                    )
                 targets |= {f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names}
         graph[name] = {t for t in targets if t in modules and t != name}
     return graph
@@ -86,7 +88,11 @@ def test_readme_module_map_matches_the_tree():
     text = README.read_text()
     block = text[text.index("## Module map"):]
     block = block[: block.index("\n## ", 4)]
-    named = {n for n in re.findall(r"`((?:[a-z0-9_]+/)*[a-z0-9_]+(?:\.py|/))`", block) if not n.startswith(("src/", "tests/"))}
+    named = {
+        n
+        for n in re.findall(r"`((?:[a-z0-9_]+/)*[a-z0-9_]+(?:\.py|/))`", block)
+        if not n.startswith(("src/", "tests/"))
+    }
     tree = {str(p.relative_to(SRC / "pedenv")) for p in (SRC / "pedenv").rglob("*.py") if p.name != "__init__.py"}
     tree |= {str(p.relative_to(SRC / "pedenv")) + "/" for p in (SRC / "pedenv").rglob("*") if p.is_dir()
              and (p / "__init__.py").exists()}

@@ -12,15 +12,24 @@ from pedenv.records import Camera, Detections, EgoPose, Frame
 from standing_people import frame_with_people
 
 
-@pytest.mark.parametrize("build, message", [
-    (lambda: Detections(np.zeros((3, 20, 2)), np.zeros((3, 20))), r"keypoints must have shape \(N, 17, 2\), got \(3, 20, 2\)"),
-    (lambda: Detections(np.zeros((2, 17, 2)), np.zeros((3, 17))), r"confidences must have shape \(2, 17\)"),
-    (lambda: Camera(np.zeros((3, 3)), 1600, 900), "intrinsics must be an invertible camera matrix"),
-    (lambda: Camera(np.eye(3), 0, 900), "image size must be positive"),
-    (lambda: EgoPose(np.zeros(3), np.diag([1.0, 1.0, -1.0])), "ego rotation must be orthonormal and right-handed"),
-    (lambda: Frame(7, 0.0, Camera.from_fov(), None), "frame 7: ego must be a EgoPose, got NoneType"),
-    (lambda: Frame(7, float("nan"), Camera.from_fov(), EgoPose.from_xy_yaw(0, 0, 0)), "frame 7: timestamp must be finite"),
-])
+@pytest.mark.parametrize(
+    "build, message",
+    [
+        (
+            lambda: Detections(np.zeros((3, 20, 2)), np.zeros((3, 20))),
+            r"keypoints must have shape \(N, 17, 2\), got \(3, 20, 2\)",
+        ),
+        (lambda: Detections(np.zeros((2, 17, 2)), np.zeros((3, 17))), r"confidences must have shape \(2, 17\)"),
+        (lambda: Camera(np.zeros((3, 3)), 1600, 900), "intrinsics must be an invertible camera matrix"),
+        (lambda: Camera(np.eye(3), 0, 900), "image size must be positive"),
+        (lambda: EgoPose(np.zeros(3), np.diag([1.0, 1.0, -1.0])), "ego rotation must be orthonormal and right-handed"),
+        (lambda: Frame(7, 0.0, Camera.from_fov(), None), "frame 7: ego must be a EgoPose, got NoneType"),
+        (
+            lambda: Frame(7, float("nan"), Camera.from_fov(), EgoPose.from_xy_yaw(0, 0, 0)),
+            "frame 7: timestamp must be finite",
+        ),
+    ],
+)
 def test_bad_records_name_the_field(build, message):
     with pytest.raises(InputError, match=message):
         build()

@@ -68,7 +68,10 @@ class PedestrianEnvironmentModel:
         rows = step.detection_rows
         if (rows < 0).any():  # low-score detections that continued no track are not pedestrians
             keep = rows >= 0
-            det, rows = Detections(det.keypoints[keep], det.confidences[keep], det.boxes[keep], det.scores[keep]), rows[keep]
+            det, rows = (
+                Detections(det.keypoints[keep], det.confidences[keep], det.boxes[keep], det.scores[keep]),
+                rows[keep],
+            )
             frame = dataclasses.replace(frame, detections=det)
         peds = self._locate(frame, det, rows) if len(det) else Pedestrians.empty()
         self.timer.add(t1 - t0, time.perf_counter() - t1, len(det))

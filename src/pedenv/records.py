@@ -138,7 +138,9 @@ class Camera:
     def __post_init__(self) -> None:
         k = check_array("intrinsics", self.intrinsics, (3, 3))
         if abs(np.linalg.det(k)) < 1e-9 or k[0, 0] <= 0 or k[1, 1] <= 0:
-            raise InputError(f"intrinsics must be an invertible camera matrix with positive focal lengths, got {k.tolist()}")
+            raise InputError(
+                f"intrinsics must be an invertible camera matrix with positive focal lengths, got {k.tolist()}"
+            )
         if int(self.width) <= 0 or int(self.height) <= 0:
             raise InputError(f"image size must be positive, got {self.width}x{self.height}")
         t = check_array("cam_to_vehicle", self.cam_to_vehicle, (4, 4))
@@ -250,7 +252,9 @@ class GroundTruth:
         if self.heights is not None:
             _frozen_set(self, "heights", check_array("ground truth heights", self.heights, (m,)))
         if self.keypoints_3d is not None:
-            _frozen_set(self, "keypoints_3d", check_array("ground truth keypoints_3d", self.keypoints_3d, (m, NUM_KEYPOINTS, 3)))
+            _frozen_set(
+                self, "keypoints_3d", check_array("ground truth keypoints_3d", self.keypoints_3d, (m, NUM_KEYPOINTS, 3))
+            )
 
     def __len__(self) -> int:
         return self.ids.shape[0]
@@ -293,7 +297,9 @@ class Frame:
         _frozen_set(self, "timestamp", ts)
         for name, kind in (("camera", Camera), ("ego", EgoPose)):
             if not isinstance(getattr(self, name), kind):
-                raise InputError(f"frame {self.index}: {name} must be a {kind.__name__}, got {type(getattr(self, name)).__name__}")
+                raise InputError(
+                    f"frame {self.index}: {name} must be a {kind.__name__}, got {type(getattr(self, name)).__name__}"
+                )
         if self.detections is not None and not isinstance(self.detections, Detections):
             raise InputError(f"frame {self.index}: detections must be Detections, got {type(self.detections).__name__}")
         if self.detections is not None:

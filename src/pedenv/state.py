@@ -82,7 +82,11 @@ class EnvironmentState:
             "scene": self.scene,
             "frame": self.frame_index,
             "timestamp": round(self.timestamp, 6),
-            "ego": {"translation": r(self.ego.translation), "rotation": r(self.ego.rotation), "yaw": round(self.ego.yaw, 6)},
+            "ego": {
+                "translation": r(self.ego.translation),
+                "rotation": r(self.ego.rotation),
+                "yaw": round(self.ego.yaw, 6),
+            },
             "keypoint_names": list(KEYPOINT_NAMES),
             "pedestrians": peds,
         }

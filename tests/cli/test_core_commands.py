@@ -34,15 +34,25 @@ def test_evaluate_writes_metrics_and_prints_table_one(simulated, tmp_path):
     assert len(lines) == 400  # 2 scenes x 200 frames at 10 Hz
 
 
-@pytest.mark.parametrize("args, message", [
-    (["evaluate", "--dataset", "waymo", "--data-root", ".", "--output", "o"], "unknown dataset 'waymo'; valid: synthetic, nuscenes, carla, kitti"),
-    (["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--scenes", "nowhere"],
-     "unknown scene(s) nowhere in synthetic; scenes there: drive-30kmh-sidewalk, red-light-crossing"),
-    (["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--pose-backend", "cid"],
-     "unknown pose backend 'cid'; valid: ground-truth, detector-model, onnx, ultralytics"),
-    (["simulate", "--output", "o", "--format", "kitti"], "unknown scene format 'kitti'"),
-    (["demo", "--method", "magic", "--output", "o"], "unknown position method 'magic'; valid: paper, fused"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (
+            ["evaluate", "--dataset", "waymo", "--data-root", ".", "--output", "o"],
+            "unknown dataset 'waymo'; valid: synthetic, nuscenes, carla, kitti",
+        ),
+        (
+            ["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--scenes", "nowhere"],
+            "unknown scene(s) nowhere in synthetic; scenes there: drive-30kmh-sidewalk, red-light-crossing",
+        ),
+        (
+            ["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--pose-backend", "cid"],
+            "unknown pose backend 'cid'; valid: ground-truth, detector-model, onnx, ultralytics",
+        ),
+        (["simulate", "--output", "o", "--format", "kitti"], "unknown scene format 'kitti'"),
+        (["demo", "--method", "magic", "--output", "o"], "unknown position method 'magic'; valid: paper, fused"),
+    ],
+)
 def test_bad_input_gives_one_error_line(simulated, tmp_path, args, message):
     args = [str(simulated) if a == "SIM" else a for a in args]
     done = pedenv(*args, cwd=tmp_path)

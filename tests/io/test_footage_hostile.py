@@ -49,8 +49,12 @@ def test_ego_pose_jump_is_warned_about(tmp_path):
 @pytest.mark.parametrize("fps", [float("inf"), float("nan"), 0.0, -3.0])
 def test_fps_must_be_finite_and_positive(tmp_path, fps):
     with pytest.raises(InputError, match=r"fps must be a finite number > 0"):
-        load_recording(calibration=_calib(tmp_path), ego_poses=_write(tmp_path / "p.csv", "timestamp,x,y,yaw\n0,0,0,0\n"),
-                       images=tmp_path, fps=fps)
+        load_recording(
+            calibration=_calib(tmp_path),
+            ego_poses=_write(tmp_path / "p.csv", "timestamp,x,y,yaw\n0,0,0,0\n"),
+            images=tmp_path,
+            fps=fps,
+        )
 
 
 def _cut_video(path, frames: int = 12):
@@ -108,7 +112,9 @@ def test_rerun_never_mixes_or_loses_runs(tmp_path, pose_env):  # noqa: F811 - py
     shorter.mkdir()
     for name in ("frame_000.jpg", "frame_001.jpg", "frame_002.jpg"):
         (shorter / name).write_bytes((rec["images"] / name).read_bytes())
-    _write(shorter / "timestamps.csv", "filename,timestamp\nframe_000.jpg,50.0\nframe_001.jpg,50.1\nframe_002.jpg,50.2\n")
+    _write(
+        shorter / "timestamps.csv", "filename,timestamp\nframe_000.jpg,50.0\nframe_001.jpg,50.1\nframe_002.jpg,50.2\n"
+    )
     assert run("--overwrite", images=shorter).returncode == 0
     assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(3)]
     assert json.loads((tmp_path / "out" / "run.json").read_text())["frames_done"] == 3

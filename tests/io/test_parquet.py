@@ -23,7 +23,9 @@ def test_environment_table_has_one_row_per_pedestrian_and_frame(evaluated):
     assert [r["track_id"] for r in mine] == [p["track_id"] for p in last["pedestrians"]]
     for row, ped in zip(mine, last["pedestrians"]):
         assert [row["x"], row["y"], row["z"]] == pytest.approx(ped["position"], abs=1e-3)
-        assert np.allclose([[row["cov_xx"], row["cov_xy"]], [row["cov_xy"], row["cov_yy"]]], ped["covariance_xy"], atol=1e-3)
+        assert np.allclose(
+            [[row["cov_xx"], row["cov_xy"]], [row["cov_xy"], row["cov_yy"]]], ped["covariance_xy"], atol=1e-3
+        )
         assert row["distance"] == pytest.approx(ped["distance"], abs=1e-3)
         assert np.allclose(row["keypoints_2d"], ped["skeleton"]["uv"], atol=1e-3)
         assert np.allclose(row["keypoints_3d"], ped["skeleton"]["xyz"], atol=1e-3)
@@ -38,7 +40,9 @@ def test_matches_table_reproduces_the_metrics(evaluated):
     assert table.schema.equals(MATCHES_SCHEMA)
     overall = result.metrics.overall
     assert table.num_rows == overall.count > 100
-    err = np.hypot(np.array(table["pred_x"]) - np.array(table["gt_x"]), np.array(table["pred_y"]) - np.array(table["gt_y"]))
+    err = np.hypot(
+        np.array(table["pred_x"]) - np.array(table["gt_x"]), np.array(table["pred_y"]) - np.array(table["gt_y"])
+    )
     assert np.allclose(err, table["abs_error"].to_numpy())
     assert table["abs_error"].to_numpy().mean() == pytest.approx(overall.abs_error_m, rel=1e-9)
     assert set(table["scene"].to_pylist()) == {"red-light-crossing", "drive-30kmh-sidewalk"}

@@ -73,7 +73,10 @@ class NaNOnce:
 
 def test_a_nan_measurement_never_poisons_the_track():
     """The issue's poisoning: one NaN measurement used to make every later frame of the track NaN."""
-    model, reference = PedestrianEnvironmentModel(Config(), locator=NaNOnce(Config(), bad_frame=3)), PedestrianEnvironmentModel()
+    model, reference = (
+        PedestrianEnvironmentModel(Config(), locator=NaNOnce(Config(), bad_frame=3)),
+        PedestrianEnvironmentModel(),
+    )
     frames = [frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 1.0 + 0.1 * i)]) for i in range(8)]
     states = [model.update(f) for f in frames]
     expected = [reference.update(f) for f in frames]

@@ -16,7 +16,9 @@ def ultralytics_asset(name: str) -> Path:
 
     spec = importlib.util.find_spec("ultralytics")
     if spec is None:
-        pytest.fail("ultralytics is not installed (pip install 'pedenv[ultralytics]'); deselect with -m 'not ultralytics'")
+        pytest.fail(
+            "ultralytics is not installed (pip install 'pedenv[ultralytics]'); deselect with -m 'not ultralytics'"
+        )
     return Path(list(spec.submodule_search_locations)[0]) / "assets" / name
 
 

@@ -56,8 +56,10 @@ def test_run_output_under_a_file_is_one_error_line(tmp_path, use_pose_cache, mon
     import numpy as np
 
     cv2.imwrite(str(tmp_path / "images" / "f0.png"), np.zeros((48, 64, 3), np.uint8))
-    (tmp_path / "calib.yaml").write_text("width: 64\nheight: 48\nintrinsics: [[50, 0, 32], [0, 50, 24], [0, 0, 1]]\n"
-                                         "cam_to_vehicle: {rotation: [0.5, -0.5, 0.5, -0.5], translation: [1, 0, 1.5]}\n")
+    (tmp_path / "calib.yaml").write_text(
+        "width: 64\nheight: 48\nintrinsics: [[50, 0, 32], [0, 50, 24], [0, 0, 1]]\n"
+        "cam_to_vehicle: {rotation: [0.5, -0.5, 0.5, -0.5], translation: [1, 0, 1.5]}\n"
+    )
     (tmp_path / "poses.csv").write_text("timestamp,x,y,yaw\n0,0,0,0\n1,1,0,0\n")
     (tmp_path / "taken").write_text("mine")
     code, _, err = pedenv(monkeypatch, capsys, "run", "--images", tmp_path / "images", "--fps", "10",

@@ -56,7 +56,9 @@ def test_onnx_backend_on_a_constant_model(tmp_path):
     np.testing.assert_allclose(det.keypoints[0, :, 0], 128.0)
     np.testing.assert_allclose(det.keypoints[0, :, 1], np.clip((2 * np.arange(17)) / 0.25, 0, 128))
     np.testing.assert_allclose(det.confidences, 0.8, rtol=1e-6)
-    frame = Frame(0, 0.0, Camera.from_fov(256, 128), EgoPose.from_xy_yaw(0, 0, 0), image=np.zeros((128, 256, 3), np.uint8))
+    frame = Frame(
+        0, 0.0, Camera.from_fov(256, 128), EgoPose.from_xy_yaw(0, 0, 0), image=np.zeros((128, 256, 3), np.uint8)
+    )
     assert len(backend(frame)) == 1
 
 

@@ -41,5 +41,7 @@ def test_detect_writes_json_and_images(tmp_path, use_pose_cache, photo):
 
 
 def test_detect_unknown_backend_lists_valid_ones(tmp_path, photo):
-    result = CliRunner().invoke(app, ["detect", str(photo("bus.jpg")), "--output", str(tmp_path), "--pose-backend", "yolo"])
+    result = CliRunner().invoke(
+        app, ["detect", str(photo("bus.jpg")), "--output", str(tmp_path), "--pose-backend", "yolo"]
+    )
     assert isinstance(result.exception, ValueError) and "valid: ground-truth" in str(result.exception)

@@ -61,15 +61,29 @@ def test_pitch_down_moves_the_band_up_and_roll_widens_it():
     assert rolled.bottom - rolled.top > level.bottom - level.top + 30
 
 
-@pytest.mark.parametrize("geometry, config, why", [
-    (None, DetectionConfig(), "no calibration"),
-    (CameraGeometry.level(NUSCENES_K, 8.0, pitch_down_rad=math.radians(35)), DetectionConfig(), "looking down"),
-    (CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-60)), DetectionConfig(), "looking at the sky"),
-    (CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-25)), DetectionConfig(), "band below the image"),
-    (CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(40)), DetectionConfig(max_pitch_down_deg=60),
-     "band above the image"),
-    (CameraGeometry.level(NUSCENES_K, -1.0), DetectionConfig(), "camera below the ground"),
-])
+@pytest.mark.parametrize(
+    "geometry, config, why",
+    [
+        (None, DetectionConfig(), "no calibration"),
+        (CameraGeometry.level(NUSCENES_K, 8.0, pitch_down_rad=math.radians(35)), DetectionConfig(), "looking down"),
+        (
+            CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-60)),
+            DetectionConfig(),
+            "looking at the sky",
+        ),
+        (
+            CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-25)),
+            DetectionConfig(),
+            "band below the image",
+        ),
+        (
+            CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(40)),
+            DetectionConfig(max_pitch_down_deg=60),
+            "band above the image",
+        ),
+        (CameraGeometry.level(NUSCENES_K, -1.0), DetectionConfig(), "camera below the ground"),
+    ],
+)
 def test_no_band_falls_back_to_tiling_the_whole_image(geometry, config, why):
     assert far_band(geometry, 1600, 900, config) is None, why
     passes, note = plan_passes(1600, 900, config, geometry)

@@ -169,4 +169,6 @@ def test_seeds_reproduce_and_differ(default_scenes):
         assert_scenes_equal(x, y)
     assert not np.array_equal(a[0].frames[0].ground_truth.positions[:3], c[0].frames[0].ground_truth.positions[:3])
     # a scenario generated alone equals the same scenario generated with all the others
-    assert_scenes_equal(generate_scenes(0, "standing-pedestrians")[0], default_scenes[SCENARIOS.index("standing-pedestrians")])
+    assert_scenes_equal(
+        generate_scenes(0, "standing-pedestrians")[0], default_scenes[SCENARIOS.index("standing-pedestrians")]
+    )

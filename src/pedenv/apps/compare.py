@@ -31,9 +31,16 @@ from pedenv.pose import PoseBackend, create_pose_backend
 from pedenv.visualize.plots import plot_error_by_distance
 
 
-def compare_methods(dataset: Dataset, *, methods: Sequence[str] = ("paper", "fused"), scenes: Sequence[str] | None = None,
-                    config: Config | None = None, pose_backend: str | PoseBackend | None = None,
-                    output_dir: str | Path | None = None, progress: bool = False) -> dict[str, EvaluationResult]:
+def compare_methods(
+    dataset: Dataset,
+    *,
+    methods: Sequence[str] = ("paper", "fused"),
+    scenes: Sequence[str] | None = None,
+    config: Config | None = None,
+    pose_backend: str | PoseBackend | None = None,
+    output_dir: str | Path | None = None,
+    progress: bool = False,
+) -> dict[str, EvaluationResult]:
     """Evaluate each of ``methods`` (``Config.method`` values) on the same frames.
 
     ``config`` supplies everything but the method. Returns method -> result, in order.

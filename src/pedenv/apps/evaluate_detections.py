@@ -90,10 +90,20 @@ def detection_table(report: dict, title: str = ""):
                 "recall", "precision", "ms/frame", "cpu ms", "units"]:
         table.add_column(col, justify="left" if col == "dataset" else "right")
     for name, block in summary.items():
-        cells = [f"{_pct(b['recall'])} ({b['found']}/{b['persons']})" for b in block["by_height"] + block["by_goal_height"]]
-        table.add_row(name, str(block["images"]), str(block["persons"]), *cells, _pct(block["recall"]),
-                      _pct(block["precision"]), f"{block['ms_per_frame']:.0f}",
-                      f"{report['cost'][name]['cpu_ms_per_frame']:.0f}", f"{report['cost'][name]['units_per_frame']:.1f}")
+        cells = [
+            f"{_pct(b['recall'])} ({b['found']}/{b['persons']})" for b in block["by_height"] + block["by_goal_height"]
+        ]
+        table.add_row(
+            name,
+            str(block["images"]),
+            str(block["persons"]),
+            *cells,
+            _pct(block["recall"]),
+            _pct(block["precision"]),
+            f"{block['ms_per_frame']:.0f}",
+            f"{report['cost'][name]['cpu_ms_per_frame']:.0f}",
+            f"{report['cost'][name]['units_per_frame']:.1f}",
+        )
     return table
 
 

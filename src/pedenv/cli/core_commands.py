@@ -36,7 +36,9 @@ def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path |
 
 
 #: The flags of the per-frame outputs, shared by demo and evaluate (run has them too).
-_PARQUET = typer.Option(False, "--parquet", help="Also write environment.parquet (and matches.parquet when evaluating).")
+_PARQUET = typer.Option(
+    False, "--parquet", help="Also write environment.parquet (and matches.parquet when evaluating)."
+)
 _RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several).")
 _MCAP = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap).")
 _OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output.")
@@ -171,8 +173,14 @@ def evaluate(
 @app.command()
 def bench(
     frames: int = typer.Option(100, "--frames", help="Frames per measurement."),
-    pose: bool = typer.Option(True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."),
-    samples: Path | None = typer.Option(Path("../shared/samples/real"), "--samples", help="Real samples for the detection modes' recall (skipped if absent)."),
+    pose: bool = typer.Option(
+        True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."
+    ),
+    samples: Path | None = typer.Option(
+        Path("../shared/samples/real"),
+        "--samples",
+        help="Real samples for the detection modes' recall (skipped if absent).",
+    ),
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.apps.bench import bench_core, format_bench

@@ -15,10 +15,14 @@ _out = console.__class__(width=None if sys.stdout.isatty() else 200)
 
 @app.command("evaluate-detections")
 def evaluate_detections_command(
-    data_root: Path = typer.Option(..., "--data-root", help="Folder with kitti/, mot17/, nuscenes-0061/ (e.g. ../shared/samples/real)."),
+    data_root: Path = typer.Option(
+        ..., "--data-root", help="Folder with kitti/, mot17/, nuscenes-0061/ (e.g. ../shared/samples/real)."
+    ),
     detection: str = typer.Option("far", "--detection", help="fast (one pass) or far (plus tiles over the far band)."),
     output: Path | None = typer.Option(None, "--output", help="Folder for detections_eval.json."),
-    pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (default: the prepared dynamic model)."),
+    pose_model: Path | None = typer.Option(
+        None, "--pose-model", help="ONNX file (default: the prepared dynamic model)."
+    ),
     threads: int = typer.Option(2, "--threads", help="onnxruntime threads."),
 ) -> None:
     """Recall by person height and distance, precision and ms per frame of the onnx pose backend on real images."""

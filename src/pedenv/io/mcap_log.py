@@ -55,7 +55,9 @@ def _quaternion(r: np.ndarray) -> fm.Quaternion:
 
 def _pose(position, yaw: float = 0.0) -> fm.Pose:
     """A pose at ``position`` (3,) metres, turned by ``yaw`` radians about z."""
-    return fm.Pose(position=_v3(position), orientation=fm.Quaternion(z=float(np.sin(yaw / 2)), w=float(np.cos(yaw / 2))))
+    return fm.Pose(
+        position=_v3(position), orientation=fm.Quaternion(z=float(np.sin(yaw / 2)), w=float(np.cos(yaw / 2)))
+    )
 
 
 class McapWriter:
@@ -118,12 +120,32 @@ class McapWriter:
 
     def _log_ground_truth(self, frame: Frame, stamp, ns: int) -> None:
         gt = frame.ground_truth
-        entities = [] if gt is None else [fm.SceneEntity(
-            timestamp=stamp, frame_id="world", id=f"gt-{int(i)}",
-            spheres=[fm.SpherePrimitive(pose=_pose(p + [0, 0, 0.2]), size=fm.Vector3(x=0.3, y=0.3, z=0.3), color=_BLACK)],
-            texts=[fm.TextPrimitive(pose=_pose(p + [0, 0, 2.3]), billboard=True, font_size=0.3, color=_BLACK,
-                                    text=f"gt {int(i)}")])
-            for i, p in zip(gt.ids, gt.positions)]
+        entities = (
+            []
+            if gt is None
+            else [
+                fm.SceneEntity(
+                    timestamp=stamp,
+                    frame_id="world",
+                    id=f"gt-{int(i)}",
+                    spheres=[
+                        fm.SpherePrimitive(
+                            pose=_pose(p + [0, 0, 0.2]), size=fm.Vector3(x=0.3, y=0.3, z=0.3), color=_BLACK
+                        )
+                    ],
+                    texts=[
+                        fm.TextPrimitive(
+                            pose=_pose(p + [0, 0, 2.3]),
+                            billboard=True,
+                            font_size=0.3,
+                            color=_BLACK,
+                            text=f"gt {int(i)}",
+                        )
+                    ],
+                )
+                for i, p in zip(gt.ids, gt.positions)
+            ]
+        )
         self._truth.log(fm.SceneUpdate(deletions=[_delete_all(stamp)], entities=entities), log_time=ns)
 
     def _log_camera(self, state: EnvironmentState, frame: Frame, stamp, ns: int) -> None:

@@ -40,8 +40,10 @@ def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: st
             raise InputError(f"output folder {path} is not empty; pass --overwrite to replace what an earlier run "
                              f"wrote there, or choose another folder")
         if not (path / MARKER).is_file():
-            raise InputError(f"output folder {path} is not empty and was not written by pedenv (no {MARKER} file); "
-                             f"--overwrite only replaces pedenv's own output folders: empty it or choose another folder")
+            raise InputError(
+                f"output folder {path} is not empty and was not written by pedenv (no {MARKER} file); "
+                f"--overwrite only replaces pedenv's own output folders: empty it or choose another folder"
+            )
         _clear(path)
     try:
         path.mkdir(parents=True, exist_ok=True)

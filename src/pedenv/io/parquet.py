@@ -94,7 +94,9 @@ class _IncrementalTable:
 
     def _add(self, columns: dict) -> None:
         """One frame's rows: column name -> array (numpy arrays of (n, ...) go to fixed-size lists)."""
-        self._pending.append(pa.record_batch([_arrow(columns[f.name], f.type) for f in self.schema], schema=self.schema))
+        self._pending.append(
+            pa.record_batch([_arrow(columns[f.name], f.type) for f in self.schema], schema=self.schema)
+        )
         self._frames += 1
         if self._frames >= self.every:
             self.flush()

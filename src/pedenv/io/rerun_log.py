@@ -108,9 +108,16 @@ class RerunWriter:
         cam = frame.camera
         rec.log("world/ego/camera", rr.Transform3D(translation=cam.cam_to_vehicle[:3, 3],
                                                    mat3x3=cam.cam_to_vehicle[:3, :3]), static=True)
-        rec.log("world/ego/camera/image", rr.Pinhole(image_from_camera=cam.intrinsics, resolution=[cam.width, cam.height],
-                                                     camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=2.0),
-                static=True)
+        rec.log(
+            "world/ego/camera/image",
+            rr.Pinhole(
+                image_from_camera=cam.intrinsics,
+                resolution=[cam.width, cam.height],
+                camera_xyz=rr.ViewCoordinates.RDF,
+                image_plane_distance=2.0,
+            ),
+            static=True,
+        )
         self.files.append(path)
         self._rec, self._scene, self._trajectory, self._shown = rec, scene, [], set()
 

@@ -49,7 +49,9 @@ def along_ray(bearing: np.ndarray, variance: float) -> np.ndarray:
     return variance * bearing[:, :, None] * bearing[:, None, :]
 
 
-def clamp_to_range(positions: np.ndarray, origin: np.ndarray, max_range_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def clamp_to_range(
+    positions: np.ndarray, origin: np.ndarray, max_range_m: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (N, 3) world, metres, moved in x-y onto the circle of ``max_range_m``
     around the camera ``origin`` (3,) where they lie beyond it.
 

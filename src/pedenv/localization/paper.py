@@ -198,7 +198,9 @@ def estimate_positions(rays: np.ndarray, centre_rays: np.ndarray, confidences: n
     return PositionEstimate(positions, distances, directions, sources)
 
 
-def keypoints_on_plane(rays: np.ndarray, origin: np.ndarray, directions: np.ndarray, distances: np.ndarray) -> np.ndarray:
+def keypoints_on_plane(
+    rays: np.ndarray, origin: np.ndarray, directions: np.ndarray, distances: np.ndarray
+) -> np.ndarray:
     """3D skeleton (N, 17, 3): each keypoint ray (N, 17, 3) cut by the plane through the
     body centre ``origin + distance * direction`` facing the camera. World frame, metres."""
     cos = np.einsum("nkc,nc->nk", rays, directions)

@@ -25,7 +25,10 @@ class GroundTruthPose:
         if gt is None or gt.keypoints is None:
             if frame.detections is not None:
                 return frame.detections
-            raise InputError(f"frame {frame.index} of {frame.scene or 'the sequence'}: no ground-truth skeletons for the 'ground-truth' pose backend")
+            raise InputError(
+                f"frame {frame.index} of {frame.scene or 'the sequence'}: "
+                "no ground-truth skeletons for the 'ground-truth' pose backend"
+            )
         conf = gt.visible.astype(np.float64)
         keep = gt.visible.any(axis=1)
         return Detections(gt.keypoints[keep], conf[keep])

@@ -46,7 +46,9 @@ def yolo_class():
         from ultralytics import YOLO
         from ultralytics.nn import tasks
     except ImportError as exc:
-        raise InputError(f"the pose weights (.pt) need ultralytics (pip install 'pedenv[ultralytics]'): {exc}") from None
+        raise InputError(
+            f"the pose weights (.pt) need ultralytics (pip install 'pedenv[ultralytics]'): {exc}"
+        ) from None
     tasks.SAFE_LOAD = True
     return YOLO
 
@@ -160,8 +162,9 @@ def export_onnx(weights: Path, input_size, target: Path) -> Path:
         level = LOGGER.level
         LOGGER.setLevel("WARNING")  # ultralytics' export banner would drown the paths we print
         try:
-            out = YOLO(str(local), task="pose").export(format="onnx", imgsz=(h, w), simplify=False, dynamic=dynamic, nms=False,
-                                                        device="cpu", verbose=False)
+            out = YOLO(str(local), task="pose").export(
+                format="onnx", imgsz=(h, w), simplify=False, dynamic=dynamic, nms=False, device="cpu", verbose=False
+            )
         except Exception as exc:  # ultralytics raises many kinds
             raise InputError(f"{weights}: ONNX export failed: {exc}") from None
         finally:

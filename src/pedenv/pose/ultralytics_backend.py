@@ -53,9 +53,16 @@ class UltralyticsPose:
     def detect(self, image_rgb: np.ndarray) -> Detections:
         """2D skeletons in ``image_rgb`` (H, W, 3) uint8 RGB; pixels of that image."""
         bgr = np.ascontiguousarray(image_rgb[..., ::-1])  # ultralytics takes numpy images as BGR
-        (result,) = self._model.predict(bgr, imgsz=list(self.input_size), conf=self.score_threshold,
-                                        iou=self.iou_threshold, max_det=self.max_detections, device=self.device, rect=False,
-                                        verbose=False)
+        (result,) = self._model.predict(
+            bgr,
+            imgsz=list(self.input_size),
+            conf=self.score_threshold,
+            iou=self.iou_threshold,
+            max_det=self.max_detections,
+            device=self.device,
+            rect=False,
+            verbose=False,
+        )
         if result.keypoints is None or len(result.boxes) == 0:
             return Detections.empty()
         kpts = result.keypoints.data.cpu().numpy().astype(np.float64)  # (N, 17, 3): x, y, visibility

@@ -104,7 +104,9 @@ class DetectorModel:
 
     def detection_probability(self, height_px: np.ndarray) -> np.ndarray:
         """Probability (N,) that persons ``height_px`` (N,) pixels tall are detected."""
-        return 1.0 / (1.0 + np.exp(-(np.asarray(height_px, float) - self.half_detection_height_px) / self.detection_slope_px))
+        return 1.0 / (
+            1.0 + np.exp(-(np.asarray(height_px, float) - self.half_detection_height_px) / self.detection_slope_px)
+        )
 
     def __call__(self, frame: Frame) -> Detections:
         gt = frame.ground_truth
@@ -159,5 +161,9 @@ class DetectorModel:
         template = -body_keypoints(np.ones(1), np.zeros(1), np.zeros(1), np.zeros((1, 2)))[0][:, [1, 2]]
         size = rng.uniform(12.0, 40.0, count)
         feet = np.stack([rng.uniform(0.0, width, count), rng.uniform(0.5 * height, 0.5 * height + 60.0, count)], axis=1)
-        kp = feet[:, None, :] + template[None] * size[:, None, None] + rng.normal(0.0, 0.1, (count, 17, 2)) * size[:, None, None]
+        kp = (
+            feet[:, None, :]
+            + template[None] * size[:, None, None]
+            + rng.normal(0.0, 0.1, (count, 17, 2)) * size[:, None, None]
+        )
         return np.clip(kp, 0.0, [width - 1.0, height - 1.0]), rng.uniform(0.1, 0.45, (count, 17))

@@ -42,7 +42,12 @@ from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth, Scen
 from pedenv.skeleton import NUM_KEYPOINTS
 
 FORMAT, VERSION = "pedenv-synthetic", 1
-_OPTIONAL = {"keypoints": (NUM_KEYPOINTS, 2), "visible": (NUM_KEYPOINTS,), "heights": (), "keypoints_3d": (NUM_KEYPOINTS, 3)}
+_OPTIONAL = {
+    "keypoints": (NUM_KEYPOINTS, 2),
+    "visible": (NUM_KEYPOINTS,),
+    "heights": (),
+    "keypoints_3d": (NUM_KEYPOINTS, 3),
+}
 _DETECTIONS = {"keypoints": (NUM_KEYPOINTS, 2), "confidences": (NUM_KEYPOINTS,), "boxes": (4,), "scores": ()}
 
 
@@ -159,5 +164,13 @@ def _frame(a: dict[str, np.ndarray], i: int, meta: dict) -> Frame:
     if a["has_detections"][i]:
         rows = slice(int(a["det_offsets"][i]), int(a["det_offsets"][i + 1]))
         det = Detections(*(a[f"det_{n}"][rows] for n in _DETECTIONS))
-    return Frame(int(a["index"][i]), float(a["timestamp"][i]), camera, EgoPose(a["ego_translation"][i], a["ego_rotation"][i]),
-                 detections=det, ground_truth=gt, image_path=meta["image_paths"][i], scene=meta["frame_scenes"][i])
+    return Frame(
+        int(a["index"][i]),
+        float(a["timestamp"][i]),
+        camera,
+        EgoPose(a["ego_translation"][i], a["ego_rotation"][i]),
+        detections=det,
+        ground_truth=gt,
+        image_path=meta["image_paths"][i],
+        scene=meta["frame_scenes"][i],
+    )

@@ -94,7 +94,9 @@ def _with_head_start(group: Pedestrians, starts: np.ndarray) -> Pedestrians:
                        group.phases, group.sway_phases)
 
 
-def standing_group(rng: np.random.Generator, centres: np.ndarray, sizes: np.ndarray, *, spread_m: float = 0.8) -> Pedestrians:
+def standing_group(
+    rng: np.random.Generator, centres: np.ndarray, sizes: np.ndarray, *, spread_m: float = 0.8
+) -> Pedestrians:
     """Clusters of standing people: ``sizes[i]`` people within ``spread_m`` of ``centres[i]`` (world x-y).
 
     Members of a cluster face its centre, as people chatting do.

@@ -43,7 +43,9 @@ class VisibilityRules:
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.min_distance_m < self.max_distance_m:
-            raise InputError(f"need 0 <= min_distance_m < max_distance_m, got {self.min_distance_m}, {self.max_distance_m}")
+            raise InputError(
+                f"need 0 <= min_distance_m < max_distance_m, got {self.min_distance_m}, {self.max_distance_m}"
+            )
         if self.min_height_px < 0:
             raise InputError(f"min_height_px must be >= 0, got {self.min_height_px}")
         for name in ("min_inside_fraction", "max_occluded_fraction"):
@@ -104,7 +106,9 @@ def visible_pedestrians(keypoints_3d: np.ndarray, ground: np.ndarray, camera: Ca
     pixels, depth = project(keypoints_3d, camera.intrinsics, invert_transform(cam_to_world))
     in_front = (depth > rules.min_depth_m).all(axis=1)
     w, h = camera.width, camera.height
-    inside = (pixels[..., 0] >= 0) & (pixels[..., 0] < w) & (pixels[..., 1] >= 0) & (pixels[..., 1] < h) & in_front[:, None]
+    inside = (
+        (pixels[..., 0] >= 0) & (pixels[..., 0] < w) & (pixels[..., 1] >= 0) & (pixels[..., 1] < h) & in_front[:, None]
+    )
     distance = np.linalg.norm(ground[:, :2] - cam_to_world[:2, 3], axis=1)
     raw = np.concatenate([pixels.min(axis=1), pixels.max(axis=1)], axis=1)
     boxes = np.clip(raw, 0.0, [w, h, w, h])

@@ -81,7 +81,9 @@ def body_keypoints(height: np.ndarray, phase: np.ndarray, gait: np.ndarray, sway
     side = np.array([1.0, -1.0])  # left, right: +y is the person's left
     leg_phase = phase + np.array([0.0, np.pi])  # (N, 2)
     thigh = a * THIGH_SWING_RAD * np.sin(leg_phase)
-    knee_flex = a * (KNEE_STANCE_FLEX_RAD + KNEE_SWING_FLEX_RAD * np.maximum(np.cos(leg_phase + KNEE_PEAK_LEAD_RAD), 0.0) ** 2)
+    knee_flex = a * (
+        KNEE_STANCE_FLEX_RAD + KNEE_SWING_FLEX_RAD * np.maximum(np.cos(leg_phase + KNEE_PEAK_LEAD_RAD), 0.0) ** 2
+    )
     shank = thigh - knee_flex
     leg_drop = THIGH * np.cos(thigh) + SHANK * np.cos(shank)  # (N, 2), in units of H
     hip_z = (ANKLE + leg_drop.max(axis=1, keepdims=True)) * h  # pelvis rides on the stance leg

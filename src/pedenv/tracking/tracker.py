@@ -117,7 +117,9 @@ class Tracker:
         sub = np.ix_(stage, live)
         extra = None if extra is None else extra[sub]
         if len(second):
-            extra = (0.0 if extra is None else extra) + np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[:, None]
+            extra = (0.0 if extra is None else extra) + np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[
+                :, None
+            ]
             extra = np.broadcast_to(extra, (len(stage), len(live)))
         m, free_rows, unmatched = associate(boxes[stage], tr.boxes[live], cfg.giou_threshold, cfg.max_height_ratio,
                                             None if allowed is None else allowed[sub], extra)

@@ -39,7 +39,13 @@ def frame_at(index: int, t: float, camera: Camera, *, ego_speed: float = 3.0, ya
         heading = np.arctan2(vy, vx)
         k3 = TEMPLATE @ rotation_z(heading).T + p
         uv, depth = project(k3, camera.intrinsics, world_to_cam)
-        inside = (depth > 0.5) & (uv[:, 0] > 0) & (uv[:, 0] < camera.width - 1) & (uv[:, 1] > 0) & (uv[:, 1] < camera.height - 1)
+        inside = (
+            (depth > 0.5)
+            & (uv[:, 0] > 0)
+            & (uv[:, 0] < camera.width - 1)
+            & (uv[:, 1] > 0)
+            & (uv[:, 1] < camera.height - 1)
+        )
         if inside.sum() < 3:
             continue
         ids.append(pid), pos.append(p), kp.append(uv), kp3.append(k3), vis.append(inside)

@@ -64,7 +64,9 @@ def test_camera_mount_and_ground_points(sample_frames):
             gt = f.ground_truth
             ankles = gt.keypoints_3d[:, [K.LEFT_ANKLE, K.RIGHT_ANKLE]]
             assert np.all(np.linalg.norm(ankles[..., :2].mean(1) - gt.positions[:, :2], axis=1) < 0.5)
-            assert np.all((ankles[..., 2].min(1) - gt.positions[:, 2] > 0.0) & (ankles[..., 2].min(1) - gt.positions[:, 2] < 0.2))
+            assert np.all(
+                (ankles[..., 2].min(1) - gt.positions[:, 2] > 0.0) & (ankles[..., 2].min(1) - gt.positions[:, 2] < 0.2)
+            )
             np.testing.assert_array_equal(gt.ids, -1)
 
 
@@ -168,14 +170,20 @@ def _good_record() -> dict:
     return load_record(SAMPLES / "scene1" / "data" / "data_18231.npy")
 
 
-@pytest.mark.parametrize("mutate, message", [
-    (lambda r: [1, 2, 3], r"data_5\.npy: expected a pickled dict"),
-    (lambda r: {k: v for k, v in r.items() if k not in ("pos_3d", "intr_cam")}, r"data_5\.npy: .*missing key\(s\) pos_3d, intr_cam"),
-    (lambda r: {**r, "ego_pos": [0, 0, 0]}, r"data_5\.npy: 'ego_pos' must be a dict"),
-    (lambda r: {**r, "2d_skel": [np.zeros((17, 2))]}, r"data_5\.npy: '2d_skel' must have shape \(N, 20, 2\)"),
-    (lambda r: {**r, "pos_3d": r["pos_3d"][:-1]}, r"data_5\.npy: .*different numbers of pedestrians"),
-    (lambda r: {**r, "cam2world": np.eye(3)}, r"data_5\.npy: 'cam2world' must have shape \(4, 4\)"),
-])
+@pytest.mark.parametrize(
+    "mutate, message",
+    [
+        (lambda r: [1, 2, 3], r"data_5\.npy: expected a pickled dict"),
+        (
+            lambda r: {k: v for k, v in r.items() if k not in ("pos_3d", "intr_cam")},
+            r"data_5\.npy: .*missing key\(s\) pos_3d, intr_cam",
+        ),
+        (lambda r: {**r, "ego_pos": [0, 0, 0]}, r"data_5\.npy: 'ego_pos' must be a dict"),
+        (lambda r: {**r, "2d_skel": [np.zeros((17, 2))]}, r"data_5\.npy: '2d_skel' must have shape \(N, 20, 2\)"),
+        (lambda r: {**r, "pos_3d": r["pos_3d"][:-1]}, r"data_5\.npy: .*different numbers of pedestrians"),
+        (lambda r: {**r, "cam2world": np.eye(3)}, r"data_5\.npy: 'cam2world' must have shape \(4, 4\)"),
+    ],
+)
 def test_bad_frame_files(tmp_path, mutate, message):
     _write(tmp_path, mutate(_good_record()))
     with pytest.raises(InputError, match=message):

@@ -53,9 +53,13 @@ def test_round_trip(written):
             assert (back.camera.width, back.camera.height) == (ours.camera.width, ours.camera.height)
             a, b = ours.ground_truth, back.ground_truth
             np.testing.assert_allclose(b.positions, a.positions, atol=1e-6)
-            np.testing.assert_allclose(b.keypoints_3d[:, EXACT_KEYPOINTS], a.keypoints_3d[:, EXACT_KEYPOINTS], atol=1e-6)
+            np.testing.assert_allclose(
+                b.keypoints_3d[:, EXACT_KEYPOINTS], a.keypoints_3d[:, EXACT_KEYPOINTS], atol=1e-6
+            )
             seen = a.visible[:, EXACT_KEYPOINTS]
-            np.testing.assert_allclose(b.keypoints[:, EXACT_KEYPOINTS][seen], a.keypoints[:, EXACT_KEYPOINTS][seen], atol=1e-6)
+            np.testing.assert_allclose(
+                b.keypoints[:, EXACT_KEYPOINTS][seen], a.keypoints[:, EXACT_KEYPOINTS][seen], atol=1e-6
+            )
             assert np.all(b.visible[:, EXACT_KEYPOINTS][seen])
             np.testing.assert_array_equal(b.ids, -1)
 

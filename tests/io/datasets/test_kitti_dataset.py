@@ -26,7 +26,9 @@ def test_ground_truth_feet_project_onto_the_box_bottoms():
         gt = frame.ground_truth
         uv, depth = project(gt.positions, frame.camera.intrinsics, invert_transform(frame.cam_to_world))
         assert np.all(depth > 9) and np.abs(uv[:, 1] - gt.boxes[:, 3]).max() < 10
-        assert np.all((gt.positions[:, 2] > -0.1) & (gt.positions[:, 2] < 0.7))  # z up; their ground lies 0.2-0.56 m above the road plane
+        assert np.all(
+            (gt.positions[:, 2] > -0.1) & (gt.positions[:, 2] < 0.7)
+        )  # z up; their ground lies 0.2-0.56 m above the road plane
         assert np.all(gt.heights > 1.0) and np.all(gt.heights < 2.1)
 
 

@@ -138,7 +138,9 @@ def test_bad_input(exported, tmp_path):
         NuScenesDataset(root, skeletons=tmp_path / "none.json")
     bad_side = tmp_path / "side.json"
     bad_side.write_text(json.dumps({"format": "pedenv-skeletons", "sample_data": {"t": [{"instance_token": "x"}]}}))
-    with pytest.raises(InputError, match=r"side\.json: sample_data t entry 0: needs instance_token, keypoints, visible"):
+    with pytest.raises(
+        InputError, match=r"side\.json: sample_data t entry 0: needs instance_token, keypoints, visible"
+    ):
         NuScenesDataset(root, skeletons=bad_side)
     assert (root / SIDE_FILE_NAME).is_file()
 

@@ -60,7 +60,11 @@ def test_chains_and_keyframe_cadence(exported):
             assert r["filename"].startswith(f"{folder}/CAM_FRONT/") and (root / r["filename"]).stat().st_size > 1000
         samples = [nusc.get("sample", r["sample_token"]) for r in chain if r["is_key_frame"]]
         assert all(s["scene_token"] == scene_rec["token"] for s in samples)
-        assert samples[0]["prev"] == "" and samples[-1]["next"] == "" and samples[-1]["token"] == scene_rec["last_sample_token"]
+        assert (
+            samples[0]["prev"] == ""
+            and samples[-1]["next"] == ""
+            and samples[-1]["token"] == scene_rec["last_sample_token"]
+        )
 
 
 def test_annotations_and_instances(exported):

@@ -38,8 +38,14 @@ def test_ground_variance_grows_fast_with_distance():
 
 
 def test_pixel_jacobian_matches_finite_differences():
-    config = FusedConfig(ground_max_distance_m=60.0, road_height_std_m=0.0, road_curvature_std_per_m=0.0, ankle_height_std_m=0.0,
-                         lateral_std_m=0.0, keypoint_pixel_std=1.0)
+    config = FusedConfig(
+        ground_max_distance_m=60.0,
+        road_height_std_m=0.0,
+        road_curvature_std_per_m=0.0,
+        ankle_height_std_m=0.0,
+        lateral_std_m=0.0,
+        keypoint_pixel_std=1.0,
+    )
     frame = make_frame(np.array([[15.0, 2.0, 0.0]]), pitch=0.02, roll=0.01)
     cue = run_ground(frame, config, noise_px=1.0)
     kp = frame.detections.keypoints[0, list(ANKLE_KEYPOINTS)]

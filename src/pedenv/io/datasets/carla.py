@@ -60,7 +60,9 @@ class CarlaDataset:
         found = [p for p in self.root.glob("scene*") if (p / "data").is_dir()]
         self._scenes = {p.name: p for p in sorted(found, key=lambda p: natural_key(p.name))}
         if not self._scenes:
-            raise InputError(f"{self.root}: no CARLA scenes (expected folders scene<N>/data/ with data_<frame>.npy files)")
+            raise InputError(
+                f"{self.root}: no CARLA scenes (expected folders scene<N>/data/ with data_<frame>.npy files)"
+            )
 
     def scene_names(self) -> list[str]:
         return list(self._scenes)
@@ -108,7 +110,9 @@ def load_record(path: Path) -> dict:
     """
     record = load_npy(path)  # never runs code from the file: see pedenv.io.safe_npy
     if not isinstance(record, dict):
-        raise InputError(f"{path}: expected a pickled dict with keys {', '.join(REQUIRED_KEYS)}, got {type(record).__name__}")
+        raise InputError(
+            f"{path}: expected a pickled dict with keys {', '.join(REQUIRED_KEYS)}, got {type(record).__name__}"
+        )
     missing = [k for k in REQUIRED_KEYS if k not in record]
     if missing:
         raise InputError(f"{path}: frame dict is missing key(s) {', '.join(missing)}")

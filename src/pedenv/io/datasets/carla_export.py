@@ -28,7 +28,9 @@ from pedenv.records import Frame, Scene
 FIRST_FRAME_NUMBER = 1000
 
 
-def write_carla(scenes: Iterable[Scene], output_dir: str | Path, *, first_frame: int = FIRST_FRAME_NUMBER) -> list[Path]:
+def write_carla(
+    scenes: Iterable[Scene], output_dir: str | Path, *, first_frame: int = FIRST_FRAME_NUMBER
+) -> list[Path]:
     """Write ``scenes`` as ``<output_dir>/scene<N>/{data,rgb}/`` and return the scene folders.
 
     Scenes already named ``scene<N>`` keep their name, the others become ``scene<i>`` by position.
@@ -63,7 +65,11 @@ def write_carla(scenes: Iterable[Scene], output_dir: str | Path, *, first_frame:
 
 
 def _folder_names(scenes: Sequence[Scene]) -> list[str]:
-    if scenes and all(re.fullmatch(r"scene\d+", s.name) for s in scenes) and len({s.name for s in scenes}) == len(scenes):
+    if (
+        scenes
+        and all(re.fullmatch(r"scene\d+", s.name) for s in scenes)
+        and len({s.name for s in scenes}) == len(scenes)
+    ):
         return [s.name for s in scenes]
     return [f"scene{i}" for i in range(len(scenes))]
 
@@ -75,8 +81,10 @@ def _frame_numbers(scene: Scene, first_frame: int) -> list[int]:
     ticks = [(f.timestamp - t0) * FRAME_RATE_HZ for f in scene.frames]
     for frame, tick in zip(scene.frames, ticks):
         if abs(tick - round(tick)) > 1e-3:
-            raise InputError(f"scene {scene.name!r} frame {frame.index}: timestamp {frame.timestamp:.4f} s is not on the "
-                             f"{FRAME_RATE_HZ:g} Hz grid of the CARLA layout; generate the scenes at {FRAME_RATE_HZ:g} Hz")
+            raise InputError(
+                f"scene {scene.name!r} frame {frame.index}: timestamp {frame.timestamp:.4f} s is not on the "
+                f"{FRAME_RATE_HZ:g} Hz grid of the CARLA layout; generate the scenes at {FRAME_RATE_HZ:g} Hz"
+            )
     return [first_frame + int(round(t)) for t in ticks]
 
 

@@ -46,7 +46,9 @@ def _training_dir(root: Path) -> Path:
     for candidate in (root, root / "training", root / "tracking_mini" / "training"):
         if (candidate / "image_02").is_dir() and (candidate / "calib").is_dir():
             return candidate
-    raise InputError(f"{root}: no KITTI tracking folder (expected training/image_02, training/calib, training/label_02)")
+    raise InputError(
+        f"{root}: no KITTI tracking folder (expected training/image_02, training/calib, training/label_02)"
+    )
 
 
 class KittiTrackingDataset:

@@ -11,7 +11,9 @@ from pedenv.records import Frame, Scene
 class MemoryDataset:
     """A :class:`~pedenv.io.datasets.Dataset` over a list of :class:`~pedenv.records.Scene`."""
 
-    def __init__(self, scenes: Sequence[Scene], name: str = "memory", default_pose_backend: str = "ground-truth") -> None:
+    def __init__(
+        self, scenes: Sequence[Scene], name: str = "memory", default_pose_backend: str = "ground-truth"
+    ) -> None:
         self._scenes = {s.name: s for s in scenes}
         self.name = name
         self.default_pose_backend = default_pose_backend

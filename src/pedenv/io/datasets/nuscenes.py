@@ -55,7 +55,9 @@ class NuScenesDataset:
         tables = self.root / version
         if not tables.is_dir():
             found = sorted(p.name for p in self.root.iterdir() if p.is_dir() and p.name.startswith("v"))
-            raise InputError(f"nuScenes version folder {tables} does not exist; version folders here: {', '.join(found) or 'none'}")
+            raise InputError(
+                f"nuScenes version folder {tables} does not exist; version folders here: {', '.join(found) or 'none'}"
+            )
         missing = [t for t in TABLES if not (tables / f"{t}.json").is_file()]
         if missing:
             raise InputError(f"{tables}: missing nuScenes table(s) {', '.join(t + '.json' for t in missing)}")
@@ -67,7 +69,9 @@ class NuScenesDataset:
         try:
             self.nusc = NuScenes(version=version, dataroot=str(self.root), verbose=False)
         except (AssertionError, KeyError, ValueError, IndexError) as exc:
-            raise InputError(f"{tables}: the nuScenes devkit cannot load these tables ({type(exc).__name__}: {exc})") from None
+            raise InputError(
+                f"{tables}: the nuScenes devkit cannot load these tables ({type(exc).__name__}: {exc})"
+            ) from None
         self.version = version
         self._scenes = {rec["name"]: rec for rec in self.nusc.scene}
         self._instance_ids = {rec["token"]: i for i, rec in enumerate(self.nusc.instance)}
@@ -89,21 +93,28 @@ class NuScenesDataset:
         chain = self._chain(scene)
         missing = [sd["filename"] for sd in chain if not (self.root / sd["filename"]).is_file()]
         if missing:
-            warnings.warn(f"nuScenes scene {scene}: image {self.root / missing[0]} is missing ({len(missing)} of "
-                          f"{len(chain)} CAM_FRONT images missing); image-based pose backends will fail on those frames",
-                          stacklevel=2)
+            warnings.warn(
+                f"nuScenes scene {scene}: image {self.root / missing[0]} is missing ({len(missing)} of "
+                f"{len(chain)} CAM_FRONT images missing); image-based pose backends will fail on those frames",
+                stacklevel=2,
+            )
         for index, sd in enumerate(chain):
             try:
                 with np.errstate(invalid="ignore", divide="ignore"):  # NaN is refused below, naming the record
                     frame = self._frame(sd, index, scene)
             except (InputError, ValueError, TypeError, KeyError, ZeroDivisionError) as exc:
-                raise InputError(f"{self.root / self.version}: scene {scene}, frame {index} (sample_data {sd['token']}, "
-                                 f"ego_pose, calibrated_sensor and sample_annotation tables): {exc}") from None
+                raise InputError(
+                    f"{self.root / self.version}: scene {scene}, frame {index} (sample_data {sd['token']}, "
+                    f"ego_pose, calibrated_sensor and sample_annotation tables): {exc}"
+                ) from None
             yield frame
 
     def _chain(self, scene: str) -> list[dict]:
         if scene not in self._scenes:
-            raise InputError(f"unknown nuScenes scene {scene!r} in {self.root / self.version}; valid: {', '.join(sorted(self._scenes))}")
+            raise InputError(
+                f"unknown nuScenes scene {scene!r} in {self.root / self.version}; "
+                f"valid: {', '.join(sorted(self._scenes))}"
+            )
         rec = self._scenes[scene]
         first = self.nusc.get("sample", rec["first_sample_token"])
         if CHANNEL not in first["data"]:

@@ -113,7 +113,9 @@ def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: d
                           f"(every {KEYFRAME_EVERY}th frame) will not be 2 Hz", stacklevel=3)
     n = (len(frames) - 1) // KEYFRAME_EVERY * KEYFRAME_EVERY + 1
     if n < len(frames):
-        log.info("scene %s: the last %d frame(s) follow the last keyframe and are not exported", scene.name, len(frames) - n)
+        log.info(
+            "scene %s: the last %d frame(s) follow the last keyframe and are not exported", scene.name, len(frames) - n
+        )
     frames = frames[:n]
     scene_token, log_token = token("scene", name), token("log", name)
     tables["log"].append({"token": log_token, "logfile": f"pedenv-{name}", "vehicle": "pedenv",
@@ -136,8 +138,14 @@ def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: d
         is_key = i % KEYFRAME_EVERY == 0
         cs_token = _calibration(frame, name, tables, calibrations, sensor_token)
         ego_token = token("ego_pose", name, i)
-        tables["ego_pose"].append({"token": ego_token, "timestamp": stamps[i], "translation": frame.ego.translation.tolist(),
-                                   "rotation": rotation_to_quaternion(frame.ego.rotation).tolist()})
+        tables["ego_pose"].append(
+            {
+                "token": ego_token,
+                "timestamp": stamps[i],
+                "translation": frame.ego.translation.tolist(),
+                "rotation": rotation_to_quaternion(frame.ego.rotation).tolist(),
+            }
+        )
         filename = f"{'samples' if is_key else 'sweeps'}/CAM_FRONT/{name}__CAM_FRONT__{stamps[i]}.jpg"
         _write_image(frame, root / filename, jpeg_quality)
         tables["sample_data"].append({
@@ -206,8 +214,15 @@ def _link_instances(annotations: dict[str, list[dict]], tables: dict) -> None:
             dt = b["_time"] - a["_time"]
             speed = np.hypot(*np.subtract(b["translation"][:2], a["translation"][:2])) / dt if dt > 0 else 0.0
             ann["attribute_tokens"] = [token("attribute", ATTRIBUTES[0 if speed > MOVING_SPEED else 1])]
-        tables["instance"].append({"token": inst, "category_token": category, "nbr_annotations": len(anns),
-                                   "first_annotation_token": anns[0]["token"], "last_annotation_token": anns[-1]["token"]})
+        tables["instance"].append(
+            {
+                "token": inst,
+                "category_token": category,
+                "nbr_annotations": len(anns),
+                "first_annotation_token": anns[0]["token"],
+                "last_annotation_token": anns[-1]["token"],
+            }
+        )
 
 
 def _write_image(frame: Frame, path: Path, quality: int) -> None:

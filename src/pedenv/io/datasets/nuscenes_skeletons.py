@@ -53,7 +53,9 @@ def skeleton_entry(instance_token: str, keypoints: np.ndarray, visible: np.ndarr
 
 def write_side_file(path: Path, entries: dict[str, list[dict]]) -> None:
     """Write ``{sample_data token: [entry, ...]}`` as a side file at ``path``."""
-    path.write_text(json.dumps({"format": FORMAT, "version": 1, "layout": "coco-17", "sample_data": entries}, allow_nan=False))
+    path.write_text(
+        json.dumps({"format": FORMAT, "version": 1, "layout": "coco-17", "sample_data": entries}, allow_nan=False)
+    )
 
 
 def read_side_file(path: Path) -> dict[str, list[Skeleton]]:
@@ -63,7 +65,9 @@ def read_side_file(path: Path) -> dict[str, list[Skeleton]]:
     except (OSError, ValueError) as exc:
         raise InputError(f"{path}: cannot read the skeleton side file ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("sample_data"), dict):
-        raise InputError(f"{path}: not a pedenv skeleton side file (needs format={FORMAT!r} and a 'sample_data' object)")
+        raise InputError(
+            f"{path}: not a pedenv skeleton side file (needs format={FORMAT!r} and a 'sample_data' object)"
+        )
     out: dict[str, list[Skeleton]] = {}
     for token, entries in data["sample_data"].items():
         skeletons = []

@@ -115,7 +115,10 @@ class MotBoxes:
 
 
 def read_gt(path: str | Path) -> MotBoxes:
-    """Read a MOT ``gt.txt`` (9 comma-separated columns: frame, id, left, top, width, height, conf, class, visibility)."""
+    """Read a MOT ``gt.txt``.
+
+    9 comma-separated columns: frame, id, left, top, width, height, conf, class, visibility.
+    """
     path = Path(path)
     rows = []
     for line, text in read_lines(path):

@@ -98,11 +98,16 @@ def _pedestrians(path: Path, entries) -> NuscenesPedestrians:
         try:
             velocity = p["velocity_global_xy"]
             row = {
-                "centers_global": (p["center_global"], (3,)), "sizes_wlh": (p["size_wlh"], (3,)),
-                "yaws_global": (p["yaw_global"], ()), "velocities_xy": ([np.nan, np.nan] if velocity is None else velocity, (2,)),
-                "centers_cam": (p["center_cam"], (3,)), "distances_xy": (p["distance_from_ego_xy_m"], ()),
-                "boxes": (p["bbox_2d"], (4,)), "centerlines": (p["centerline_2d"], (2, 2)),
-                "heights_px": (p["height_px"], ()), "num_lidar_pts": (p["num_lidar_pts"], ()),
+                "centers_global": (p["center_global"], (3,)),
+                "sizes_wlh": (p["size_wlh"], (3,)),
+                "yaws_global": (p["yaw_global"], ()),
+                "velocities_xy": ([np.nan, np.nan] if velocity is None else velocity, (2,)),
+                "centers_cam": (p["center_cam"], (3,)),
+                "distances_xy": (p["distance_from_ego_xy_m"], ()),
+                "boxes": (p["bbox_2d"], (4,)),
+                "centerlines": (p["centerline_2d"], (2, 2)),
+                "heights_px": (p["height_px"], ()),
+                "num_lidar_pts": (p["num_lidar_pts"], ()),
                 "num_radar_pts": (p["num_radar_pts"], ()),
             }
             attribute = str(p["attribute"])

@@ -85,7 +85,9 @@ def skeleton_3d(tri: Triangulated, rays: np.ndarray, origin: np.ndarray, xy: np.
     count = torso.sum(axis=1)
     if not count.any():
         return cut
-    centre = (np.where(torso[..., None], tri.points[:, TORSO_KEYPOINTS, :2], 0.0)).sum(axis=1) / np.maximum(count, 1)[:, None]
+    centre = (np.where(torso[..., None], tri.points[:, TORSO_KEYPOINTS, :2], 0.0)).sum(axis=1) / np.maximum(count, 1)[
+        :, None
+    ]
     bx, by = bearing[:, None, 0], bearing[:, None, 1]
     c = tri.covariances
     var = c[..., 0] * bx * bx + 2.0 * c[..., 1] * bx * by + c[..., 2] * by * by

@@ -88,10 +88,12 @@ def triangulate(rays: np.ndarray, terms: np.ndarray, usable: np.ndarray, origin:
     """Triangulate N pedestrians' K keypoints from their rays now and in the past.
 
     rays: (N, K, 3) unit, world, now; terms: (N, K, 9) their least-squares terms
-    (:func:`~pedenv.localization.fused.history.ray_terms`); usable: (N, K) bool. origin: (3,) camera centre now, world, metres; time: seconds.
+    (:func:`~pedenv.localization.fused.history.ray_terms`); usable: (N, K) bool.
+    origin: (3,) camera centre now, world, metres; time: seconds.
     start: (N, K, 3) world, metres, where each keypoint is believed to be (outlier test);
     has_start: (N,) bool. past_rays, past_terms, past_dots, past_usable, cameras, filled:
-    the tracks' histories (N, K, L, 3), (N, K, L, 9), (N, K, L), (N, K, L), (N, L, 5), (N, L) (see :class:`~pedenv.localization.fused.history.TrackHistory`).
+    the tracks' histories (N, K, L, 3), (N, K, L, 9), (N, K, L), (N, K, L), (N, L, 5), (N, L)
+    (see :class:`~pedenv.localization.fused.history.TrackHistory`).
     angle_std: keypoint noise (radians), scalar or (N,) per person. Reasons: ``no-history``,
     ``no-baseline``, ``unplaced``, ``no-parallax``, ``degenerate``.
     """
