@@ -81,8 +81,8 @@ class TrackingConfig:
         detection no track took in the image whose foot point lies within ``memory_gate``
         (squared Mahalanobis distance, 2 dof) of a remembered (or just missed) track's
         predicted ground position gets that track's id back. Raising it bridges longer
-        occlusions, with more chance of handing an old id to someone else. The ``fused`` preset uses 2 s. Needs the camera (the
-        model passes it).
+        occlusions, with more chance of handing an old id to someone else. The ``fused``
+        preset uses 2 s. Needs the camera (the model passes it).
     memory_gate: the squared Mahalanobis gate of re-identification after an occlusion
         (the ``fused`` preset: 9.2, the 99 % quantile). Raising it re-identifies more.
     """
