@@ -64,7 +64,7 @@ def nms(boxes: np.ndarray, scores: np.ndarray, iou_threshold: float, max_detecti
     """
     boxes = np.asarray(boxes, float)
     order = np.argsort(-np.asarray(scores), kind="stable")
-    keep = []
+    keep: list[int] = []
     while order.size and len(keep) < max_detections:
         best, rest = order[0], order[1:]
         keep.append(best)

@@ -73,7 +73,7 @@ def innovation_distance(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarr
 
 
 def correct(x: np.ndarray, P: np.ndarray, started: np.ndarray, z: np.ndarray, r: np.ndarray, spread: np.ndarray,
-            config) -> tuple[np.ndarray, np.ndarray]:
+            config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One frame's correction of the tracks that have a measurement.
 
     x (N, 4), P (N, 4, 4): predicted states; started (N,) bool: the filter holds a state.

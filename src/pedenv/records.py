@@ -68,8 +68,9 @@ class Detections:
 
     keypoints: np.ndarray
     confidences: np.ndarray
-    boxes: np.ndarray | None = None
-    scores: np.ndarray | None = None
+    # None (the default) is replaced in __post_init__: after construction both are arrays
+    boxes: np.ndarray = None  # type: ignore[assignment]
+    scores: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         kp = check_array("keypoints", self.keypoints, (None, NUM_KEYPOINTS, 2), finite=False)
