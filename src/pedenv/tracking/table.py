@@ -59,6 +59,8 @@ class TrackColumns(ColumnGroup):
     misses: np.ndarray
     hits: np.ndarray
     velocities: np.ndarray
+    lost: np.ndarray
+    last_seen: np.ndarray
 
     def __init__(self) -> None:
         super().__init__({"ids": ((), np.int64), "boxes": ((4,), np.float64), "misses": ((), np.int64),
