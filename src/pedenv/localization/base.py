@@ -14,6 +14,7 @@ from typing import Protocol
 
 import numpy as np
 
+from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, pixel_rays
 from pedenv.records import Detections, Frame
 from pedenv.tracking.table import ColumnGroup
@@ -40,6 +41,8 @@ class FrameGeometry:
     def of(cls, frame: Frame) -> FrameGeometry:
         """The geometry of ``frame`` and its detections (which must be set)."""
         det, cam_to_world = frame.detections, frame.cam_to_world
+        if det is None:
+            raise InputError(f"frame {frame.index}: no detections to locate (run a pose backend first)")
         centre = 0.5 * (det.boxes[:, :2] + det.boxes[:, 2:])
         rays = pixel_rays(np.concatenate([det.keypoints, centre[:, None]], axis=1), frame.camera.intrinsics,
                           cam_to_world)

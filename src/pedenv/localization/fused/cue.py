@@ -142,16 +142,16 @@ def stance_ankle(usable: np.ndarray, tangents: np.ndarray, angle_std: float):
     (it may be lifted), and each skeleton's observed keypoint noise.
     """
     a = list(ANKLE_KEYPOINTS)
-    angle_std = observed_angle_std(usable, tangents, angle_std)
+    noise = observed_angle_std(usable, tangents, angle_std)
     extent = np.where(usable, tangents, -np.inf).max(axis=1) - np.where(usable, tangents, np.inf).min(axis=1)
     seen, z = usable[:, a], tangents[:, a]
     both = seen[:, 0] & seen[:, 1]
-    limit = LIFTED_ANKLE_SIGMA * np.sqrt(2.0) * angle_std + LIFTED_ANKLE_EXTENT * np.where(both, extent, 0.0)
+    limit = LIFTED_ANKLE_SIGMA * np.sqrt(2.0) * noise + LIFTED_ANKLE_EXTENT * np.where(both, extent, 0.0)
     lifted = both & (np.abs(z[:, 0] - z[:, 1]) > limit)
     lower_first = z[:, 0] <= z[:, 1]
     use = seen.copy()
     use[lifted, 0], use[lifted, 1] = lower_first[lifted], ~lower_first[lifted]
-    return use, seen[:, 0] ^ seen[:, 1], angle_std
+    return use, seen[:, 0] ^ seen[:, 1], noise
 
 
 @dataclass(frozen=True)

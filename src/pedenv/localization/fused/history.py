@@ -85,7 +85,7 @@ class TrackHistory(ColumnGroup):
         self.filled[rows, slot] = True
         self.count[rows] += 1
 
-    def of(self, rows: np.ndarray):
+    def of(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(rays, terms, dots, usable, cameras, filled)`` of the tracks at ``rows`` (N,); views, not
         copies, when ``rows`` is the whole table in order (the usual case)."""
         if len(rows) == len(self.count) and (rows == np.arange(len(rows))).all():

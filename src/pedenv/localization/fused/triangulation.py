@@ -84,7 +84,7 @@ def _solve_3x3(s: np.ndarray):
 def triangulate(rays: np.ndarray, terms: np.ndarray, usable: np.ndarray, origin: np.ndarray, time: float,
                 start: np.ndarray, has_start: np.ndarray, past_rays: np.ndarray, past_terms: np.ndarray,
                 past_dots: np.ndarray, past_usable: np.ndarray, cameras: np.ndarray, filled: np.ndarray,
-                angle_std: float, config: FusedConfig) -> Triangulated:
+                angle_std: float | np.ndarray, config: FusedConfig) -> Triangulated:
     """Triangulate N pedestrians' K keypoints from their rays now and in the past.
 
     rays: (N, K, 3) unit, world, now; terms: (N, K, 9) their least-squares terms
