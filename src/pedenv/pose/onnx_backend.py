@@ -92,7 +92,9 @@ class OnnxPose:
             if wanted is not None and wanted != fixed:
                 raise InputError(f"{self.model_path}: model input is {fixed[0]}x{fixed[1]}, "
                                  f"asked for {wanted[0]}x{wanted[1]}")
-            self.input_size = fixed
+            height, width = fixed
+            assert height is not None and width is not None  # not dynamic: both sides fixed
+            self.input_size = (height, width)
         self._input_name = self._session.get_inputs()[0].name
 
     def __call__(self, frame: Frame) -> Detections:
@@ -103,6 +105,9 @@ class OnnxPose:
 
     def plan(self, width: int, height: int, geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
         """The passes this backend runs on a ``width`` x ``height`` image, and how they were chosen."""
+        if self.detection is None:
+            raise InputError(f"{self.model_path}: no detection mode set (one pass at {self.input_size}): "
+                             "nothing to plan")
         passes, note = plan_passes(width, height, self.detection, geometry)
         if self._base_input is not None:
             passes[0] = Pass(passes[0].region, self._base_input, "full")

@@ -114,7 +114,7 @@ def letterbox(image: np.ndarray, input_size: tuple[int, int], pad_value: int = P
 
     Returns ``(padded (in_h, in_w, 3) uint8, Letterbox)``.
     """
-    box = Letterbox.fit(image.shape[:2], input_size)
+    box = Letterbox.fit((image.shape[0], image.shape[1]), input_size)
     new_h, new_w = box.resized_size
     if (new_h, new_w) != image.shape[:2]:
         image = cv2.resize(image, (new_w, new_h), interpolation=cv2.INTER_LINEAR)

@@ -24,7 +24,8 @@ def benchmark_image() -> np.ndarray:
         import importlib.util
 
         spec = importlib.util.find_spec("ultralytics")
-        path = Path(list(spec.submodule_search_locations)[0]) / "assets" / "bus.jpg" if spec else None
+        locations = spec.submodule_search_locations if spec else None
+        path = Path(list(locations)[0]) / "assets" / "bus.jpg" if locations else None
     except (ImportError, ValueError):
         path = None
     if path is not None and path.is_file():
@@ -66,7 +67,7 @@ def benchmark_pose(repeats: int = 10, threads: int = 2) -> list[dict]:
             ("ultralytics", (640, 640), _ultralytics)]
     rows = []
     for name, size, make in runs:
-        row = {"backend": name, "input_size": f"{size[0]}x{size[1]}"}
+        row: dict[str, object] = {"backend": name, "input_size": f"{size[0]}x{size[1]}"}
         try:
             backend = make()
         except (InputError, ImportError) as exc:
