@@ -323,6 +323,7 @@ def load_recording(*, calibration: str | Path, ego_poses: str | Path, images: st
         if not video.is_file():
             raise InputError(f"{video}: video file not found")
         return Recording(name or video.stem, camera, trajectory, video=video, fps=fps, start_time=start)
+    assert images is not None  # exactly one of images and video (checked above)
     folder = Path(images)
     if not folder.is_dir():
         raise InputError(f"{folder}: image folder not found")

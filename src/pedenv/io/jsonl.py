@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TextIO
 
 from pedenv.errors import InputError
 from pedenv.io.output_dir import writable_file
@@ -21,7 +22,7 @@ class EnvironmentWriter:
     def __init__(self, path: str | Path, decimals: int = 3) -> None:
         self.path = Path(path)
         self.decimals = decimals
-        self._file = None
+        self._file: TextIO | None = None
 
     def __enter__(self) -> EnvironmentWriter:
         path = writable_file(self.path, "environment model")
@@ -32,6 +33,8 @@ class EnvironmentWriter:
         return self
 
     def write(self, state: EnvironmentState) -> None:
+        if self._file is None:
+            raise InputError(f"{self.path}: EnvironmentWriter.write() outside its with block")
         self._file.write(json.dumps(state.to_dict(self.decimals), separators=(",", ":"), allow_nan=False) + "\n")
         self._file.flush()
 

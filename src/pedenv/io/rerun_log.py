@@ -81,6 +81,7 @@ class RerunWriter:
         if self._rec is None or state.scene != self._scene:
             self._start(state.scene, frame)
         rec = self._rec
+        assert rec is not None  # _start() made it
         rec.set_time("frame", sequence=int(state.frame_index))
         rec.set_time("time", duration=float(state.timestamp))
         self._log_ego(rec, state, frame)

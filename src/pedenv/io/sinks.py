@@ -20,6 +20,8 @@ from pedenv.state import EnvironmentState
 class FrameSink(Protocol):
     """Something that records the environment model frame by frame."""
 
+    path: Path
+
     def write(self, state: EnvironmentState, frame: Frame) -> None: ...
 
     def close(self) -> None: ...

@@ -55,7 +55,8 @@ def write_carla(
         numbers = _frame_numbers(scene, first_frame)
         blank: dict[tuple[int, int], bytes] = {}
         for frame, number in zip(scene.frames, numbers):
-            np.save(folder / "data" / f"data_{number}.npy", frame_record(frame, scene.name), allow_pickle=True)
+            record = frame_record(frame, scene.name)  # a dict, pickled: numpy's stubs type np.save for arrays only
+            np.save(folder / "data" / f"data_{number}.npy", record, allow_pickle=True)  # type: ignore[arg-type]
             size = (frame.camera.width, frame.camera.height)
             if size not in blank:
                 blank[size] = cv2.imencode(".png", np.zeros((size[1], size[0], 3), np.uint8))[1].tobytes()

@@ -18,6 +18,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -161,7 +162,12 @@ class NuScenesDataset:
         nusc = self.nusc
         size = (camera.width, camera.height)
         by_instance = {s.instance_token: s for s in skeletons}
-        ids, positions, boxes, heights, keypoints, visible = [], [], [], [], [], []
+        ids: list[int] = []
+        positions: list[list[float]] = []
+        boxes: list[Any] = []  # (4,) arrays from the side file or lists from the 3D box
+        heights: list[float] = []
+        keypoints: list[np.ndarray] = []
+        visible: list[np.ndarray] = []
         for ann_token in nusc.get("sample", sd["sample_token"])["anns"]:
             ann = nusc.get("sample_annotation", ann_token)
             if ann["category_name"] not in PEDESTRIAN_CATEGORIES:

@@ -156,7 +156,7 @@ def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: d
         gt = frame.ground_truth
         if gt is None:
             continue
-        if gt.keypoints is not None:
+        if gt.keypoints is not None and gt.visible is not None:
             skeletons[sd_tokens[i]] = [skeleton_entry(_instance_key(name, gt.ids[m], i, m), gt.keypoints[m],
                                                       gt.visible[m], gt.boxes[m]) for m in range(len(gt))]
         if is_key:
@@ -229,7 +229,7 @@ def _write_image(frame: Frame, path: Path, quality: int) -> None:
     """A grey image of the camera's size with the ground-truth skeletons drawn in white."""
     image = np.full((frame.camera.height, frame.camera.width, 3), 96, np.uint8)
     gt = frame.ground_truth
-    if gt is not None and gt.keypoints is not None:
+    if gt is not None and gt.keypoints is not None and gt.visible is not None:
         for kp, vis in zip(np.round(gt.keypoints).astype(int), gt.visible):
             for a, b in COCO_BONES:
                 if vis[a] and vis[b]:
