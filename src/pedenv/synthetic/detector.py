@@ -118,6 +118,7 @@ class DetectorModel:
         if gt.keypoints is None:  # a frame with nobody in it
             kp, seen = np.zeros((0, 17, 2)), np.zeros((0, 17), bool)
         else:
+            assert gt.visible is not None  # GroundTruth sets visible whenever it has keypoints
             kp, seen = gt.keypoints, gt.visible
         n = kp.shape[0]
         height = np.ptp(kp[..., 1], axis=1) if n else np.zeros(0)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -81,7 +82,7 @@ def ego_poses(track: EgoTrack, terrain: Terrain) -> list[EgoPose]:
     rear = 0.5 * (wheels[-1, 1] + wheels[-1, -1])
     left_z = 0.5 * (wheels[1, 1] + wheels[-1, 1])
     right_z = 0.5 * (wheels[1, -1] + wheels[-1, -1])
-    z = 0.25 * sum(wheels.values())
+    z = cast(np.ndarray, 0.25 * sum(wheels.values()))  # (T,) metres
     # positive pitch turns the nose down (front lower); accelerating lifts it
     pitch = np.arctan2(rear - front, WHEELBASE_M) - SUSPENSION_PITCH_RAD_PER_MPS2 * track.acceleration
     roll = np.arctan2(left_z - right_z, TRACK_WIDTH_M)  # positive roll lifts the left side

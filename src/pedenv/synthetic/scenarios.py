@@ -96,7 +96,9 @@ def turn_intersection(rng: np.random.Generator, duration_s: float) -> ScenarioPl
         sidewalk_walkers(rng, cross, _count(0.12, ahead[1] - ahead[0]), ahead),
         crossers(rng, cross, 8, (sign * 8.0, sign * 11.0), (-6.0, duration_s - 6.0)),
         crossers(rng, main, 6, (x_c + 8.0, x_c + 11.0), (-6.0, duration_s - 6.0)),
-        standing_group(rng, [[x_c + dx, dy] for dx in (-7.0, 7.0) for dy in (-7.0, 7.0)], rng.integers(1, 4, 4)),
+        standing_group(
+            rng, np.array([[x_c + dx, dy] for dx in (-7.0, 7.0) for dy in (-7.0, 7.0)]), rng.integers(1, 4, 4)
+        ),
     )
     side = "left" if sign > 0 else "right"
     return ScenarioPlan(f"the ego turns {side} at an intersection (yaw rate 20 deg/s for {turn_s} s)",
