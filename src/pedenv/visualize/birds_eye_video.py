@@ -46,7 +46,7 @@ class BirdsEyeVideo:
         self.scale = 0.9 * self.size / self.ahead  # pixels per metre
         self.origin = np.array([self.size / 2.0, self.size * 0.95])  # the ego's pixel (u, v)
         self.frames_written = 0
-        self._writer = None
+        self._writer: cv2.VideoWriter | None = None
         self._first: tuple[np.ndarray, float] | None = None
         self._scene: str | None = None
         self._base: tuple | None = None
@@ -141,14 +141,16 @@ class BirdsEyeVideo:
         side = self.ahead
         for m in np.arange(-side, side + 1e-9, 5.0):
             for line in (np.array([[m, -side], [m, side]]), np.array([[-side, m], [side, m]])):
-                cv2.line(img, *(tuple(int(x) for x in p) for p in self._px(line)), _GRID, 1)
+                (u0, v0), (u1, v1) = self._px(line).tolist()
+                cv2.line(img, (int(u0), int(v0)), (int(u1), int(v1)), _GRID, 1)
 
     def _open(self, fps: float) -> None:
-        self._writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), float(fps),
-                                       (self.size, self.size))
-        if not self._writer.isOpened():
+        writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter.fourcc(*"mp4v"), float(fps), (self.size, self.size))
+        self._writer = writer
+        if not writer.isOpened():
             raise InputError(f"{self.path}: cannot write the bird's-eye video")
 
     def _put(self, picture: np.ndarray) -> None:
+        assert self._writer is not None  # _open() came first
         self._writer.write(picture)
         self.frames_written += 1

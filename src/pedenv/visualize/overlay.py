@@ -27,7 +27,8 @@ _PALETTE = np.array([[230, 25, 75], [60, 180, 75], [0, 130, 200], [245, 130, 48]
 
 def color_for(key: int) -> tuple[int, int, int]:
     """A stable RGB colour per track id (or detection index)."""
-    return tuple(int(c) for c in _PALETTE[int(key) % len(_PALETTE)])
+    r, g, b = (int(c) for c in _PALETTE[int(key) % len(_PALETTE)])
+    return r, g, b
 
 
 def _scale(image: np.ndarray) -> float:

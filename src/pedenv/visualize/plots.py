@@ -61,7 +61,7 @@ def plot_birds_eye(state: EnvironmentState, path: str | Path, frame: Frame | Non
         ax2.quiver(pos[:, 0], pos[:, 1], vel[:, 0], vel[:, 1], color="tab:red", angles="xy", scale_units="xy",
                    scale=0.5, width=0.003)
         for i, tid in enumerate(peds.track_ids):
-            ax2.annotate(str(tid), pos[i, :2], textcoords="offset points", xytext=(4, 4), fontsize=7)
+            ax2.annotate(str(tid), (pos[i, 0], pos[i, 1]), textcoords="offset points", xytext=(4, 4), fontsize=7)
     if frame is not None and frame.ground_truth is not None and len(frame.ground_truth):
         gt = (frame.ground_truth.positions - state.ego.translation) @ state.ego.rotation
         ax2.scatter(gt[:, 0], gt[:, 1], marker="x", color="black", s=22, label="ground truth", zorder=2)
