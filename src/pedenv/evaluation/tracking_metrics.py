@@ -7,6 +7,8 @@ independently of the position error.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from pedenv.boxes import iou_matrix
@@ -20,7 +22,7 @@ class TrackingAccumulator:
 
         self._mm = motmetrics
         self.min_iou = min_iou
-        self.scenes: dict[str, object] = {}
+        self.scenes: dict[str, Any] = {}  # motmetrics.MOTAccumulator per scene (motmetrics has no types)
 
     def add(self, scene: str, gt_ids: np.ndarray, gt_boxes: np.ndarray, track_ids: np.ndarray,
             boxes: np.ndarray) -> None:
