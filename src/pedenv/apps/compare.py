@@ -21,7 +21,7 @@ from rich.table import Table
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.evaluation.metrics import strict_json
+from pedenv.evaluation.metrics import ErrorSummary, strict_json
 from pedenv.evaluation.report import fmt
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.io.datasets import Dataset
@@ -92,7 +92,8 @@ def comparison_by_scene_table(results: dict[str, EvaluationResult], title: str =
         table.add_column(f"{m} abs. [m]", justify="right")
     table.add_column("# Pedestrians", justify="right")
     per_method = {m: dict(r.metrics.scenes) for m, r in results.items()}
-    rows = [("all", {m: r.metrics.overall for m, r in results.items()})]
+    overall: dict[str, ErrorSummary | None] = {m: r.metrics.overall for m, r in results.items()}
+    rows = [("all", overall)]
     rows += [(name, {m: per_method[m].get(name) for m in results}) for name, _ in first.scenes]
     for name, cells in rows:
         values = []

@@ -97,6 +97,8 @@ def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, c
 def _score(frame: Frame, state: EnvironmentState, samples: ErrorSamples, tracking: TrackingAccumulator,
            pairs=None) -> int:
     gt, peds = frame.ground_truth, state.pedestrians
+    if gt is None:
+        raise InputError(f"frame {frame.index} of {frame.scene}: no ground truth to score against")
     tracking.add(frame.scene, gt.ids, gt.boxes, peds.track_ids, peds.boxes)
     match = match_to_ground_truth(peds.boxes, peds.positions[:, :2], gt.boxes, gt.positions[:, :2])
     sel = match >= 0

@@ -6,6 +6,7 @@ import dataclasses
 import json
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -55,8 +56,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
-    summary = {"recording": rec.name, "pose_backend": describe, "frames_total": len(rec), "frames_done": 0,
-               "environment": str(out / "environment.jsonl")}
+    summary: dict[str, Any] = {"recording": rec.name, "pose_backend": describe, "frames_total": len(rec),
+                               "frames_done": 0, "environment": str(out / "environment.jsonl")}
     model = PedestrianEnvironmentModel(cfg)
     writer_video, last = None, None
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
@@ -67,6 +68,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                 state = model.update(frame)
                 writer.write(state)
                 sinks.write(state, frame)
+                if frame.image is None:
+                    raise InputError(f"{rec.name}: frame {frame.index} has no image")
                 drawn = draw_environment(frame.image, state)
                 if video_out:
                     writer_video = writer_video or _open_video(out / "overlay.mp4", rec, drawn.shape)
@@ -100,7 +103,7 @@ def _open_video(path: Path, rec: Recording, shape):
         cap = cv2.VideoCapture(str(rec.video))
         rate = cap.get(cv2.CAP_PROP_FPS) or rate
         cap.release()
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), rate, (shape[1], shape[0]))
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"mp4v"), rate, (shape[1], shape[0]))
     if not writer.isOpened():
         raise InputError(f"{path}: cannot write the overlay video")
     return writer

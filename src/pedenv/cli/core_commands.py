@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from pedenv.cli.app import app, console
 from pedenv.config import Config
+
+if TYPE_CHECKING:
+    from pedenv.pose import PoseBackend
 
 #: stdout console for tables and results; wide enough for the tables when piped
 _out = console.__class__(width=None if sys.stdout.isatty() else 140)
@@ -133,13 +137,14 @@ def evaluate(
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
+    backend: str | PoseBackend | None = pose_backend
     if detection is not None or pose_backend == "onnx":
         from pedenv.errors import InputError
         from pedenv.pose.base import create_pose_backend
 
         if (pose_backend or data.default_pose_backend) != "onnx":
             raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
-        pose_backend = create_pose_backend("onnx", detection=detection or "far")
+        backend = create_pose_backend("onnx", detection=detection or "far")
     names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
     cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
     if cues:
@@ -150,7 +155,7 @@ def evaluate(
     if method == "both":
         from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 
-        results = compare_methods(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
+        results = compare_methods(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
                                   progress=True)
         _out.print(comparison_by_scene_table(results))
         _out.print(comparison_summary_table(results))
@@ -160,13 +165,13 @@ def evaluate(
         from pedenv.localization import configure
 
         cfg = configure(cfg, method)
-    metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
+    metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
                                progress=True, extra_outputs=_extra_outputs(output, parquet, rerun, mcap, matches=True))
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
     if ablation:
         from pedenv.apps.ablation import run_ablation
 
-        _out.print(run_ablation(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output))
+        _out.print(run_ablation(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output))
     _out.print(f"outputs: {output}", highlight=False)
 
 
