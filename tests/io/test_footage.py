@@ -125,22 +125,17 @@ def test_slerp_agrees_with_the_textbook_formula():
     np.testing.assert_allclose(slerp(q0, -q1, 1.0), q1, atol=1e-15)
 
 
-@pytest.mark.parametrize(
-    "text, message",
-    [
-        ("t,x,y\n0,0,0\n", "header must be timestamp,x,y,z,qw,qx,qy,qz or timestamp,x,y,yaw"),
-        ("timestamp,x,y,yaw\n", "no ego pose rows"),
-        (
-            "timestamp,x,y,yaw\n0,0,0,0\n2,1,0,0\n1,2,0,0\n",
-            r"sorted by time: row 3 \(line 4, timestamp 1\.000000 s\) is not after row 2",
-        ),
-        ("timestamp,x,y,yaw\n0,0,0,0\n0,1,0,0\n", "sorted by time: row 2"),
-        ("timestamp,x,y,yaw\n0,0,0\n", r"row 1 \(line 2\) must hold 4 numbers"),
-        ("timestamp,x,y,yaw\n0,a,0,0\n", r"row 1 \(line 2\) must hold 4 numbers"),
-        ("timestamp,x,y,yaw\n0,nan,0,0\n", "NaN"),
-        ("timestamp,x,y,z,qw,qx,qy,qz\n0,0,0,0,0,0,0,0\n", "row 1 has a zero quaternion"),
-    ],
-)
+@pytest.mark.parametrize("text, message", [
+    ("t,x,y\n0,0,0\n", "header must be timestamp,x,y,z,qw,qx,qy,qz or timestamp,x,y,yaw"),
+    ("timestamp,x,y,yaw\n", "no ego pose rows"),
+    ("timestamp,x,y,yaw\n0,0,0,0\n2,1,0,0\n1,2,0,0\n",
+     r"sorted by time: row 3 \(line 4, timestamp 1\.000000 s\) is not after row 2"),
+    ("timestamp,x,y,yaw\n0,0,0,0\n0,1,0,0\n", "sorted by time: row 2"),
+    ("timestamp,x,y,yaw\n0,0,0\n", r"row 1 \(line 2\) must hold 4 numbers"),
+    ("timestamp,x,y,yaw\n0,a,0,0\n", r"row 1 \(line 2\) must hold 4 numbers"),
+    ("timestamp,x,y,yaw\n0,nan,0,0\n", "NaN"),
+    ("timestamp,x,y,z,qw,qx,qy,qz\n0,0,0,0,0,0,0,0\n", "row 1 has a zero quaternion"),
+])
 def test_ego_pose_errors(tmp_path, text, message):
     with pytest.raises(InputError, match="poses.csv: .*" + message):
         load_ego_poses(_write(tmp_path / "poses.csv", text))
@@ -152,10 +147,8 @@ def _image_folder(tmp_path, count=3, size=(48, 64), stamps=None) -> Path:
     for i in range(count):
         cv2.imwrite(str(folder / f"f{i:02d}.png"), np.full((*size, 3), 40 * i, np.uint8))
     if stamps is not None:
-        _write(
-            folder / "timestamps.csv",
-            "filename,timestamp\n" + "".join(f"f{i:02d}.png,{t}\n" for i, t in enumerate(stamps)),
-        )
+        _write(folder / "timestamps.csv",
+               "filename,timestamp\n" + "".join(f"f{i:02d}.png,{t}\n" for i, t in enumerate(stamps)))
     return folder
 
 
@@ -183,10 +176,8 @@ def test_frames_from_fps_start_at_first_pose(tmp_path):
 def test_frame_outside_the_poses_keeps_the_frames_before(tmp_path):
     rec = _recording(tmp_path, images=_image_folder(tmp_path, stamps=[100.5, 101.0, 101.5]))
     done = []
-    with pytest.raises(
-        InputError,
-        match=r"f02\.png: frame 2 at 101\.500000 s has no ego pose.*poses\.csv covers 100\.000000 s to 101\.000000 s",
-    ):
+    with pytest.raises(InputError, match=r"f02\.png: frame 2 at 101\.500000 s has no ego pose.*"
+                                         r"poses\.csv covers 100\.000000 s to 101\.000000 s"):
         for frame in rec.frames():
             done.append(frame.index)
     assert done == [0, 1]
@@ -300,12 +291,9 @@ def test_run_cli_stops_at_a_frame_without_pose_and_keeps_earlier_output(tmp_path
     rec = _bus_recording(tmp_path / "rec", pose_env["bus"], frames=4, last_stamp=51.0)
     args = ["run", "--images", rec["images"], "--calibration", rec["calibration"], "--ego-poses", rec["ego_poses"],
             "--output", tmp_path / "out"]
-    done = subprocess.run(
-        [sys.executable, "-c", "from pedenv.cli import main; main()", *map(str, args)],
-        capture_output=True,
-        text=True,
-        env={**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"], "COLUMNS": "1000"},
-    )
+    env = {**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"], "COLUMNS": "1000"}
+    done = subprocess.run([sys.executable, "-c", "from pedenv.cli import main; main()", *map(str, args)],
+                          capture_output=True, text=True, env=env)
     assert done.returncode == 2
     errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
     assert len(errors) == 1 and "frame_003.jpg: frame 3 at 51.000000 s has no ego pose" in errors[0]
