@@ -65,12 +65,10 @@ def demo(
     mcap: Optional[Path] = _MCAP,
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
-    from pedenv.apps.demo import run_demo
+    from pedenv.apps.demo import VIDEO_SCENE, run_demo
     from pedenv.io.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
-    from pedenv.apps.demo import VIDEO_SCENE
-
     extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
