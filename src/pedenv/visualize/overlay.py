@@ -16,7 +16,7 @@ from pedenv.io.detections import detections_to_dict, unique_names, write_detecti
 from pedenv.io.output_dir import writable_file
 from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Detections
-from pedenv.skeleton import COCO_BONES, KEYPOINT_NAMES
+from pedenv.skeleton import COCO_BONES
 
 #: Keypoints at or below this confidence are not drawn.
 MIN_DRAW_CONFIDENCE = 0.3
