@@ -35,7 +35,7 @@ def test_evaluate_writes_metrics_and_prints_table_one(simulated, tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["evaluate", "--dataset", "kitti", "--data-root", ".", "--output", "o"], "unknown dataset 'kitti'; valid: synthetic, nuscenes, carla"),
+    (["evaluate", "--dataset", "waymo", "--data-root", ".", "--output", "o"], "unknown dataset 'waymo'; valid: synthetic, nuscenes, carla, kitti"),
     (["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--scenes", "nowhere"],
      "unknown scene(s) nowhere in synthetic; scenes there: drive-30kmh-sidewalk, red-light-crossing"),
     (["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--pose-backend", "cid"],
