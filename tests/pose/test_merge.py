@@ -79,5 +79,5 @@ def test_merge_config_is_checked(field):
 
 def test_a_box_spanning_the_band_from_edge_to_edge_is_a_fragment():
     band = (200, 200, 520, 306)  # a tile of the band, rows 200-306 of a 640x480 image
-    boxes = np.array([[141, 200, 299, 305], [300, 230, 330, 300], [0, 0, 30, 479.0]])
+    boxes = np.array([[141, 200, 299, 305], [300, 230, 330, 300], [400, 200, 430, 260.0]])
     assert spans_the_region(boxes, band, (480, 640), 2).tolist() == [True, False, False]
