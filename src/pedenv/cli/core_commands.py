@@ -130,18 +130,23 @@ def evaluate(
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
-    if detection is not None or pose_backend == "onnx":
-        from pedenv.pose.base import create_pose_backend
-
-        from pedenv.errors import InputError
-
-        if (pose_backend or data.default_pose_backend) != "onnx":
-            raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
-        pose_backend = create_pose_backend("onnx", detection=detection or "far")
     names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
     cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
+    if method and method != "both":
+        from pedenv.localization import configure
+
+        cfg = configure(cfg, method)
+    if detection is not None or pose_backend == "onnx":
+        from pedenv.errors import InputError
+        from pedenv.pose.base import create_pose_backend
+
+        if (pose_backend or data.default_pose_backend) != "onnx":
+            raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
+        threshold = {} if cfg.tracking.pose_score_threshold is None else {
+            "score_threshold": cfg.tracking.pose_score_threshold}
+        pose_backend = create_pose_backend("onnx", detection=detection or "far", **threshold)
     from pedenv.io.output_dir import prepare_output_dir
 
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
@@ -154,10 +159,6 @@ def evaluate(
         _out.print(comparison_summary_table(results))
         _out.print(f"outputs: {output}", highlight=False)
         return
-    if method:
-        from pedenv.localization import configure
-
-        cfg = configure(cfg, method)
     metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=pose_backend, output_dir=output,
                                progress=True, extra_outputs=_extra_outputs(output, parquet, rerun, mcap, matches=True))
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
