@@ -71,7 +71,7 @@ def _cut_video(path, frames: int = 12):
 @pytest.mark.ultralytics
 @pytest.mark.onnx_model
 @pytest.mark.slow
-def test_video_cut_in_half_is_warned_and_recorded(tmp_path, pose_env, monkeypatch):  # noqa: F811 - pytest fixture
+def test_video_cut_in_half_is_warned_and_recorded(tmp_path, pose_env, monkeypatch):  # noqa: F811
     from pedenv.apps.run import run_recording
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
@@ -88,7 +88,7 @@ def test_video_cut_in_half_is_warned_and_recorded(tmp_path, pose_env, monkeypatc
 @pytest.mark.ultralytics
 @pytest.mark.onnx_model
 @pytest.mark.slow
-def test_rerun_never_mixes_or_loses_runs(tmp_path, pose_env):  # noqa: F811 - pytest fixture
+def test_rerun_never_mixes_or_loses_runs(tmp_path, pose_env):  # noqa: F811
     """The issue's re-run: a failing second run truncated the first run's environment.jsonl, and a
     shorter successful re-run left the longer run's overlays behind."""
     rec = _bus_recording(tmp_path / "rec", pose_env["bus"])

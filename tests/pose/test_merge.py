@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from pedenv.pose.merge import MergeConfig, keypoint_similarity, merge_detections
-from pedenv.pose.multipass import cut_by_inner_edge
+from pedenv.pose.multipass import cut_by_inner_edge, spans_the_region
 from pedenv.records import Detections
 
 # A standing person 100 px tall, COCO-17, box (0, 0)-(40, 100) before shifting.
@@ -75,3 +75,9 @@ def test_cut_flags_only_at_inner_edges():
 def test_merge_config_is_checked(field):
     with pytest.raises(ValueError, match=f"MergeConfig.{field} must be in"):
         MergeConfig(**{field: 1.5})
+
+
+def test_a_box_spanning_the_band_from_edge_to_edge_is_a_fragment():
+    band = (200, 200, 520, 306)  # a tile of the band, rows 200-306 of a 640x480 image
+    boxes = np.array([[141, 200, 299, 305], [300, 230, 330, 300], [400, 200, 430, 260.0]])
+    assert spans_the_region(boxes, band, (480, 640), 2).tolist() == [True, False, False]

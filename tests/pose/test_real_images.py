@@ -50,7 +50,7 @@ def test_onnx_agrees_with_ultralytics(pose_cache, photo, name, size):
     from pedenv.pose.ultralytics_backend import UltralyticsPose
 
     image = read_image_rgb(photo(name))
-    ours = OnnxPose(find_onnx_model(size, cache=pose_cache)).detect(image)
+    ours = OnnxPose(find_onnx_model(size, cache=pose_cache), input_size=size).detect(image)  # one pass
     ref = UltralyticsPose(input_size=size).detect(image)
     assert len(ours) == len(ref) > 0
     cost = np.linalg.norm(ours.boxes[:, None] - ref.boxes[None], axis=2)

@@ -52,7 +52,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                          start_time=start_time)
     if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
+    backend = create_pose_backend(pose_backend, **backend_options(
+        pose_backend, pose_model, pose_input_size, detection, cfg.tracking.pose_score_threshold))
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}

@@ -70,12 +70,10 @@ def demo(
     mcap: Path | None = _MCAP,
 ) -> None:
     """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
-    from pedenv.apps.demo import run_demo
+    from pedenv.apps.demo import VIDEO_SCENE, run_demo
     from pedenv.io.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
-    from pedenv.apps.demo import VIDEO_SCENE
-
     extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
@@ -137,6 +135,14 @@ def evaluate(
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
+    names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
+    cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
+    if cues:
+        cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
+    if method and method != "both":
+        from pedenv.localization import configure
+
+        cfg = configure(cfg, method)
     backend: str | PoseBackend | None = pose_backend
     if detection is not None or pose_backend == "onnx":
         from pedenv.errors import InputError
@@ -144,11 +150,9 @@ def evaluate(
 
         if (pose_backend or data.default_pose_backend) != "onnx":
             raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
-        backend = create_pose_backend("onnx", detection=detection or "far")
-    names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
-    cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
-    if cues:
-        cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
+        threshold = {} if cfg.tracking.pose_score_threshold is None else {
+            "score_threshold": cfg.tracking.pose_score_threshold}
+        backend = create_pose_backend("onnx", detection=detection or "far", **threshold)
     from pedenv.io.output_dir import prepare_output_dir
 
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
@@ -161,10 +165,6 @@ def evaluate(
         _out.print(comparison_summary_table(results))
         _out.print(f"outputs: {output}", highlight=False)
         return
-    if method:
-        from pedenv.localization import configure
-
-        cfg = configure(cfg, method)
     metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
                                progress=True, extra_outputs=_extra_outputs(output, parquet, rerun, mcap, matches=True))
     _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")

@@ -37,6 +37,17 @@ def cut_by_inner_edge(boxes: np.ndarray, region: tuple[int, int, int, int], imag
     return cut
 
 
+def spans_the_region(boxes: np.ndarray, region: tuple[int, int, int, int], image_size: tuple[int, int],
+                     margin_px: float) -> np.ndarray:
+    """(N,) bool: boxes cut by two opposite inner edges of ``region`` (top and bottom, or left
+    and right): a part of something larger than the tile, whole only in a coarser pass."""
+    x0, y0, x1, y1 = region
+    h, w = image_size
+    vertical = (y0 > 0) & (y1 < h) & (boxes[:, 1] <= y0 + margin_px) & (boxes[:, 3] >= y1 - margin_px)
+    horizontal = (x0 > 0) & (x1 < w) & (boxes[:, 0] <= x0 + margin_px) & (boxes[:, 2] >= x1 - margin_px)
+    return vertical | horizontal
+
+
 def run_pass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, step: Pass, input_size: tuple[int, int],
              score_threshold: float, iou_threshold: float, max_detections: int) -> Detections:
     """Detections of one pass, in pixels of the whole ``image`` (H, W, 3) uint8 RGB."""
@@ -63,6 +74,9 @@ def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarra
         size = fixed_input or step.input_size
         dets = run_pass(infer, image, step, size, score_threshold, iou_threshold, max_detections)
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
-        parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, (image.shape[0], image.shape[1]),
-                                                    edge_margin_px / scale)))
+        margin = edge_margin_px / scale
+        image_size = (image.shape[0], image.shape[1])
+        if len(dets):
+            dets = dets.take(~spans_the_region(dets.boxes, step.region, image_size, margin))
+        parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, image_size, margin)))
     return merge_detections(parts, merge, max_detections)

@@ -56,7 +56,7 @@ class DetectionConfig:
     max_pitch_down_deg: float = 20.0
     max_pitch_up_deg: float = 30.0
     max_tiles: int = 12
-    edge_margin_px: int = 4
+    edge_margin_px: int = 16
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:

@@ -1,0 +1,35 @@
+"""``pedenv evaluate`` with --parquet, --rerun and --mcap, as a user runs it."""
+
+import json
+import subprocess
+import sys
+
+import pyarrow.parquet as pq
+import pytest
+import rerun.dataframe as rrd
+from mcap.reader import make_reader
+
+
+@pytest.mark.slow
+def test_evaluate_writes_the_tables_the_recording_and_the_mcap(tmp_path):
+    def pedenv(*args):
+        return subprocess.run([sys.executable, "-m", "pedenv", *map(str, args)], capture_output=True, text=True,
+                              timeout=600)
+
+    assert pedenv("simulate", "--output", tmp_path / "sim", "--scenes", 1, "--seed", 4).returncode == 0
+    out = tmp_path / "out"
+    done = pedenv("evaluate", "--dataset", "synthetic", "--data-root", tmp_path / "sim", "--output", out,
+                  "--pose-backend", "ground-truth", "--parquet", "--rerun", out / "eval.rrd",
+                  "--mcap", out / "eval.mcap")
+    assert done.returncode == 0, done.stderr
+    frames = len((out / "environment.jsonl").read_text().splitlines())
+    assert frames == 200
+    matches = pq.read_table(out / "matches.parquet")
+    count = json.loads((out / "metrics.json").read_text())["overall"]["count"]
+    assert matches.num_rows == count > 1000
+    assert pq.read_table(out / "environment.parquet").num_rows >= count
+    view = rrd.load_recording(out / "eval.rrd").view(index="frame", contents="/**")
+    assert view.select().read_all().num_rows == frames
+    with (out / "eval.mcap").open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert sum(summary.statistics.channel_message_counts.values()) == 7 * frames  # 7 topics per frame, no image
