@@ -22,7 +22,7 @@ GOLDEN = Path(__file__).resolve().parents[1] / "tests" / "golden_metrics.json"
 #: Absolute tolerance of each figure: errors in percentage points or metres, coverage and
 #: tracking scores as fractions, counts exact.
 TOLERANCE = {"rel_error_pct": 0.05, "abs_error_m": 0.01, "count": 0, "within_1sigma": 0.002,
-             "within_2sigma": 0.002, "mota": 0.002, "idf1": 0.002, "id_switches": 0}
+             "within_2sigma": 0.002, "mean_nees": 0.01, "mota": 0.002, "idf1": 0.002, "id_switches": 0}
 
 TERRAIN_SCENES = ["standing-pedestrians", "drive-30kmh-sidewalk"]
 
@@ -31,7 +31,7 @@ def figures(metrics) -> dict:
     """The figures of one evaluation that the golden file keeps."""
     o = metrics.overall
     out = {"rel_error_pct": round(o.rel_error_pct, 3), "abs_error_m": round(o.abs_error_m, 4), "count": o.count}
-    for key in ("within_1sigma", "within_2sigma"):
+    for key in ("within_1sigma", "within_2sigma", "mean_nees"):
         if key in metrics.calibration:
             out[key] = round(metrics.calibration[key], 4)
     for key in ("mota", "idf1", "id_switches"):

@@ -24,7 +24,7 @@ from pedenv import kalman
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.localization import FrameGeometry, Locator, create_locator
-from pedenv.localization.bounds import CLAMPED, along_ray, bound_measurement, clamp_to_range
+from pedenv.localization.bounds import bound_measurement, clamp_reported
 from pedenv.records import Detections, Frame
 from pedenv.stage_timer import StageTimer
 from pedenv.state import EnvironmentState, Pedestrians
@@ -111,7 +111,6 @@ class PedestrianEnvironmentModel:
         x, P, corrected = kalman.correct(f.x[rows], f.P[rows], was_started, z, cov, spread, self.config.kalman)
         f.x[rows], f.P[rows], f.started[rows] = x, P, was_started | corrected
         positions, velocities, skeleton = meas.positions, np.zeros_like(meas.positions), meas.keypoints_3d
-        sources = meas.sources
         if self.config.kalman.enabled:
             # an unlocalised person whose track has a state is reported at its prediction
             use = corrected | was_started
@@ -121,12 +120,7 @@ class PedestrianEnvironmentModel:
             skeleton = skeleton + (positions - meas.positions)[:, None, :]
         if bias is not None:
             cov = cov + bias
-        unclamped = positions
-        positions, clamped, unit = clamp_to_range(positions, geo.origin, cap)  # the filter may drift beyond
-        if clamped.any():
-            skeleton[clamped] += (positions[clamped] - unclamped[clamped])[:, None, :]
-            cov[clamped] += along_ray(unit[clamped], cap**2)
-            sources = np.where(clamped & ~np.char.endswith(sources, CLAMPED), np.char.add(sources, CLAMPED), sources)
+        positions, cov, skeleton, sources = clamp_reported(positions, cov, skeleton, meas.sources, geo.origin, cap)
         tr = self.tracks.tracks
         return Pedestrians(
             track_ids=tr.ids[rows], ages=tr.hits[rows], positions=positions, velocities=velocities,

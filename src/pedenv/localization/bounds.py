@@ -64,6 +64,25 @@ def clamp_to_range(
     return out, clamped, unit
 
 
+def clamp_reported(positions: np.ndarray, covariances: np.ndarray, skeletons: np.ndarray, sources: np.ndarray,
+                   origin: np.ndarray, max_range_m: float):
+    """What the model reports, held to the range like a measurement (the filter may drift beyond).
+
+    positions (N, 3), covariances (N, 2, 2), skeletons (N, 17, 3), sources (N,) str; world,
+    metres. A row beyond ``max_range_m`` from the camera ``origin`` (3,) moves onto that
+    circle with its skeleton, its covariance widened along the ray by ``max_range_m**2``
+    and ``;clamped`` added to its source. Returns the four, changed where clamped.
+    """
+    out, clamped, unit = clamp_to_range(positions, origin, max_range_m)
+    if clamped.any():
+        skeletons = skeletons.copy()
+        skeletons[clamped] += (out[clamped] - positions[clamped])[:, None, :]
+        covariances = covariances.copy()
+        covariances[clamped] += along_ray(unit[clamped], max_range_m**2)
+        sources = np.where(clamped & ~np.char.endswith(sources, CLAMPED), np.char.add(sources, CLAMPED), sources)
+    return out, covariances, skeletons, sources
+
+
 def unlocalised_positions(centre_rays: np.ndarray, origin: np.ndarray, ground_z: float,
                           max_range_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Where an unlocalised detection is reported: ``max_range_m`` along the horizontal
