@@ -22,7 +22,8 @@ PAPER_MS = {"tracking_per_frame": 0.35, "position_per_pedestrian": 0.29, "pose_n
 
 
 def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera: Camera | None = None) -> list[Frame]:
-    """Frames at 10 Hz of an ego at 30 km/h with ``n_pedestrians`` walking 5-60 m ahead."""
+    """Frames at 10 Hz of an ego at 30 km/h with ``n_pedestrians`` walking 5-60 m ahead
+    (those a walk has taken behind the camera or out of the image are not detected)."""
     rng = np.random.default_rng(seed)
     camera = camera or Camera.from_fov()
     start = np.column_stack([rng.uniform(8, 60, n_pedestrians), rng.uniform(-12, 12, n_pedestrians)])
@@ -36,9 +37,12 @@ def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera:
         xy = start + vel * t + np.array([8.33 * t, 0.0])
         pts = world_keypoints(np.column_stack([xy, np.zeros(n_pedestrians)]), facing_ego, body)
         frame = Frame(i, t, camera, ego)
-        uv, _ = project(pts, camera.intrinsics, invert_transform(frame.cam_to_world))
+        uv, depth = project(pts, camera.intrinsics, invert_transform(frame.cam_to_world))
         uv += rng.normal(0, 1.0, uv.shape)
-        frames.append(replace(frame, detections=Detections(uv, np.full((n_pedestrians, 17), 0.9))))
+        # what a camera sees: people wholly in front of it, their box overlapping the image
+        seen = (depth > 0.5).all(axis=1) & (uv[..., 0].max(axis=1) > 0) & (uv[..., 0].min(axis=1) < camera.width)
+        detections = Detections(uv[seen], np.full((int(seen.sum()), 17), 0.9))
+        frames.append(replace(frame, detections=detections))
     return frames
 
 
