@@ -19,8 +19,13 @@ def carry_rows(array: np.ndarray, previous_rows: np.ndarray, fill=0) -> np.ndarr
 
     previous_rows: (T_new,) int, each new row's row in the old table or -1 for a new track.
     """
-    padded = np.concatenate([array, np.full((1,) + array.shape[1:], fill, dtype=array.dtype)])
-    return padded[previous_rows]  # row -1 is the fill row
+    if len(array) == 0:
+        return np.full((len(previous_rows),) + array.shape[1:], fill, dtype=array.dtype)
+    out = array[previous_rows]  # a new track's -1 takes the last row for now (one copy, no padding)
+    new = previous_rows < 0
+    if new.any():
+        out[new] = fill
+    return out
 
 
 class ColumnGroup:

@@ -110,23 +110,14 @@ class Tracker:
             tr.boxes = shift_u(tr.boxes, u_shift)
         if cfg.predict_motion and len(tr.ids):
             tr.boxes = tr.boxes + tr.velocities  # constant velocity in the image (kept tracks too)
-        first, second = split_by_score(scores, len(boxes), cfg)
-        stage = np.concatenate([first, second])  # one assignment; the low band pays its cost
-        live = np.flatnonzero(~tr.lost)
-        allowed, extra = ground_terms(boxes, self.table.filter, view, cfg)
-        sub = np.ix_(stage, live)
-        extra = None if extra is None else extra[sub]
-        if len(second):
-            extra = (0.0 if extra is None else extra) + np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[
-                :, None
-            ]
-            extra = np.broadcast_to(extra, (len(stage), len(live)))
-        m, free_rows, unmatched = associate(boxes[stage], tr.boxes[live], cfg.giou_threshold, cfg.max_height_ratio,
-                                            None if allowed is None else allowed[sub], extra)
-        pairs, free = [np.column_stack([stage[m[:, 0]], live[m[:, 1]]])], live[free_rows]
-        fresh = stage[unmatched[unmatched < len(first)]]  # a weak detection never starts a track
-        remembered = np.flatnonzero(tr.lost)
-        if view is not None and cfg.memory_s > 0 and len(fresh) and len(remembered) + len(free):
+        memory = view is not None and cfg.memory_s > 0
+        if cfg.low_score_threshold <= 0 and (view is None or cfg.ground_gate <= 0) and not memory:
+            # the paper's association, without the steps beyond it (the hot path of `paper`)
+            m, free, fresh = associate(boxes, tr.boxes, cfg.giou_threshold, cfg.max_height_ratio)
+            pairs, remembered = [m], np.zeros(0, np.int64)
+        else:
+            pairs, free, fresh, remembered = self._associate_beyond(boxes, scores, view)
+        if view is not None and memory and len(fresh) and len(remembered) + len(free):
             # the remembered tracks and the live ones the image left without a detection
             candidates = np.concatenate([free, remembered])
             m = recall_remembered(view, boxes[fresh], self.table.filter, candidates, cfg.memory_gate)
@@ -137,14 +128,17 @@ class Tracker:
 
         missed = free  # live tracks without a detection
         alive = tr.misses[missed] + 1 < cfg.max_misses
-        keep_lost = np.zeros(len(tr.ids), bool)
-        if view is not None and cfg.memory_s > 0:
+        if memory:
+            assert view is not None
+            keep_lost = np.zeros(len(tr.ids), bool)
             keep_lost[missed[~alive]] = True
             still = remembered[~np.isin(remembered, matches[:, 1])]
             keep_lost[still[view.timestamp - tr.last_seen[still] <= cfg.memory_s]] = True
-        gone = np.setdiff1d(np.arange(len(tr.ids)), np.concatenate([matches[:, 1], missed[alive]]))
-        kept = np.concatenate([missed[alive], np.flatnonzero(keep_lost)])
-        dropped = tr.ids[gone[~keep_lost[gone]]]
+            gone = np.setdiff1d(np.arange(len(tr.ids)), np.concatenate([matches[:, 1], missed[alive]]))
+            kept = np.concatenate([missed[alive], np.flatnonzero(keep_lost)])
+            dropped = tr.ids[gone[~keep_lost[gone]]]
+        else:
+            kept, dropped = missed[alive], tr.ids[missed[~alive]]
         n_match, n_kept, n_new = len(matches), len(kept), len(fresh)
         previous_box = tr.boxes[matches[:, 1]] - tr.velocities[matches[:, 1]]  # the last frame's box
         was_lost = tr.lost[matches[:, 1]]
@@ -170,3 +164,22 @@ class Tracker:
             moved = np.where(was_lost[:, None], 0.0, boxes[matches[:, 0]] - previous_box)
             tr.velocities[matched] = MOTION_SMOOTHING * moved + (1.0 - MOTION_SMOOTHING) * tr.velocities[matched]
         return TrackerStep(detection_rows, previous_rows, dropped)
+
+    def _associate_beyond(self, boxes: np.ndarray, scores: np.ndarray | None, view: CameraView | None):
+        """The association of the fused preset: the low-score band in one assignment at its
+        cost, the ground gate, lost rows left out. Returns ``(pairs, free live tracks, fresh
+        detections, lost rows)``; a weak detection is never fresh."""
+        cfg, tr = self.config, self.table.tracks
+        first, second = split_by_score(scores, len(boxes), cfg)
+        stage = np.concatenate([first, second])  # one assignment; the low band pays its cost
+        live = np.flatnonzero(~tr.lost)
+        allowed, extra = ground_terms(boxes, self.table.filter, view, cfg)
+        sub = np.ix_(stage, live)
+        extra = None if extra is None else extra[sub]
+        if len(second):
+            band = np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[:, None]
+            extra = np.broadcast_to((0.0 if extra is None else extra) + band, (len(stage), len(live)))
+        m, free_rows, unmatched = associate(boxes[stage], tr.boxes[live], cfg.giou_threshold, cfg.max_height_ratio,
+                                            None if allowed is None else allowed[sub], extra)
+        pairs = [np.column_stack([stage[m[:, 0]], live[m[:, 1]]])]
+        return pairs, live[free_rows], stage[unmatched[unmatched < len(first)]], np.flatnonzero(tr.lost)
