@@ -11,7 +11,7 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pedenv.errors import InputError
+from pedenv.errors import InputError, read_text
 
 
 def _check_range(name: str, value, low=None, high=None, *, low_open=False, high_open=False) -> None:
@@ -395,12 +395,9 @@ class Config:
     def load(cls, path: str | Path) -> Config:
         """The config saved at ``path`` (JSON); every error names the file."""
         path = Path(path)
+        text = read_text(path, "the config")
         try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise InputError(f"{path}: cannot read the config: {exc.strerror or exc}") from None
-        except UnicodeDecodeError:
-            raise InputError(f"{path}: the config is not UTF-8 text (a binary file?)") from None
+            data = json.loads(text)
         except json.JSONDecodeError as exc:
             raise InputError(f"{path}: the config is not valid JSON (line {exc.lineno}, column {exc.colno}: "
                              f"{exc.msg})") from None

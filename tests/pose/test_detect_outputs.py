@@ -4,22 +4,13 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
 
 import pytest
 
-from pedenv.cli import main
+from cli_in_process import pedenv
 
 pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model]
 
-
-def pedenv(monkeypatch, capsys, *args) -> tuple[int, str, str]:
-    monkeypatch.setattr(sys, "argv", ["pedenv", *map(str, args)])
-    monkeypatch.setenv("COLUMNS", "1000")
-    with pytest.raises(SystemExit) as done:
-        main()
-    out = capsys.readouterr()
-    return done.value.code or 0, out.out, out.err
 
 
 def test_corrupt_image_is_named_and_the_good_ones_are_written(tmp_path, use_pose_cache, photo, monkeypatch, capsys):

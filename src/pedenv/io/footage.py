@@ -27,7 +27,7 @@ import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation, Slerp
 
-from pedenv.errors import InputError, check_array
+from pedenv.errors import InputError, check_array, read_text
 from pedenv.geometry import quaternion_to_rotation
 from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame
@@ -58,12 +58,9 @@ def _numbers(value, key: str, path: Path, shape: tuple) -> np.ndarray:
 def load_calibration(path: str | Path) -> Camera:
     """The :class:`Camera` described by a calibration YAML file (format in the module doc)."""
     path = Path(path)
+    text = read_text(path, "the calibration")
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the calibration: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: the calibration is not UTF-8 text (a binary file?)") from None
+        data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise InputError(f"{path}: not valid YAML: {exc}") from None
     if not isinstance(data, dict):
