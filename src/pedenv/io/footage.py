@@ -20,7 +20,7 @@ from __future__ import annotations
 import csv
 import warnings
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -117,6 +117,7 @@ class EgoTrajectory:
     translations: np.ndarray
     quaternions: np.ndarray
     source: str = ""
+    _rotations: Slerp | Rotation = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         ts = check_array("ego timestamps", self.timestamps, (None,))
@@ -125,18 +126,21 @@ class EgoTrajectory:
         object.__setattr__(self, "timestamps", ts)
         object.__setattr__(self, "translations", check_array("ego translations", self.translations, (len(ts), 3)))
         object.__setattr__(self, "quaternions", check_array("ego quaternions", self.quaternions, (len(ts), 4)))
+        # one interpolator for the whole trajectory, built once (not two rotations per frame)
+        rotations = Rotation.from_quat(self.quaternions, scalar_first=True)
+        object.__setattr__(self, "_rotations", Slerp(ts, rotations) if len(ts) > 1 else rotations[0])
 
     def at(self, timestamp: float) -> EgoPose | None:
         """The pose interpolated at ``timestamp`` seconds; None outside the recorded span."""
         ts = self.timestamps
         if not ts[0] <= timestamp <= ts[-1]:
             return None
-        i = int(np.clip(np.searchsorted(ts, timestamp, side="right") - 1, 0, len(ts) - 2)) if len(ts) > 1 else 0
         if len(ts) == 1:
-            return EgoPose(self.translations[0], quaternion_to_rotation(self.quaternions[0]))
+            return EgoPose(self.translations[0], self._rotations.as_matrix())
+        i = int(np.clip(np.searchsorted(ts, timestamp, side="right") - 1, 0, len(ts) - 2))
         f = (timestamp - ts[i]) / (ts[i + 1] - ts[i])
         pos = (1.0 - f) * self.translations[i] + f * self.translations[i + 1]
-        return EgoPose(pos, quaternion_to_rotation(slerp(self.quaternions[i], self.quaternions[i + 1], f)))
+        return EgoPose(pos, self._rotations(timestamp).as_matrix())
 
 
 def load_ego_poses(path: str | Path) -> EgoTrajectory:
