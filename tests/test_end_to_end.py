@@ -23,7 +23,8 @@ def scenes():
 
 @pytest.mark.slow
 def test_exact_skeletons_beat_the_papers_carla_error(scenes):
-    result = run_evaluation(MemoryDataset(scenes, name="flat"), config=Config(), pose_backend="ground-truth")
+    result = run_evaluation(MemoryDataset(scenes, name="flat"), config=Config(method="paper"),
+                            pose_backend="ground-truth")
     m = result.metrics
     assert_golden("flat7/paper/ground-truth", m)  # 15.30 % over 23906 matched (seed 0)
     assert m.overall.rel_error_pct < PAPER_CARLA_REL_ERROR_PCT  # the paper: 16.85 % on CARLA
@@ -36,8 +37,9 @@ def test_exact_skeletons_beat_the_papers_carla_error(scenes):
 def test_refinement_matters_as_in_the_papers_ablation(scenes):
     # a standing ego gives no intersection, so those scenes use the height fallback either way
     data = MemoryDataset(scenes, name="flat")
-    with_ref = run_evaluation(data, pose_backend="ground-truth").metrics.overall
-    without_metrics = run_evaluation(data, config=Config().replace(paper={"refine": False}),
+    paper = Config(method="paper")
+    with_ref = run_evaluation(data, config=paper, pose_backend="ground-truth").metrics.overall
+    without_metrics = run_evaluation(data, config=paper.replace(paper={"refine": False}),
                                      pose_backend="ground-truth").metrics
     without = without_metrics.overall
     assert_golden("flat7/paper-no-refinement/ground-truth", without_metrics)
