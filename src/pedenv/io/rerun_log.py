@@ -171,7 +171,9 @@ class RerunWriter:
         for tid, pts, conf in zip(ids, points, confidences):
             seen = np.flatnonzero(conf > 0)
             radius = 0.05 if kind is rr.Points3D else 2.0  # metres in 3D, pixels in the image
-            rec.log(f"{base}/{int(tid)}", kind(pts[seen], keypoint_ids=seen, class_ids=PERSON_CLASS, radii=radius))
+            # no keypoint names on screen: 17 labels per person hide the scene (the ids are on the boxes)
+            rec.log(f"{base}/{int(tid)}", kind(pts[seen], keypoint_ids=seen, class_ids=PERSON_CLASS, radii=radius,
+                                               show_labels=False))
 
     @staticmethod
     def _log_ground_truth(rec, frame: Frame) -> None:
