@@ -408,7 +408,8 @@ class Config:
 
     def replace(self, method: str | None = None, **sections) -> Config:
         """A copy with the method or some sections' fields changed:
-        ``cfg.replace(paper={"refine": False})``."""
+        ``cfg.replace(paper={"refine": False})``. A new ``method`` here keeps every section
+        as it is; :func:`pedenv.localization.configure` switches to a method with its defaults."""
         data = self.to_dict()
         if method is not None:
             data["method"] = method
