@@ -30,13 +30,15 @@ try:
     from pedenv.apps.bench import bench_core
     from pedenv.localization import configure
     fused = lambda c: configure(c, "fused")
+    paper = lambda c: configure(c, "paper")  # Config() is the fused method since issue 12
 except ImportError:
     from pedenv.bench import bench_core
     fused = lambda c: c.for_method("fused")
+    paper = lambda c: c
 from pedenv.config import Config
 frames = int(sys.argv[1])
 out = {}
-for name, cfg in (("paper", Config()), ("fused", fused(Config()))):
+for name, cfg in (("paper", paper(Config())), ("fused", fused(Config()))):
     for row in bench_core(n_frames=frames, config=cfg):
         for key in ("tracking_per_frame", "position_per_pedestrian"):
             out[f"{name} {key} {row['pedestrians']} peds"] = row[key]

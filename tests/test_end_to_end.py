@@ -23,7 +23,8 @@ def scenes():
 
 @pytest.mark.slow
 def test_exact_skeletons_beat_the_papers_carla_error(scenes):
-    result = run_evaluation(MemoryDataset(scenes, name="flat"), config=Config(), pose_backend="ground-truth")
+    result = run_evaluation(MemoryDataset(scenes, name="flat"), config=Config(method="paper"),
+                            pose_backend="ground-truth")
     m = result.metrics
     assert_golden("flat7/paper/ground-truth", m)  # 15.30 % over 23906 matched (seed 0)
     assert m.overall.rel_error_pct < PAPER_CARLA_REL_ERROR_PCT  # the paper: 16.85 % on CARLA
@@ -36,8 +37,9 @@ def test_exact_skeletons_beat_the_papers_carla_error(scenes):
 def test_refinement_matters_as_in_the_papers_ablation(scenes):
     # a standing ego gives no intersection, so those scenes use the height fallback either way
     data = MemoryDataset(scenes, name="flat")
-    with_ref = run_evaluation(data, pose_backend="ground-truth").metrics.overall
-    without_metrics = run_evaluation(data, config=Config().replace(paper={"refine": False}),
+    paper = Config(method="paper")
+    with_ref = run_evaluation(data, config=paper, pose_backend="ground-truth").metrics.overall
+    without_metrics = run_evaluation(data, config=paper.replace(paper={"refine": False}),
                                      pose_backend="ground-truth").metrics
     without = without_metrics.overall
     assert_golden("flat7/paper-no-refinement/ground-truth", without_metrics)
@@ -64,3 +66,12 @@ def test_demo_writes_every_output(tmp_path):
     crowd = sum(json.loads(line)["scene"] == VIDEO_SCENE for line in lines)
     assert cv2.VideoCapture(str(tmp_path / "birds_eye.mp4")).get(cv2.CAP_PROP_FRAME_COUNT) == crowd == 150
     assert np.isfinite(result.metrics.overall.rel_error_pct)
+    # the outputs are the fused method's; the paper's ran beside it on the same frames
+    assert metrics["info"]["method"] == "fused"
+    assert json.loads((tmp_path / "config.json").read_text())["method"] == "fused"
+    methods = result.extras["methods"]
+    assert list(methods) == ["paper", "fused"] and methods["fused"] is result
+    paper = json.loads((tmp_path / "metrics-paper.json").read_text())
+    assert paper["info"]["method"] == "paper" and paper["info"]["scenes"] == metrics["info"]["scenes"]
+    assert paper["overall"]["count"] == methods["paper"].metrics.overall.count > 10000
+    assert result.metrics.overall.rel_error_pct < paper["overall"]["rel_error_pct"] - 5.0  # 7.1 vs 18.9 % (seed 0)

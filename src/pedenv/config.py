@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from pedenv.errors import InputError, read_text
@@ -334,24 +334,52 @@ class FusedConfig:
         _check_range("fused.max_range_m", self.max_range_m, 5.0, 10000.0)
 
 
+#: The position method of ``Config()`` and of every command without ``--method``: the
+#: most accurate one (``paper`` reproduces the paper's figures).
+DEFAULT_METHOD = "fused"
+
+#: Per method, the fields whose defaults differ from the section classes' own defaults
+#: (which are the paper's values). ``fused`` turns on the tracker's height-ratio rule,
+#: low-score second pass, motion prediction, ground gate and track memory, and the
+#: filter's restart gate (on the golden ``terrain2/fused/detector-model`` case 75 identity
+#: switches with them, 200 without).
+METHOD_PRESETS: dict[str, dict[str, dict]] = {
+    "paper": {},
+    "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
+                           "ground_gate": 4.0, "memory_s": 2.0},
+              "kalman": {"restart_gate": 25.0}},
+}
+
+
 @dataclass(frozen=True)
 class Config:
     """Everything the environment model needs besides the data.
 
-    method: the position method, a name of :data:`pedenv.localization.LOCATORS`
-        (``paper`` or ``fused``); ``pedenv.localization.configure`` sets it together with
-        the method's preset. Each method's constants are in its own section.
+    method: the position method, a name of :data:`pedenv.localization.LOCATORS`:
+        ``fused`` (the default, the best one) or ``paper`` (reproduces the paper).
+        Each method's constants are in its own section.
+
+    A section not given starts from the method's defaults (:data:`METHOD_PRESETS` over the
+    section class's defaults), so ``Config()`` is the fused method as every command runs it
+    and ``Config(method="paper")`` the paper's. ``pedenv.localization.configure`` switches
+    a config to another method. A saved config without ``method`` (as written before the
+    field existed) loads as ``fused``; the fields it names keep their values.
     """
 
-    method: str = "paper"
-    tracking: TrackingConfig = field(default_factory=TrackingConfig)
-    paper: PaperConfig = field(default_factory=PaperConfig)
-    kalman: KalmanConfig = field(default_factory=KalmanConfig)
-    fused: FusedConfig = field(default_factory=FusedConfig)
+    method: str = DEFAULT_METHOD
+    # None (the default): the method's defaults, filled in by __post_init__
+    tracking: TrackingConfig = None  # type: ignore[assignment]
+    paper: PaperConfig = None  # type: ignore[assignment]
+    kalman: KalmanConfig = None  # type: ignore[assignment]
+    fused: FusedConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method:
             raise InputError(f"method must be the name of a position method, got {self.method!r}")
+        preset = METHOD_PRESETS.get(self.method, {})
+        for name, kind in SECTIONS.items():
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, kind(**preset.get(name, {})))
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -362,6 +390,8 @@ class Config:
         if unknown:
             raise InputError(f"unknown config section(s): {', '.join(sorted(unknown))}; "
                              f"valid: method, {', '.join(SECTIONS)}")
+        method = data.get("method", DEFAULT_METHOD)
+        preset = METHOD_PRESETS.get(method, {}) if isinstance(method, str) else {}
         built = {}
         for name, kind in SECTIONS.items():
             values = data.get(name, {})
@@ -373,12 +403,13 @@ class Config:
                 raise InputError(
                     f"unknown field(s) in config.{name}: {', '.join(sorted(extra))}; valid: {', '.join(sorted(names))}"
                 )
-            built[name] = kind(**values)
-        return cls(method=data.get("method", "paper"), **built)
+            built[name] = kind(**{**preset.get(name, {}), **values})
+        return cls(method=method, **built)
 
     def replace(self, method: str | None = None, **sections) -> Config:
         """A copy with the method or some sections' fields changed:
-        ``cfg.replace(paper={"refine": False})``."""
+        ``cfg.replace(paper={"refine": False})``. A new ``method`` here keeps every section
+        as it is; :func:`pedenv.localization.configure` switches to a method with its defaults."""
         data = self.to_dict()
         if method is not None:
             data["method"] = method

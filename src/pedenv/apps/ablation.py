@@ -11,6 +11,7 @@ from pedenv.config import Config
 from pedenv.evaluation.metrics import Metrics, strict_json
 from pedenv.evaluation.report import comparison_table
 from pedenv.io.datasets import Dataset
+from pedenv.localization import configure
 
 #: Variant name -> paper-method settings changed from the configuration given.
 ABLATIONS: dict[str, dict] = {
@@ -23,8 +24,9 @@ ABLATIONS: dict[str, dict] = {
 
 def ablation_metrics(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,
                      pose_backend=None) -> list[tuple[str, Metrics]]:
-    """Evaluate every variant of :data:`ABLATIONS` on the same frames."""
-    config = config or Config()
+    """Evaluate every variant of :data:`ABLATIONS` on the same frames, with the paper's method
+    (``config`` switched to it when it names another)."""
+    config = configure(config or Config(), "paper")
     return [(name, run_evaluation(dataset, scenes=scenes, config=config.replace(paper=changes),
                                   pose_backend=pose_backend).metrics)
             for name, changes in ABLATIONS.items()]

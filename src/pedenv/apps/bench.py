@@ -47,16 +47,20 @@ def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera:
 
 
 def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config | None = None) -> list[dict]:
-    """Tracking ms/frame and position ms/pedestrian of the model for each pedestrian count."""
+    """Tracking ms/frame and position ms/pedestrian of the model for each pedestrian count.
+
+    ``config``: by default the paper's method (``Config(method="paper")``), whose stages the
+    paper timed; pass ``Config()`` to time the fused method.
+    """
     if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
         raise InputError(f"the number of frames to time must be an integer >= 1, got {n_frames!r}")
     rows = []
     for n in pedestrian_counts:
         frames = bench_frames(n, n_frames)
-        model = PedestrianEnvironmentModel(config or Config())
+        model = PedestrianEnvironmentModel(config or Config(method="paper"))
         for f in frames[:5]:  # warm-up: imports and caches
             model.update(f)
-        model = PedestrianEnvironmentModel(config or Config())
+        model = PedestrianEnvironmentModel(config or Config(method="paper"))
         t0 = time.perf_counter()
         for f in frames:
             model.update(f)
@@ -70,7 +74,7 @@ def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
     """A rich table of the rows, with the paper's figures and the speed-up over them."""
     from rich.table import Table
 
-    table = Table(title="pedenv bench (this CPU) vs. the paper (RTX 3090 + Threadripper 3960X)")
+    table = Table(title="pedenv bench, the paper's method (this CPU) vs. the paper (RTX 3090 + Threadripper 3960X)")
     for col in ("stage", "pedestrians", "pedenv [ms]", "paper [ms]", "paper / pedenv"):
         table.add_column(col, justify="left" if col == "stage" else "right")
     for r in rows:
@@ -87,7 +91,8 @@ def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
 
 
 def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
-    """Pose network + model per 1600x900 frame, and the networks alone (onnx square/rect, ultralytics).
+    """Pose network + model (the paper's method) per 1600x900 frame, and the networks alone
+    (onnx square/rect, ultralytics).
 
     Rows for :func:`format_bench`: ``stage``, ``ms`` and the paper figure they compare to.
     """
@@ -101,7 +106,7 @@ def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
                          "pedestrians": r.get("persons", ""), "paper_key": "pose_network"})
     image = benchmark_image()
     pose = OnnxPose(input_size=(384, 640), threads=threads)
-    model = PedestrianEnvironmentModel()
+    model = PedestrianEnvironmentModel(Config(method="paper"))
     camera = Camera.from_fov()
     times = []
     for i in range(repeats + 2):

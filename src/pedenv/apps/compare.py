@@ -7,13 +7,15 @@
 Each method gets its own model but the same pose backend object, so both see the same
 detections. With ``output_dir`` every method's usual outputs go to ``output_dir/<method>/``
 and ``output_dir`` gets one ``error_by_distance.png`` with all methods and a combined
-``metrics.json`` ``{"methods": {name: metrics}}``.
+``metrics.json`` ``{"methods": {name: metrics}}``. :func:`outputs_per_method` names each
+method's Parquet, Rerun and MCAP files.
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from rich.table import Table
@@ -26,6 +28,7 @@ from pedenv.evaluation.report import fmt
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.io.datasets import Dataset
 from pedenv.io.outputs import write_outputs
+from pedenv.io.sinks import ExtraOutputs
 from pedenv.localization import METHODS, configure
 from pedenv.pose import PoseBackend, create_pose_backend
 from pedenv.visualize.plots import plot_error_by_distance
@@ -40,10 +43,13 @@ def compare_methods(
     pose_backend: str | PoseBackend | None = None,
     output_dir: str | Path | None = None,
     progress: bool = False,
+    extra_outputs: Mapping[str, ExtraOutputs] | None = None,
 ) -> dict[str, EvaluationResult]:
     """Evaluate each of ``methods`` (``Config.method`` values) on the same frames.
 
-    ``config`` supplies everything but the method. Returns method -> result, in order.
+    ``config`` supplies everything but the method. ``extra_outputs``: method -> its
+    Parquet, Rerun and MCAP outputs (:func:`outputs_per_method`); all are checked before
+    the first method runs. Returns method -> result, in order.
     Raises ValueError for an unknown or repeated method.
     """
     methods = list(methods)
@@ -54,17 +60,37 @@ def compare_methods(
     spec = pose_backend or dataset.default_pose_backend
     backend = create_pose_backend(spec) if isinstance(spec, str) else spec
     out = Path(output_dir) if output_dir else None
+    extras = dict(extra_outputs or {})
+    for extra in extras.values():
+        extra.check()
     results: dict[str, EvaluationResult] = {}
     for method in methods:
         cfg = configure(config, method)
         where = out / method if out else None
         results[method] = run_evaluation(dataset, scenes=scenes, config=cfg, pose_backend=backend,
-                                         output_dir=where, progress=progress)
+                                         output_dir=where, progress=progress, extra_outputs=extras.get(method))
         if where:
             write_outputs(results[method], where, cfg, label=method)
     if out:
         write_comparison(results, out)
     return results
+
+
+def outputs_per_method(extra: ExtraOutputs, methods: Sequence[str], output_dir: str | Path) -> dict[str, ExtraOutputs]:
+    """``extra`` for each method of a comparison: the Parquet tables and the video in that
+    method's folder (``output_dir/<method>/environment.parquet``, ``matches.parquet``), the
+    Rerun and MCAP files with the method in their name (``run.rrd`` -> ``run-paper.rrd``).
+    """
+    def in_folder(path: Path | None, method: str) -> Path | None:
+        return None if path is None else Path(output_dir) / method / path.name
+
+    def tagged(path: Path | None, method: str) -> Path | None:
+        return None if path is None else path.with_name(f"{path.stem}-{method}{path.suffix}")
+
+    return {m: replace(extra, parquet=in_folder(extra.parquet, m), matches_parquet=in_folder(extra.matches_parquet, m),
+                       birds_eye_video=in_folder(extra.birds_eye_video, m), rerun=tagged(extra.rerun, m),
+                       mcap=tagged(extra.mcap, m))
+            for m in methods}
 
 
 def write_comparison(results: dict[str, EvaluationResult], output_dir: Path) -> dict[str, Path]:

@@ -13,11 +13,15 @@ from pedenv.evaluation.result import EvaluationResult
 from pedenv.io.datasets.memory import MemoryDataset
 from pedenv.io.outputs import write_outputs
 from pedenv.io.sinks import ExtraOutputs
+from pedenv.localization import configure
 from pedenv.records import Scene
+from pedenv.visualize.plots import plot_error_by_distance
 
 #: The most scenes ``builtin_scenes`` / ``pedenv simulate --scenes`` makes in one go (each
 #: is 15-20 s of frames; 1000 of them take about an hour and some GB on disk).
 MAX_SCENES = 1000
+#: The methods the demo puts side by side, on the same frames and detections.
+DEMO_METHODS = ("paper", "fused")
 #: The scene of the demo's animated bird's-eye view (the busiest: 37 people per frame on average).
 VIDEO_SCENE = "crowd"
 
@@ -61,8 +65,15 @@ def rename_scene(scene: Scene, name: str) -> Scene:
 
 def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = None, terrain: bool = False,
              pose_backend: str = "detector-model", progress: bool = True,
-             extra_outputs: ExtraOutputs | None = None) -> EvaluationResult:
+             extra_outputs: ExtraOutputs | None = None, compare: bool = True) -> EvaluationResult:
     """Generate the built-in scenes, run and evaluate the model, write every output.
+
+    The outputs (``metrics.json``, ``environment.jsonl``, plots, ``extra_outputs``) come
+    from ``config``'s method (``fused`` by default). With ``compare`` every other method of
+    :data:`DEMO_METHODS` runs on the same frames and detections too, for its metrics
+    (``metrics-<method>.json``); ``error_by_distance.png`` then shows every method, and
+    ``result.extras["methods"]`` maps each method, in :data:`DEMO_METHODS` order, to its
+    EvaluationResult (for :func:`pedenv.apps.compare.comparison_by_scene_table`).
 
     ``extra_outputs``: Parquet, Rerun, MCAP; by default the bird's-eye video ``birds_eye.mp4``
     alone, of the scene :data:`VIDEO_SCENE`.
@@ -76,7 +87,22 @@ def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = N
     result = run_evaluation(dataset, config=config, output_dir=output_dir, progress=progress,
                             extra_outputs=extra_outputs)
     result.extras["paths"] = write_outputs(result, output_dir, config)
+    if not compare:
+        return result
+    methods = {config.method: result}
+    for method in (m for m in DEMO_METHODS if m != config.method):
+        other = run_evaluation(dataset, config=configure(config, method), progress=progress)
+        other.metrics.save(output_dir / f"metrics-{method}.json")
+        methods[method] = other
+    result.extras["methods"] = {m: methods[m] for m in sorted(methods, key=_demo_order)}
+    result.extras["paths"]["error_by_distance"] = plot_error_by_distance(
+        {m: r.metrics.error_by_distance for m, r in result.extras["methods"].items()},
+        output_dir / "error_by_distance.png", title="Absolute error over distance (synthetic)")
     return result
+
+
+def _demo_order(method: str) -> int:
+    return DEMO_METHODS.index(method) if method in DEMO_METHODS else len(DEMO_METHODS)
 
 
 def scenes_summary(scenes: Sequence[Scene]) -> str:

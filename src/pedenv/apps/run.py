@@ -16,6 +16,7 @@ from pedenv.io.footage import Recording, load_recording
 from pedenv.io.jsonl import EnvironmentWriter
 from pedenv.io.output_dir import prepare_output_dir
 from pedenv.io.sinks import ExtraOutputs
+from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose.base import create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
@@ -26,7 +27,8 @@ from pedenv.visualize.plots import plot_birds_eye
 def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
                   video_out: bool = False, overwrite: bool = False, progress=None,
-                  detection: str | None = "far", extra_outputs: ExtraOutputs | None = None) -> dict:
+                  detection: str | None = "far", extra_outputs: ExtraOutputs | None = None,
+                  method: str | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
@@ -43,9 +45,12 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     ``detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
     ``fast`` (one pass fitted to the camera's aspect); None with ``pose_input_size`` None
     picks 384x640 for wide cameras, else 640 (one pass).
+    ``config``: a Config or a config.json (default ``Config()``, the fused method);
+    ``method`` switches it to another position method (:func:`pedenv.localization.configure`).
     Returns the summary also saved as ``run.json``.
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
+    cfg = configure(cfg, method) if method else cfg
     extra = extra_outputs or ExtraOutputs()
     extra.check()
     rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
@@ -57,8 +62,9 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
-    summary: dict[str, Any] = {"recording": rec.name, "pose_backend": describe, "frames_total": len(rec),
-                               "frames_done": 0, "environment": str(out / "environment.jsonl")}
+    summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": describe,
+                               "frames_total": len(rec), "frames_done": 0,
+                               "environment": str(out / "environment.jsonl")}
     model = PedestrianEnvironmentModel(cfg)
     writer_video, last = None, None
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()

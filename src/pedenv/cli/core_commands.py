@@ -63,13 +63,16 @@ def demo(
     terrain: bool = typer.Option(False, "--terrain/--flat", help="Rolling terrain and vehicle pitch, or a flat world."),
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
     config: Path | None = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
-    method: str | None = typer.Option(None, "--method", help="paper (default) or fused."),
+    method: str | None = typer.Option(
+        None, "--method", help="Method of the outputs: fused (default, or the --config file's) or paper; "
+                               "the other one runs beside it on the same frames for the table."),
     overwrite: bool = _OVERWRITE,
     parquet: bool = _PARQUET,
     rerun: Path | None = _RERUN,
     mcap: Path | None = _MCAP,
 ) -> None:
-    """Run the method on the built-in synthetic scenes and show the paper's table and plots."""
+    """Run the paper's and the fused method on the built-in synthetic scenes; print them side by side, write plots."""
+    from pedenv.apps.compare import comparison_by_scene_table, comparison_summary_table
     from pedenv.apps.demo import VIDEO_SCENE, run_demo
     from pedenv.io.output_dir import prepare_output_dir
 
@@ -77,7 +80,11 @@ def demo(
     extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
-    _print_result(result.metrics, "pedenv demo: built-in synthetic scenes")
+    methods = result.extras["methods"]
+    _out.print(comparison_by_scene_table(methods, "pedenv demo: built-in synthetic scenes, the same frames and "
+                                                  f"{result.metrics.info['pose_backend']} skeletons"))
+    _out.print(comparison_summary_table(methods))
+    _out.print(f"outputs below: method {cfg.method}", highlight=False)
     for name, path in result.extras["paths"].items():
         _out.print(f"{name}: {path}", highlight=False)
     _out.print(f"environment: {output / 'environment.jsonl'}", highlight=False)
@@ -118,10 +125,16 @@ def evaluate(
     version: str = typer.Option("v1.0-mini", "--version", help="nuScenes version folder."),
     pose_backend: str | None = typer.Option(None, "--pose-backend", help="Default: the dataset's own."),
     config: Path | None = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
-    no_refinement: bool = typer.Option(False, "--no-refinement", help="Ablation: skip the height refinement."),
-    initial_estimate: str | None = typer.Option(None, "--initial-estimate", help="all-keypoints or midpoint."),
-    ablation: bool = typer.Option(False, "--ablation", help="Also run the paper's ablations and print their table."),
-    method: str | None = typer.Option(None, "--method", help="paper, fused or both."),
+    no_refinement: bool = typer.Option(
+        False, "--no-refinement", help="Ablation of the paper method: skip the height refinement."),
+    initial_estimate: str | None = typer.Option(
+        None, "--initial-estimate", help="Paper method: all-keypoints or midpoint."),
+    ablation: bool = typer.Option(
+        False, "--ablation", help="Also run the paper method's ablations (whatever --method) and print their table."),
+    method: str | None = typer.Option(
+        None, "--method", help="fused (default, or the --config file's), paper (the paper's figures), or both: "
+                               "side by side on the same frames, each method's outputs in OUTPUT/<method>/ "
+                               "(its --parquet tables there too) and FILE-<method>.rrd / .mcap."),
     cues: str | None = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
     overwrite: bool = _OVERWRITE,
     detection: str | None = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
@@ -131,21 +144,21 @@ def evaluate(
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.apps.evaluate import evaluate_dataset
+    from pedenv.errors import InputError
     from pedenv.io.datasets import open_dataset
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
     names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
-    cfg = _config(config, refine=False if no_refinement else None, initial_estimate=initial_estimate)
+    cfg = _config(config, method if method != "both" else None, refine=False if no_refinement else None,
+                  initial_estimate=initial_estimate)
+    if (no_refinement or initial_estimate) and method != "both" and cfg.method != "paper":
+        raise InputError(f"--no-refinement and --initial-estimate change the paper's method, not {cfg.method}; "
+                         "add --method paper")
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
-    if method and method != "both":
-        from pedenv.localization import configure
-
-        cfg = configure(cfg, method)
     backend: str | PoseBackend | None = pose_backend
     if detection is not None or pose_backend == "onnx":
-        from pedenv.errors import InputError
         from pedenv.pose.base import create_pose_backend
 
         if (pose_backend or data.default_pose_backend) != "onnx":
@@ -155,19 +168,26 @@ def evaluate(
         backend = create_pose_backend("onnx", detection=detection or "far", **threshold)
     from pedenv.io.output_dir import prepare_output_dir
 
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
     if method == "both":
-        from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
+        from pedenv.apps.compare import (
+            compare_methods,
+            comparison_by_scene_table,
+            comparison_summary_table,
+            outputs_per_method,
+        )
 
-        results = compare_methods(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
-                                  progress=True)
+        methods = ("paper", "fused")
+        results = compare_methods(data, methods=methods, scenes=names, config=cfg, pose_backend=backend,
+                                  output_dir=output, progress=True,
+                                  extra_outputs=outputs_per_method(extra, methods, output))
         _out.print(comparison_by_scene_table(results))
         _out.print(comparison_summary_table(results))
-        _out.print(f"outputs: {output}", highlight=False)
-        return
-    metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
-                               progress=True, extra_outputs=_extra_outputs(output, parquet, rerun, mcap, matches=True))
-    _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
+    else:
+        metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
+                                   progress=True, extra_outputs=extra)
+        _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
     if ablation:
         from pedenv.apps.ablation import run_ablation
 

@@ -73,6 +73,8 @@ def run(
         None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."
     ),
     config: Path | None = typer.Option(None, "--config", help="config.json of the environment model."),
+    method: str | None = typer.Option(
+        None, "--method", help="Position method: fused (default, or the --config file's) or paper."),
     fps: float | None = typer.Option(
         None, "--fps", help="Frame rate when there is no timestamps.csv (or to override a video's)."
     ),
@@ -102,5 +104,5 @@ def run(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            extra_outputs=extra, progress=progress)
+            extra_outputs=extra, progress=progress, method=method)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")

@@ -145,14 +145,16 @@ class RerunWriter:
             rec.log(base, rr.EncodedImage(path=frame.image_path))
         p = state.pedestrians
         labels = [str(t) for t in p.track_ids]
+        # show_labels: the viewer hides labels of a busy entity by default; the ids are the point here
         rec.log(f"{base}/boxes", rr.Boxes2D(array=p.boxes, array_format=rr.Box2DFormat.XYXY, labels=labels,
-                                            class_ids=np.full(len(p), PERSON_CLASS)))
+                                            class_ids=np.full(len(p), PERSON_CLASS), show_labels=True))
         self._log_skeletons(rec, f"{base}/skeletons", p.track_ids, p.keypoints, p.confidences, rr.Points2D)
 
     def _log_world(self, rec, state: EnvironmentState) -> None:
         p = state.pedestrians
         labels = [str(t) for t in p.track_ids]
-        rec.log("world/pedestrians/positions", rr.Points3D(p.positions, labels=labels, radii=0.25, colors=[_PRED]))
+        rec.log("world/pedestrians/positions", rr.Points3D(p.positions, labels=labels, radii=0.25, colors=[_PRED],
+                                                           show_labels=True))
         rec.log("world/pedestrians/velocities", rr.Arrows3D(origins=p.positions, vectors=p.velocities, colors=[_PRED]))
         rings = covariance_ellipses(p.positions[:, :2], p.covariances, sigma=2.0)
         ground = np.concatenate([rings, np.broadcast_to(p.positions[:, None, 2:3], rings.shape[:2] + (1,))], axis=2)
@@ -171,7 +173,9 @@ class RerunWriter:
         for tid, pts, conf in zip(ids, points, confidences):
             seen = np.flatnonzero(conf > 0)
             radius = 0.05 if kind is rr.Points3D else 2.0  # metres in 3D, pixels in the image
-            rec.log(f"{base}/{int(tid)}", kind(pts[seen], keypoint_ids=seen, class_ids=PERSON_CLASS, radii=radius))
+            # no keypoint names on screen: 17 labels per person hide the scene (the ids are on the boxes)
+            rec.log(f"{base}/{int(tid)}", kind(pts[seen], keypoint_ids=seen, class_ids=PERSON_CLASS, radii=radius,
+                                               show_labels=False))
 
     @staticmethod
     def _log_ground_truth(rec, frame: Frame) -> None:

@@ -33,15 +33,14 @@ def create_locator(config: Config) -> Locator:
 
 
 def configure(config: Config, method: str) -> Config:
-    """``config`` with ``method`` and that method's preset (the locator class's ``PRESET``).
-
-    A preset changes only fields still at their defaults, so values set on purpose win.
-    ``paper`` has no preset: the paper's method as printed.
+    """``config`` switched to ``method``: the fields still at the defaults of ``config``'s
+    method (:data:`pedenv.config.METHOD_PRESETS`) take ``method``'s defaults; values set on
+    purpose stay. ``configure(Config(), "paper")`` is the paper's method as printed.
     """
-    preset = getattr(_check(method), "PRESET", {})
-    defaults, data = Config().to_dict(), config.to_dict()
-    changes = {section: {k: v for k, v in values.items() if data[section][k] == defaults[section][k]}
-               for section, values in preset.items()}
+    _check(method)
+    old, new, data = Config(method=config.method).to_dict(), Config(method=method).to_dict(), config.to_dict()
+    changes = {section: {k: v for k, v in values.items() if data[section][k] == old[section][k] != v}
+               for section, values in new.items() if section != "method"}
     return config.replace(method=method, **changes)
 
 

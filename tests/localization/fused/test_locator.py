@@ -7,7 +7,7 @@ from pedenv.skeleton import ANKLE_KEYPOINTS
 
 from fused_frames import make_frame
 
-FUSED = Config().replace(method="fused")
+FUSED = Config(method="paper").replace(method="fused")  # the fused locator behind the paper's tracker
 
 
 def run(frames, config=FUSED):

@@ -103,12 +103,6 @@ class FusedLocator:
     Its per-track memory (``columns``) is the :class:`TrackHistory`.
     """
 
-    #: What the method changes besides ``Config.method``, beyond the paper: the tracker's
-    #: height-ratio rule and motion prediction and the filter's restart gate.
-    PRESET = {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
-                           "ground_gate": 4.0, "memory_s": 2.0},
-              "kalman": {"restart_gate": 25.0}}
-
     def __init__(self, config: Config) -> None:
         self.config = config
         self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
