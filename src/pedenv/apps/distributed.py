@@ -181,3 +181,40 @@ class SceneStore:
                 with (self.folder(name) / "environment.jsonl").open("rb") as part:
                     shutil.copyfileobj(part, out)
         return path
+
+
+def evaluate_distributed(dataset: Dataset, *, executor: str = "ray", address: str | None = None,
+                         workers: int | None = None, scenes: Sequence[str] | None = None,
+                         config: Config | None = None, pose_backend: BackendSpec | None = None,
+                         output_dir: str | Path | None = None, resume: bool = False,
+                         progress: bool = False, object_store_memory: int | None = None) -> EvaluationResult:
+    """:func:`evaluate_on` with the executor named ``executor`` (started and stopped here), then
+    ``metrics.json``, ``config.json`` and the plots into ``output_dir`` (also when scenes failed).
+
+    ``output_dir`` must be new, empty, or (with ``resume``) a folder pedenv wrote.
+    """
+    from pedenv.apps.executors import create_executor
+    from pedenv.io.outputs import write_outputs
+
+    config = config or Config()
+    if output_dir is not None and resume:
+        prepare_resume_dir(Path(output_dir))
+    with create_executor(executor, address=address, workers=workers,
+                         object_store_memory=object_store_memory) as ex:
+        result = evaluate_on(dataset, executor=ex, scenes=scenes, config=config, pose_backend=pose_backend,
+                             output_dir=output_dir, resume=resume, progress=progress)
+    if output_dir is not None:
+        result.extras["paths"] = write_outputs(result, Path(output_dir), config)
+    return result
+
+
+def prepare_resume_dir(path: Path) -> Path:
+    """``path`` for a resumed run: created if new; a non-empty folder must be pedenv's own."""
+    from pedenv.io.output_dir import MARKER, prepare_output_dir
+
+    if path.is_dir() and any(path.iterdir()):
+        if not (path / MARKER).is_file():
+            raise InputError(f"output folder {path} is not empty and was not written by pedenv (no {MARKER} "
+                             f"file): --resume continues pedenv's own runs only")
+        return path
+    return prepare_output_dir(path, command="pedenv evaluate --resume")
