@@ -23,11 +23,10 @@ import pickle
 import shutil
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
 
 from pedenv.apps.evaluate import evaluation_info, resolve_scenes
 from pedenv.apps.executors import RayExecutor, SerialExecutor, TaskContext
-from pedenv.apps.progress import progress_bar
+from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.scene_result import SceneResult, evaluate_scene, merge_scene_results
 from pedenv.config import Config
 from pedenv.errors import InputError
@@ -103,30 +102,6 @@ def _scene_task(name: str, context: TaskContext) -> SceneResult:
     context.report(0, len(frames))
     return evaluate_scene(name, frames, config=config, backend=backend, collect_lines=True,
                           progress=lambda done: context.report(done, len(frames)))
-
-
-class FrameCounter:
-    """One progress bar line over all workers: frames done of the frames of the scenes started."""
-
-    def __init__(self, bar, scenes: int, already: int = 0) -> None:
-        self.bar, self.scenes, self.done_scenes = bar, scenes, already
-        self.task = bar.add_task(self._label(), total=None)
-        self.frames: dict[Any, tuple[int, int]] = {}
-
-    def _label(self) -> str:
-        return f"scenes {self.done_scenes}/{self.scenes}"
-
-    def update(self, item, done: int, total: int) -> None:
-        self.frames[item] = (done, total)
-        self.bar.update(self.task, completed=sum(d for d, _ in self.frames.values()),
-                        total=sum(t for _, t in self.frames.values()) or None)
-
-    def finish(self, item, failed: bool = False) -> None:
-        if not failed:
-            done, total = self.frames.get(item, (0, 0))
-            self.update(item, total, total)
-        self.done_scenes += 1
-        self.bar.update(self.task, description=self._label())
 
 
 class SceneStore:

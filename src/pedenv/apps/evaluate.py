@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from contextlib import nullcontext
+from functools import partial
 from pathlib import Path
 
 from pedenv.apps.progress import progress_bar
@@ -63,8 +64,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
             frames = list(dataset.frames(name))
             task = bar.add_task(name, total=len(frames))
             results.append(evaluate_scene(name, frames, config=config, backend=backend, model_factory=model_factory,
-                                          on_frame=on_frame, pairs=pairs,
-                                          progress=lambda done, task=task: bar.update(task, completed=done)))
+                                          on_frame=on_frame, pairs=pairs, progress=partial(_advance, bar, task)))
     result = merge_scene_results(results, evaluation_info(dataset, backend, config, names))
     result.extras["files"] = sinks.files + ([pairs.path] if pairs else [])
     return result
@@ -84,6 +84,10 @@ def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, c
     if output_dir:
         write_outputs(result, Path(output_dir), config or Config())
     return result.metrics
+
+
+def _advance(bar, task, done: int) -> None:
+    bar.update(task, completed=done)
 
 
 def _matches_writer(path, sinks):

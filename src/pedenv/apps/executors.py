@@ -137,7 +137,8 @@ class RayExecutor:
         refs = {key: ray.put(value) for key, value in (shared or {}).items()}
         queue = Queue() if on_progress else None
         limit = self.workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
-        waiting, pending = list(items), {}
+        waiting: list = list(items)
+        pending: dict = {}
         try:
             while waiting or pending:
                 while waiting and len(pending) < limit:

@@ -152,7 +152,7 @@ def evaluate(
         from pedenv.localization import configure
 
         cfg = configure(cfg, method)
-    backend: str | PoseBackend | None = pose_backend
+    onnx = None  # the onnx backend's factory: called here, or once per Ray worker
     if detection is not None or pose_backend == "onnx":
         from pedenv.errors import InputError
         from pedenv.pose.base import create_pose_backend
@@ -161,15 +161,14 @@ def evaluate(
             raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
         threshold = {} if cfg.tracking.pose_score_threshold is None else {
             "score_threshold": cfg.tracking.pose_score_threshold}
-        backend = partial(create_pose_backend, "onnx", detection=detection or "far", **threshold)
+        onnx = partial(create_pose_backend, "onnx", detection=detection or "far", **threshold)
     if executor != "serial" or resume:
         _evaluate_distributed(data, executor=executor, address=address, workers=workers, scenes=names, config=cfg,
-                              pose_backend=backend, output=output, resume=resume, overwrite=overwrite,
+                              pose_backend=onnx or pose_backend, output=output, resume=resume, overwrite=overwrite,
                               refused={"--method both": method == "both", "--ablation": ablation, "--parquet": parquet,
                                        "--rerun": rerun is not None, "--mcap": mcap is not None})
         return
-    if callable(backend) and not isinstance(backend, str):
-        backend = backend()  # the onnx session, made once here
+    backend: str | PoseBackend | None = onnx() if onnx else pose_backend
     from pedenv.io.output_dir import prepare_output_dir
 
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
