@@ -161,19 +161,24 @@ class SceneStore:
 def evaluate_distributed(dataset: Dataset, *, executor: str = "ray", address: str | None = None,
                          workers: int | None = None, scenes: Sequence[str] | None = None,
                          config: Config | None = None, pose_backend: BackendSpec | None = None,
-                         output_dir: str | Path | None = None, resume: bool = False,
+                         output_dir: str | Path | None = None, resume: bool = False, overwrite: bool = False,
                          progress: bool = False, object_store_memory: int | None = None) -> EvaluationResult:
     """:func:`evaluate_on` with the executor named ``executor`` (started and stopped here), then
     ``metrics.json``, ``config.json`` and the plots into ``output_dir`` (also when scenes failed).
 
-    ``output_dir`` must be new, empty, or (with ``resume``) a folder pedenv wrote.
+    ``output_dir`` must be new, empty, a folder pedenv wrote with ``overwrite`` (emptied), or
+    one it wrote with ``resume`` (continued).
     """
     from pedenv.apps.executors import create_executor
+    from pedenv.io.output_dir import prepare_output_dir
     from pedenv.io.outputs import write_outputs
 
     config = config or Config()
-    if output_dir is not None and resume:
-        prepare_resume_dir(Path(output_dir))
+    if output_dir is not None:
+        if resume:
+            prepare_resume_dir(Path(output_dir))
+        else:
+            prepare_output_dir(output_dir, overwrite=overwrite, command="pedenv evaluate")
     with create_executor(executor, address=address, workers=workers,
                          object_store_memory=object_store_memory) as ex:
         result = evaluate_on(dataset, executor=ex, scenes=scenes, config=config, pose_backend=pose_backend,

@@ -196,15 +196,12 @@ def _evaluate_distributed(data, *, output: Path, resume: bool, overwrite: bool, 
     """``pedenv evaluate --executor ray`` or ``--resume``: one task per scene; failed scenes are listed, exit code 1."""
     from pedenv.apps.distributed import evaluate_distributed
     from pedenv.errors import InputError
-    from pedenv.io.output_dir import prepare_output_dir
 
     given = [flag for flag, on in refused.items() if on]
     if given:
         raise InputError(f"{', '.join(given)} run in the serial in-process evaluation only; leave out --executor ray "
                          f"and --resume")
-    if not resume:
-        prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
-    result = evaluate_distributed(data, output_dir=output, resume=resume, progress=True, **options)
+    result = evaluate_distributed(data, output_dir=output, resume=resume, overwrite=overwrite, progress=True, **options)
     info = result.metrics.info
     _print_result(result.metrics, f"{info['dataset']}: {info['pose_backend']} skeletons, method {info['method']}")
     if result.extras["resumed"]:
