@@ -162,6 +162,10 @@ def evaluate(
         threshold = {} if cfg.tracking.pose_score_threshold is None else {
             "score_threshold": cfg.tracking.pose_score_threshold}
         onnx = partial(create_pose_backend, "onnx", detection=detection or "far", **threshold)
+    if executor == "serial" and (address is not None or workers is not None):
+        from pedenv.errors import InputError
+
+        raise InputError("--address and --workers apply to --executor ray")
     if executor != "serial" or resume:
         _evaluate_distributed(data, executor=executor, address=address, workers=workers, scenes=names, config=cfg,
                               pose_backend=onnx or pose_backend, output=output, resume=resume, overwrite=overwrite,
