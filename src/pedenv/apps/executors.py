@@ -116,7 +116,11 @@ class RayExecutor:
         try:
             ray.init(address=self.address, **options)
         except ConnectionError as exc:
+            ray.shutdown()
             raise InputError(f"cannot join the Ray cluster at {self.address}: {exc}") from None
+        except BaseException:  # Ctrl-C while Ray starts: stop what has started
+            ray.shutdown()
+            raise
         self._started = True
         return self
 
