@@ -7,6 +7,7 @@ import pytest
 
 from pedenv.apps.batch import run_manifest
 
+from cli_in_process import pedenv
 from shared_paths import REAL_SAMPLES
 
 pytestmark = pytest.mark.onnx_model
@@ -63,3 +64,23 @@ def test_a_bad_recording_is_named_the_other_written_and_resume_runs_only_it(requ
     assert [(r["name"], r["status"]) for r in again["recordings"]] == [("good", "resumed"), ("bad", "done")]
     assert again["failed"] == 0 and (out / "good" / "environment.jsonl").stat().st_mtime_ns == before
     assert (out / "bad" / "environment.jsonl").read_text() == (out / "good" / "environment.jsonl").read_text()
+
+
+def test_run_cli_with_a_manifest_lists_each_recording_and_exits_1_when_one_failed(monkeypatch, capsys, tmp_path):
+    manifest = _manifest(tmp_path / "in")
+    code, out, err = pedenv(monkeypatch, capsys, "run", "--manifest", manifest, "--output", tmp_path / "out",
+                            "--detection", "fast")
+    assert code == 1
+    assert out.splitlines() == [f"good: done, 3 of 3 frames -> {tmp_path / 'out' / 'good'}",
+                                "bad: failed, 0 of 3 frames", f"summary: {tmp_path / 'out' / 'summary.json'}"]
+    assert "error: recording bad (row 2) failed: InputError: " in err and "the calibration says 1224x370" in err
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--images", "x"], "--images: with --manifest each row names its recording's files and timing"),
+    (["--parquet"], "--parquet, --rerun and --mcap are written by single-recording runs"),
+])
+def test_run_cli_refuses_single_recording_flags_beside_a_manifest(monkeypatch, capsys, tmp_path, flags, message):
+    manifest = _manifest(tmp_path / "in")
+    code, _, err = pedenv(monkeypatch, capsys, "run", "--manifest", manifest, "--output", tmp_path / "out", *flags)
+    assert code == 2 and err.startswith(f"error: {message}") and not (tmp_path / "out").exists()

@@ -21,6 +21,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from rich.console import Console
+
 from pedenv.apps.executors import TaskContext, create_executor
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.run import run_recording
@@ -54,7 +56,7 @@ def run_manifest(manifest: str | Path, output: str | Path, *, executor: str = "s
     options = {"pose_backend": pose_backend, "pose_model": pose_model, "pose_input_size": pose_input_size,
                "detection": detection, "video_out": video_out, "config": cfg}
     with create_executor(executor, address=address, workers=workers, object_store_memory=object_store_memory) as ex, \
-            progress_bar(enabled=progress) as bar:
+            progress_bar(Console(stderr=True), enabled=progress) as bar:  # on stderr, as pedenv run's
         counter = FrameCounter(bar, len(rows), already=len(entries), noun="recordings")
         shared = {"options": options, "output": str(out)}
         for row, value, error in ex.run(_recording_task, todo, shared=shared, on_progress=counter.update):
