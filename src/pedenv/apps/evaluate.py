@@ -4,27 +4,21 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from contextlib import nullcontext
-from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
-import numpy as np
-
 from pedenv.apps.progress import progress_bar
+from pedenv.apps.scene_result import evaluate_scene, merge_scene_results
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.evaluation.matching import match_to_ground_truth, position_errors
-from pedenv.evaluation.metrics import ErrorSamples, Metrics
+from pedenv.evaluation.metrics import Metrics
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.evaluation.tracking_metrics import TrackingAccumulator
-from pedenv.geometry import inverse_2x2
 from pedenv.io.datasets import Dataset
 from pedenv.io.jsonl import EnvironmentWriter
 from pedenv.io.outputs import write_outputs
 from pedenv.io.sinks import ExtraOutputs
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose import PoseBackend, create_pose_backend
-from pedenv.records import Frame
-from pedenv.state import EnvironmentState
 
 
 def resolve_scenes(dataset: Dataset, scenes: Sequence[str] | None) -> list[str]:
@@ -42,45 +36,43 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
                    pose_backend: str | PoseBackend | None = None, output_dir: str | Path | None = None,
                    progress: bool = False, model_factory=PedestrianEnvironmentModel,
                    extra_outputs: ExtraOutputs | None = None) -> EvaluationResult:
-    """Run every scene through a fresh model state, evaluate labelled frames, write outputs.
+    """Run every scene through a fresh model state, evaluate labelled frames, write outputs (in this process).
 
     Writes ``environment.jsonl`` line by line while running (when ``output_dir`` is set),
     so a failure at a bad frame keeps what was computed; ``metrics.json`` etc. come from
     :func:`pedenv.io.outputs.write_outputs`. ``extra_outputs``: Parquet, Rerun, MCAP, video
     (refused before the run when their extra is missing; closed, and so valid, when a frame fails).
+    Each scene is one :func:`~pedenv.apps.scene_result.evaluate_scene`, merged as the Ray
+    executor merges them (:mod:`pedenv.apps.distributed`).
     """
     config = config or Config()
     backend = _backend(pose_backend or dataset.default_pose_backend)
     names = resolve_scenes(dataset, scenes)
-    model = model_factory(config)
-    samples = {name: ErrorSamples() for name in names}
-    tracking = TrackingAccumulator()
-    busiest, busiest_n = None, -1
     writer = EnvironmentWriter(Path(output_dir) / "environment.jsonl") if output_dir else None
     extra_outputs = extra_outputs or ExtraOutputs()
     sinks = extra_outputs.open()
     pairs = _matches_writer(extra_outputs.matches_parquet, sinks)
+    results = []
+
+    def on_frame(state, frame) -> None:
+        if writer:
+            writer.write(state)
+        sinks.write(state, frame)
+
     with progress_bar(enabled=progress) as bar, writer or nullcontext(), sinks, pairs or nullcontext():
         for name in names:
             frames = list(dataset.frames(name))
             task = bar.add_task(name, total=len(frames))
-            model.reset()
-            for frame in frames:
-                frame = replace(frame, detections=backend(frame))
-                state = model.update(frame)
-                if writer:
-                    writer.write(state)
-                sinks.write(state, frame)
-                if frame.ground_truth is not None:
-                    n = _score(frame, state, samples[name], tracking, pairs)
-                    if n > busiest_n:
-                        busiest, busiest_n = (state, frame), n
-                bar.advance(task)
-    info = {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method,
-            "scenes": names}
-    metrics = Metrics.from_samples(samples, tracking.summary(), model.timer.per_stage_ms(), info)
-    files = sinks.files + ([pairs.path] if pairs else [])
-    return EvaluationResult(metrics, samples, busiest, extras={"files": files})
+            results.append(evaluate_scene(name, frames, config=config, backend=backend, model_factory=model_factory,
+                                          on_frame=on_frame, pairs=pairs, progress=partial(_advance, bar, task)))
+    result = merge_scene_results(results, evaluation_info(dataset, backend, config, names))
+    result.extras["files"] = sinks.files + ([pairs.path] if pairs else [])
+    return result
+
+
+def evaluation_info(dataset: Dataset, backend: PoseBackend, config: Config, names: Sequence[str]) -> dict:
+    """The ``info`` of ``metrics.json``: dataset, pose backend, method and scenes."""
+    return {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method, "scenes": list(names)}
 
 
 def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,
@@ -94,24 +86,8 @@ def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, c
     return result.metrics
 
 
-def _score(frame: Frame, state: EnvironmentState, samples: ErrorSamples, tracking: TrackingAccumulator,
-           pairs=None) -> int:
-    gt, peds = frame.ground_truth, state.pedestrians
-    if gt is None:
-        raise InputError(f"frame {frame.index} of {frame.scene}: no ground truth to score against")
-    tracking.add(frame.scene, gt.ids, gt.boxes, peds.track_ids, peds.boxes)
-    match = match_to_ground_truth(peds.boxes, peds.positions[:, :2], gt.boxes, gt.positions[:, :2])
-    sel = match >= 0
-    if sel.any():
-        pred, truth = peds.positions[sel, :2], gt.positions[match[sel], :2]
-        abs_err, rel_err, dist = position_errors(pred, truth, frame.ego.translation[:2])
-        e = pred - truth
-        cov = peds.covariances[sel] + 1e-9 * np.eye(2)
-        maha = np.sqrt(np.einsum("ni,nij,nj->n", e, inverse_2x2(cov), e))
-        samples.add(abs_err, rel_err, dist, maha)
-        if pairs is not None:
-            pairs.write_pairs(frame, peds.track_ids[sel], gt.ids[match[sel]], pred, truth, abs_err, rel_err, dist)
-    return int((sel & (peds.ages >= 3)).sum())  # settled tracks: what the busiest-frame plot shows
+def _advance(bar, task, done: int) -> None:
+    bar.update(task, completed=done)
 
 
 def _matches_writer(path, sinks):

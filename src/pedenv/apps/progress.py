@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -42,3 +43,30 @@ def progress_callback(description: str, console: Console | None = None) -> Itera
     finally:
         if task is not None:
             bar.stop()
+
+
+class FrameCounter:
+    """One line of a :func:`progress_bar` over all workers: frames done of the frames of the items started.
+
+    ``update(item, done, total)`` as a worker reports; ``finish(item)`` when an item ends.
+    """
+
+    def __init__(self, bar, items: int, already: int = 0, noun: str = "scenes") -> None:
+        self.bar, self.items, self.finished, self.noun = bar, items, already, noun
+        self.task = bar.add_task(self._label(), total=None)
+        self.frames: dict[Any, tuple[int, int]] = {}
+
+    def _label(self) -> str:
+        return f"{self.noun} {self.finished}/{self.items}"
+
+    def update(self, item, done: int, total: int) -> None:
+        self.frames[item] = (done, total)
+        self.bar.update(self.task, completed=sum(d for d, _ in self.frames.values()),
+                        total=sum(t for _, t in self.frames.values()) or None)
+
+    def finish(self, item, failed: bool = False) -> None:
+        if not failed:
+            done, total = self.frames.get(item, (0, 0))
+            self.update(item, total, total)
+        self.finished += 1
+        self.bar.update(self.task, description=self._label())

@@ -18,7 +18,7 @@ from pedenv.io.output_dir import prepare_output_dir
 from pedenv.io.sinks import ExtraOutputs
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.base import create_pose_backend
+from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.visualize.overlay import draw_environment, write_image
 from pedenv.visualize.plots import plot_birds_eye
@@ -28,7 +28,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
                   video_out: bool = False, overwrite: bool = False, progress=None,
                   detection: str | None = "far", extra_outputs: ExtraOutputs | None = None,
-                  method: str | None = None) -> dict:
+                  method: str | None = None, backend: PoseBackend | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
@@ -47,6 +47,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     picks 384x640 for wide cameras, else 640 (one pass).
     ``config``: a Config or a config.json (default ``Config()``, the fused method);
     ``method`` switches it to another position method (:func:`pedenv.localization.configure`).
+    ``backend``: a pose backend already made (a worker's, kept over recordings) instead of
+    the one ``pose_backend``, ``pose_model``, ``pose_input_size`` and ``detection`` describe.
     Returns the summary also saved as ``run.json``.
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
@@ -57,8 +59,9 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                          start_time=start_time)
     if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
-    backend = create_pose_backend(pose_backend, **backend_options(
-        pose_backend, pose_model, pose_input_size, detection, cfg.tracking.pose_score_threshold))
+    if backend is None:
+        backend = create_pose_backend(pose_backend, **backend_options(
+            pose_backend, pose_model, pose_input_size, detection, cfg.tracking.pose_score_threshold))
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -46,6 +47,10 @@ _PARQUET = typer.Option(
 _RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several).")
 _MCAP = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap).")
 _OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output.")
+_EXECUTOR = typer.Option("serial", "--executor", help="serial (in this process) or ray (one task per scene).")
+_ADDRESS = typer.Option(None, "--address", help="Ray cluster HOST:PORT (`ray start --head`); default: a local Ray.")
+_WORKERS = typer.Option(None, "--workers", help="Ray: CPUs of the local Ray, or most tasks at once on a cluster.")
+_RESUME = typer.Option(False, "--resume", help="Keep the scenes an earlier run in --output completed; run the rest.")
 
 
 def _print_result(metrics, title: str = "") -> None:
@@ -141,6 +146,10 @@ def evaluate(
     parquet: bool = _PARQUET,
     rerun: Path | None = _RERUN,
     mcap: Path | None = _MCAP,
+    executor: str = _EXECUTOR,
+    address: str | None = _ADDRESS,
+    workers: int | None = _WORKERS,
+    resume: bool = _RESUME,
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.apps.evaluate import evaluate_dataset
@@ -157,7 +166,7 @@ def evaluate(
                          "add --method paper")
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
-    backend: str | PoseBackend | None = pose_backend
+    onnx = None  # the onnx backend's factory: called here, or once per Ray worker
     if detection is not None or pose_backend == "onnx":
         from pedenv.pose.base import create_pose_backend
 
@@ -165,7 +174,18 @@ def evaluate(
             raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
         threshold = {} if cfg.tracking.pose_score_threshold is None else {
             "score_threshold": cfg.tracking.pose_score_threshold}
-        backend = create_pose_backend("onnx", detection=detection or "far", **threshold)
+        onnx = partial(create_pose_backend, "onnx", detection=detection or "far", **threshold)
+    if executor == "serial" and (address is not None or workers is not None):
+        from pedenv.errors import InputError
+
+        raise InputError("--address and --workers apply to --executor ray")
+    if executor != "serial" or resume:
+        _evaluate_distributed(data, executor=executor, address=address, workers=workers, scenes=names, config=cfg,
+                              pose_backend=onnx or pose_backend, output=output, resume=resume, overwrite=overwrite,
+                              refused={"--method both": method == "both", "--ablation": ablation, "--parquet": parquet,
+                                       "--rerun": rerun is not None, "--mcap": mcap is not None})
+        return
+    backend: str | PoseBackend | None = onnx() if onnx else pose_backend
     from pedenv.io.output_dir import prepare_output_dir
 
     extra = _extra_outputs(output, parquet, rerun, mcap, matches=True)
@@ -193,6 +213,30 @@ def evaluate(
 
         _out.print(run_ablation(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output))
     _out.print(f"outputs: {output}", highlight=False)
+
+
+def _evaluate_distributed(data, *, output: Path, resume: bool, overwrite: bool, refused: dict[str, bool],
+                          **options) -> None:
+    """``pedenv evaluate --executor ray`` or ``--resume``: one task per scene; failed scenes are listed, exit code 1."""
+    from pedenv.apps.distributed import evaluate_distributed
+    from pedenv.errors import InputError
+
+    given = [flag for flag, on in refused.items() if on]
+    if given:
+        raise InputError(f"{', '.join(given)} run in the serial in-process evaluation only; leave out --executor ray "
+                         f"and --resume")
+    result = evaluate_distributed(data, output_dir=output, resume=resume, overwrite=overwrite, progress=True, **options)
+    info = result.metrics.info
+    _print_result(result.metrics, f"{info['dataset']}: {info['pose_backend']} skeletons, method {info['method']}")
+    if result.extras["resumed"]:
+        _out.print(f"resumed: {len(result.extras['resumed'])} scene(s) taken from {output}", highlight=False)
+    _out.print(f"outputs: {output}", highlight=False)
+    for name, exc in result.extras["failures"].items():
+        console.print(f"error: scene {name} failed: {exc}", style="red", highlight=False, markup=False)
+    if result.extras["failures"]:
+        console.print(f"{len(result.extras['failures'])} scene(s) failed; the others are in {output} (re-run with "
+                      f"--resume to run only the failed ones)", highlight=False, markup=False)
+        raise typer.Exit(1)
 
 
 @app.command()

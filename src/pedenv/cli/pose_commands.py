@@ -64,8 +64,10 @@ def detect(
 def run(
     images: Path | None = typer.Option(None, "--images", help="Folder of images (sorted by name)."),
     video: Path | None = typer.Option(None, "--video", help="Video file."),
-    calibration: Path = typer.Option(..., "--calibration", help="Calibration YAML."),
-    ego_poses: Path = typer.Option(..., "--ego-poses", help="Ego poses CSV."),
+    calibration: Path | None = typer.Option(
+        None, "--calibration", help="Calibration YAML (required without --manifest)."
+    ),
+    ego_poses: Path | None = typer.Option(None, "--ego-poses", help="Ego poses CSV (required without --manifest)."),
     output: Path = typer.Option(..., "--output", help="Output folder."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
@@ -91,8 +93,35 @@ def run(
     ),
     rerun: Path | None = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
     mcap: Path | None = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
+    manifest: Path | None = typer.Option(
+        None, "--manifest", help="CSV or YAML, one recording per row: one output folder each + summary.json."
+    ),
+    executor: str = typer.Option("serial", "--executor", help="With --manifest: serial or ray (a task per recording)."),
+    address: str | None = typer.Option(None, "--address", help="Ray cluster HOST:PORT; default: a local Ray."),
+    workers: int | None = typer.Option(None, "--workers", help="Ray: local CPUs, or most tasks at once on a cluster."),
+    resume: bool = typer.Option(False, "--resume", help="With --manifest: keep the recordings already complete."),
 ) -> None:
-    """Run the pedestrian environment model on a recording (images or video + calibration + ego poses)."""
+    """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
+    or on every recording of a --manifest."""
+    from pedenv.errors import InputError
+
+    if manifest is not None:
+        per_recording = (("--images", images), ("--video", video), ("--calibration", calibration),
+                         ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time))
+        given = [flag for flag, value in per_recording if value is not None]
+        if given:
+            raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
+        if parquet or rerun or mcap:
+            raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+        _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
+                      overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
+                      pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
+                      method=method)
+        return
+    if calibration is None or ego_poses is None:
+        raise InputError("give --calibration and --ego-poses (or a --manifest of recordings)")
+    if executor != "serial" or address or workers or resume:
+        raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
     from pedenv.io.sinks import ExtraOutputs
@@ -106,3 +135,19 @@ def run(
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
             extra_outputs=extra, progress=progress, method=method)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")
+
+
+def _run_manifest(manifest: Path, output: Path, **options) -> None:
+    """``pedenv run --manifest``: every recording; failed ones listed, exit code 1."""
+    from pedenv.apps.batch import run_manifest
+
+    summary = run_manifest(manifest, output, progress=True, **options)
+    for rec in summary["recordings"]:
+        line = f"{rec['name']}: {rec['status']}, {rec.get('frames_done', 0)} of {rec.get('frames_total', '?')} frames"
+        typer.echo(line + (f" -> {rec['output']}" if rec["status"] != "failed" else ""))
+        if rec["status"] == "failed":
+            console.print(f"error: recording {rec['name']} (row {rec['row']}) failed: {rec['error']}", style="red",
+                          highlight=False, markup=False)
+    typer.echo(f"summary: {output / 'summary.json'}")
+    if summary["failed"]:
+        raise typer.Exit(1)

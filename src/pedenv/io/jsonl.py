@@ -33,14 +33,23 @@ class EnvironmentWriter:
         return self
 
     def write(self, state: EnvironmentState) -> None:
+        self.write_line(environment_line(state, self.decimals))
+
+    def write_line(self, line: str) -> None:
+        """Append one line made by :func:`environment_line` (a state computed elsewhere, e.g. on a Ray worker)."""
         if self._file is None:
             raise InputError(f"{self.path}: EnvironmentWriter.write() outside its with block")
-        self._file.write(json.dumps(state.to_dict(self.decimals), separators=(",", ":"), allow_nan=False) + "\n")
+        self._file.write(line + "\n")
         self._file.flush()
 
     def __exit__(self, *exc) -> None:
         if self._file is not None:
             self._file.close()
+
+
+def environment_line(state: EnvironmentState, decimals: int = 3) -> str:
+    """One line of the environment model (no newline): ``state.to_dict(decimals)`` as compact JSON."""
+    return json.dumps(state.to_dict(decimals), separators=(",", ":"), allow_nan=False)
 
 
 def read_environment(path: str | Path) -> list[dict]:

@@ -1,0 +1,111 @@
+"""``pedenv run --manifest``: many recordings, one task each, serially or on Ray.
+
+    summary = run_manifest("drives.csv", "out", executor="ray", workers=2)
+
+Each row of the manifest (:mod:`pedenv.io.manifest`) is one
+:func:`~pedenv.apps.run.run_recording` into ``<output>/<name>/``, as ``pedenv run`` writes
+it. The pose network is loaded once per worker process and kept for its later
+recordings. ``<output>/summary.json`` lists every recording in manifest order with its
+status (``done``, ``failed`` with the error, or ``resumed``), frames and folder. A recording
+that fails stops alone: the others finish, and what it wrote before the failure stays.
+``resume`` keeps the recordings an earlier run completed (their ``run.json`` counts every
+frame) and runs the others again.
+
+On a Ray cluster every machine must see the manifest's files and the output folder under
+the same paths (a shared file system): the workers read and write them directly.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+
+from pedenv.apps.executors import TaskContext, create_executor
+from pedenv.apps.progress import FrameCounter, progress_bar
+from pedenv.apps.run import run_recording
+from pedenv.config import Config
+from pedenv.io.manifest import ManifestRow, read_manifest
+from pedenv.io.output_dir import prepare_output_dir
+from pedenv.localization import configure
+
+SUMMARY = "summary.json"
+
+
+def run_manifest(manifest: str | Path, output: str | Path, *, executor: str = "serial", address: str | None = None,
+                 workers: int | None = None, resume: bool = False, overwrite: bool = False,
+                 pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
+                 detection: str | None = "far", video_out: bool = False, progress: bool = False,
+                 object_store_memory: int | None = None, method: str | None = None) -> dict:
+    """Run every recording of ``manifest`` into ``output``; returns the summary saved as ``summary.json``.
+
+    The pose and model options are those of :func:`~pedenv.apps.run.run_recording`, for
+    every recording (``method``: as ``pedenv run --method``, applied to ``config``).
+    ``summary["failed"]`` counts the recordings that failed.
+    """
+    from pedenv.apps.distributed import prepare_resume_dir
+
+    rows = read_manifest(manifest)
+    cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
+    cfg = configure(cfg, method) if method else cfg
+    out = prepare_resume_dir(Path(output)) if resume else prepare_output_dir(
+        output, overwrite=overwrite, command="pedenv run --manifest")
+    entries: dict[str, dict[str, Any]] = {}
+    if resume:
+        entries = {r.name: {**_complete(out / r.name), "status": "resumed"} for r in rows if _complete(out / r.name)}
+    todo = [r for r in rows if r.name not in entries]
+    options = {"pose_backend": pose_backend, "pose_model": pose_model, "pose_input_size": pose_input_size,
+               "detection": detection, "video_out": video_out, "config": cfg}
+    with create_executor(executor, address=address, workers=workers, object_store_memory=object_store_memory) as ex, \
+            progress_bar(Console(stderr=True), enabled=progress) as bar:  # on stderr, as pedenv run's
+        counter = FrameCounter(bar, len(rows), already=len(entries), noun="recordings")
+        shared = {"options": options, "output": str(out)}
+        for row, value, error in ex.run(_recording_task, todo, shared=shared, on_progress=counter.update):
+            if error is None:
+                entries[row.name] = {**value, "status": "done"}
+            else:
+                entries[row.name] = {**_complete(out / row.name, partial=True), "status": "failed",
+                                     "error": f"{type(error).__name__}: {error}"}
+            counter.finish(row, failed=error is not None)
+    recordings = [{"name": r.name, "row": r.row, "output": str(out / r.name), **entries[r.name]} for r in rows]
+    summary = {"manifest": str(manifest), "output": str(out), "executor": executor, "recordings": recordings,
+               "failed": sum(e["status"] == "failed" for e in recordings)}
+    (out / SUMMARY).write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
+    return summary
+
+
+def _recording_task(row: ManifestRow, context: TaskContext) -> dict:
+    """One recording on a worker, with the worker's pose backend (made at its first recording)."""
+    o = context.shared["options"]
+    backend = None
+    if o["pose_backend"] != "onnx" or o["detection"] is not None or o["pose_input_size"] is not None:
+        # else run_recording picks the input size from each recording's camera
+        backend = context.cached(("pose", o["pose_backend"], str(o["pose_model"]), o["pose_input_size"],
+                                  o["detection"]), lambda: _make_backend(o))
+    return run_recording(calibration=row.calibration, ego_poses=row.ego_poses, images=row.images, video=row.video,
+                         fps=row.fps, start_time=row.start_time, output=Path(context.shared["output"]) / row.name,
+                         overwrite=True, pose_backend=o["pose_backend"], pose_model=o["pose_model"],
+                         pose_input_size=o["pose_input_size"], detection=o["detection"], config=o["config"],
+                         video_out=o["video_out"], backend=backend, progress=context.report)
+
+
+def _make_backend(o: dict):
+    from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.models import backend_options
+
+    return create_pose_backend(o["pose_backend"], **backend_options(
+        o["pose_backend"], o["pose_model"], o["pose_input_size"], o["detection"],
+        o["config"].tracking.pose_score_threshold))
+
+
+def _complete(folder: Path, partial: bool = False) -> dict:
+    """The ``run.json`` of a recording's folder when it counts every frame (or, ``partial``, whatever it holds)."""
+    try:
+        summary = json.loads((folder / "run.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    if partial or summary.get("frames_done") == summary.get("frames_total") or "ended_early" in summary:
+        return summary
+    return {}

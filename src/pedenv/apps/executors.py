@@ -1,0 +1,237 @@
+"""Where independent units of work (scenes, recordings) run: in this process, or on Ray.
+
+    with create_executor("ray", workers=2) as ex:
+        for item, value, error in ex.run(task, items, shared={"dataset": data}, on_progress=show):
+            ...
+
+``task(item, context)`` is a module-level function; ``context.shared`` holds the objects
+given in ``shared`` (shipped once to each Ray worker through Ray's object store),
+``context.cached(key, make)`` keeps an object (a pose network session) for every later
+item run by the same process, and ``context.report(done, total)`` counts frames.
+``run`` yields ``(item, value, None)`` or ``(item, None, error)`` as the items finish, in
+any order: one failing item never stops the others.
+
+The Ray executor uses Ray's own machinery: one remote task per item with ``max_retries``
+(a worker process that dies is restarted and its item run again), ``ray.wait`` for
+finished items and ``ray.util.queue.Queue`` for frame counts. Without an address it
+starts a local Ray with ``workers`` CPUs and shuts it down on the way out, Ctrl-C
+included, so no Ray process it started outlives the run; with ``address`` it joins a
+running cluster (``ray start --head``) and only disconnects.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import time
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
+
+from pedenv.errors import InputError, require_extra
+
+#: Executor names of ``--executor``.
+EXECUTORS = ("serial", "ray")
+#: Times Ray runs an item again after its worker process died (Ray's ``max_retries``).
+MAX_RETRIES = 3
+#: Seconds between two frame counts a worker sends to the progress bar.
+REPORT_INTERVAL_S = 0.5
+#: Seconds to wait for a TCP connection to a cluster's address before calling it unreachable.
+CONNECT_TIMEOUT_S = 5.0
+
+Outcome = tuple[Any, Any, BaseException | None]
+
+
+class TaskContext:
+    """What a task sees: the shared objects, a per-process cache, a frame counter."""
+
+    def __init__(self, shared: dict[str, Any], cache: dict, report: Callable[[int, int], None]) -> None:
+        self.shared = shared
+        self._cache = cache
+        self.report = report
+
+    def cached(self, key: Any, make: Callable[[], Any]) -> Any:
+        """The object stored under ``key`` in this process, made by ``make()`` the first time."""
+        if key not in self._cache:
+            self._cache[key] = make()
+        return self._cache[key]
+
+
+class SerialExecutor:
+    """Runs the items one after the other in this process."""
+
+    name = "serial"
+
+    def __enter__(self) -> SerialExecutor:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+    def run(self, task: Callable, items: Iterable, *, shared: dict[str, Any] | None = None,
+            on_progress: Callable[[Any, int, int], None] | None = None) -> Iterator[Outcome]:
+        cache: dict = {}  # one run: the pose network is loaded once
+        for item in items:
+            report = (lambda done, total, item=item: on_progress(item, done, total)) if on_progress else _ignore
+            try:
+                value = task(item, TaskContext(shared or {}, cache, report))
+            except Exception as exc:  # noqa: BLE001 - reported per item; Ctrl-C passes through
+                yield item, None, exc
+            else:
+                yield item, value, None
+
+
+class RayExecutor:
+    """Runs each item as one Ray task on a local Ray (started here) or on a cluster at ``address``.
+
+    workers: CPUs of the local Ray, or the most items in flight on a cluster (default: all
+    its CPUs). max_retries: Ray's retries of an item whose worker died. object_store_memory:
+    bytes of the local Ray's object store (None: Ray's default).
+    """
+
+    name = "ray"
+
+    def __init__(self, *, address: str | None = None, workers: int | None = None, max_retries: int = MAX_RETRIES,
+                 object_store_memory: int | None = None) -> None:
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+            raise InputError(f"workers must be an integer >= 1, got {workers!r}")
+        if isinstance(max_retries, bool) or not isinstance(max_retries, int) or max_retries < 0:
+            raise InputError(f"max_retries must be an integer >= 0, got {max_retries!r}")
+        self.address, self.workers, self.max_retries = address, workers, max_retries
+        self.object_store_memory = object_store_memory
+        self._started = False
+
+    def __enter__(self) -> RayExecutor:
+        require_extra("ray", "ray", "--executor ray")
+        import ray
+
+        if self.address is None and ray.is_initialized():
+            return self  # a Ray this process already runs (a test session): used, left running
+        if self.address is not None:
+            check_reachable(self.address)
+        options: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
+        if self.address is None:
+            options["num_cpus"] = self.workers or os.cpu_count() or 1
+            if self.object_store_memory:
+                options["object_store_memory"] = self.object_store_memory
+        try:
+            ray.init(address=self.address, **options)
+        except ConnectionError as exc:
+            ray.shutdown()
+            raise InputError(f"cannot join the Ray cluster at {self.address}: {exc}") from None
+        except BaseException:  # Ctrl-C while Ray starts: stop what has started
+            ray.shutdown()
+            raise
+        self._started = True
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._started:
+            import ray
+
+            ray.shutdown()  # a local Ray is stopped with its raylet and workers; a cluster is only left
+            self._started = False
+
+    def run(self, task: Callable, items: Iterable, *, shared: dict[str, Any] | None = None,
+            on_progress: Callable[[Any, int, int], None] | None = None) -> Iterator[Outcome]:
+        import ray
+        from ray.exceptions import RayError, RayTaskError
+        from ray.util.queue import Queue
+
+        remote = ray.remote(num_cpus=1, max_retries=self.max_retries)(_run_on_worker)
+        refs = {key: ray.put(value) for key, value in (shared or {}).items()}
+        queue = Queue() if on_progress else None
+        limit = self.workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
+        waiting: list = list(items)
+        pending: dict = {}
+        try:
+            while waiting or pending:
+                while waiting and len(pending) < limit:
+                    item = waiting.pop(0)
+                    pending[remote.remote(task, item, [refs], queue)] = item  # [refs]: resolved in the worker
+                done, _ = ray.wait(list(pending), num_returns=1, timeout=REPORT_INTERVAL_S)
+                _drain(queue, on_progress)
+                for ref in done:
+                    item = pending.pop(ref)
+                    try:
+                        yield item, ray.get(ref), None
+                    except RayTaskError as exc:  # the task raised: its own exception
+                        yield item, None, _cause(exc)
+                    except RayError as exc:  # the worker died more than max_retries times
+                        yield item, None, exc
+            _drain(queue, on_progress)
+        finally:
+            for ref in pending:  # Ctrl-C or a failing consumer: stop what still runs
+                ray.cancel(ref, force=True)
+            if queue is not None:
+                queue.shutdown()
+
+
+def _cause(exc) -> BaseException:
+    cause = getattr(exc, "cause", None)
+    return cause if isinstance(cause, BaseException) else exc
+
+
+#: Per worker process: shared objects and what tasks cached (pose network sessions).
+_WORKER_CACHE: dict = {}
+
+
+def _run_on_worker(task: Callable, item: Any, refs: list[dict], queue) -> Any:
+    """A Ray task: the shared objects (fetched once per process), then ``task(item, context)``."""
+    import ray
+
+    shared = {key: _fetch(ray, ref) for key, ref in refs[0].items()}
+    last = [0.0]
+
+    def report(done: int, total: int) -> None:
+        now = time.monotonic()
+        if queue is not None and (done in (0, total) or now - last[0] >= REPORT_INTERVAL_S):
+            last[0] = now
+            queue.put_nowait((item, done, total))
+
+    return task(item, TaskContext(shared, _WORKER_CACHE, report))
+
+
+def _fetch(ray, ref):
+    key = ("shared", ref.hex())
+    if key not in _WORKER_CACHE:
+        _WORKER_CACHE[key] = ray.get(ref)
+    return _WORKER_CACHE[key]
+
+
+def _drain(queue, on_progress) -> None:
+    if queue is None or on_progress is None:
+        return
+    for item, done, total in queue.get_nowait_batch(queue.qsize()):
+        on_progress(item, done, total)
+
+
+def _ignore(done: int, total: int) -> None:
+    return None
+
+
+def check_reachable(address: str) -> None:
+    """InputError in one line unless ``host:port`` accepts a TCP connection (``auto`` and ``ray://`` pass)."""
+    if address == "auto" or "://" in address:
+        return
+    host, sep, port = address.rpartition(":")
+    if not sep or not port.isdigit():
+        raise InputError(f"Ray address must be HOST:PORT (e.g. 10.0.0.1:6379), 'auto' or ray://HOST:PORT, "
+                         f"got {address!r}")
+    try:
+        with socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT_S):
+            pass
+    except OSError as exc:
+        raise InputError(f"Ray cluster at {address} is not reachable ({exc.strerror or exc}); start one there with "
+                         f"`ray start --head --port {port}` or leave out --address for a local Ray") from None
+
+
+def create_executor(name: str = "serial", *, address: str | None = None, workers: int | None = None,
+                    object_store_memory: int | None = None) -> SerialExecutor | RayExecutor:
+    """The executor named ``name`` (:data:`EXECUTORS`); ``address`` and ``workers`` apply to Ray."""
+    if name == "serial":
+        if address is not None:
+            raise InputError("--address applies to --executor ray")
+        return SerialExecutor()
+    if name == "ray":
+        return RayExecutor(address=address, workers=workers, object_store_memory=object_store_memory)
+    raise InputError(f"unknown executor {name!r}; valid: {', '.join(EXECUTORS)}")
