@@ -266,6 +266,8 @@ class FusedConfig:
         fused method on the real KITTI and nuScenes persons (RMS 0.051 m at 9-16 m, where the
         measured keypoint jitter, under 1 px, adds about 0.01 m); the fused covariance
         across the ray is floored at the sharpest cue's, since all cues share this error.
+        It repeats over a gait cycle and for the person, so it is the per-person part of
+        each cue's covariance: the Kalman filter does not average it away.
     keypoint_span_scale: the pose source's eyes-to-ankles span as a share of the span in the
         anatomical table of the height cue (eyes 0.933, ankles 0.046 of body height, upright).
         1.0 takes the table as it is; the real YOLO11n-pose spans 0.823 of the true height on

@@ -97,9 +97,10 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
     lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
                         config.ankle_height_std_m)
     lift, lat = lift_std**2, config.lateral_std_m**2  # the foot's lift changes with the gait
-    frame_cov = symmetric_2x2(pxx + lift * ax * ax + lat, pxy + lift * ax * ay, pyy + lift * ay * ay + lat)
-    # the road under a pedestrian r metres away stays off the vehicle's plane frame after frame
+    frame_cov = symmetric_2x2(pxx + lift * ax * ax, pxy + lift * ax * ay, pyy + lift * ay * ay)
+    # the road under a pedestrian r metres away stays off the vehicle's plane frame after
+    # frame, and so does where the feet stand against the body (lean, stance: the person's)
     r = np.sqrt((xy[:, 0] - origin[0]) ** 2 + (xy[:, 1] - origin[1]) ** 2)
     road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2) ** 2
-    bias = symmetric_2x2(road * ax * ax, road * ax * ay, road * ay * ay)
+    bias = symmetric_2x2(road * ax * ax + lat, road * ax * ay, road * ay * ay + lat)
     return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)

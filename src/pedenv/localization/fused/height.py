@@ -150,6 +150,6 @@ def height_cue(skeletons: FrameSkeletons, focal_px: float, config: FusedConfig,
     bearing = horizontal_bearing(mean_ray)
     xy = skeletons.origin[:2] + r[:, None] * bearing
     s2 = scale**2
-    across = (scale * skeletons.noise) ** 2 + config.lateral_std_m**2
+    across = (scale * skeletons.noise) ** 2  # the body's own sideways spread is the person's
     return CueEstimate(NAME, xy, range_bearing_covariance(bearing, frame_rel * s2, across),
-                       range_bearing_covariance(bearing, bias_rel * s2, 0.0), good, reasons)
+                       range_bearing_covariance(bearing, bias_rel * s2, config.lateral_std_m**2), good, reasons)
