@@ -9,7 +9,8 @@ are compared with the reported covariance (frame-to-frame plus per-person part):
 the same detections.
 
 Synthetic scenes (rolling terrain, seed 0): ``compare_methods`` paper vs fused with the
-detector model of ``--profile``: relative error of both, and the fused coverage and NEES;
+detector model of ``--profile``: relative error, MOTA, IDF1 and ID switches of both, and
+the coverage and NEES;
 with ``--breakdown`` also where the fused error and NEES come from (false positives,
 people matched to a neighbour, their own person; :func:`nees_breakdown`).
 
@@ -135,8 +136,10 @@ def synthetic(profile: str, scenes: list[str] | None, config: Config, duration_s
 
     data = MemoryDataset(generate_scenes(0, scenes, terrain=True, duration_s=duration_s), name="terrain-seed0")
     results = compare_methods(data, pose_backend=f"detector-model:{profile}", config=config)
+    tracking = ("mota", "idf1", "id_switches")
     return {m: {"count": r.metrics.overall.count, "rel_error_pct": r.metrics.overall.rel_error_pct,
-                **r.metrics.calibration} for m, r in results.items()}
+                **r.metrics.calibration, **{k: (r.metrics.tracking or {}).get(k) for k in tracking}}
+            for m, r in results.items()}
 
 
 def nees_breakdown(profile: str, config: Config, duration_s: float) -> dict:
