@@ -9,10 +9,13 @@ are compared with the reported covariance (frame-to-frame plus per-person part):
 the same detections.
 
 Synthetic scenes (rolling terrain, seed 0): ``compare_methods`` paper vs fused with the
-detector model of ``--profile``: relative error of both, and the fused coverage and NEES.
+detector model of ``--profile``: relative error, MOTA, IDF1 and ID switches of both, and
+the coverage and NEES;
+with ``--breakdown`` also where the fused error and NEES come from (false positives,
+people matched to a neighbour, their own person; :func:`nees_breakdown`).
 
     PYTHONPATH=src python benchmarks/fused_calibration.py --detections /work/cache-h7/det-far.npz \
-        --profile yolo11n-pose-far
+        --profile yolo11n-pose-far --breakdown
 """
 
 from __future__ import annotations
@@ -133,8 +136,58 @@ def synthetic(profile: str, scenes: list[str] | None, config: Config, duration_s
 
     data = MemoryDataset(generate_scenes(0, scenes, terrain=True, duration_s=duration_s), name="terrain-seed0")
     results = compare_methods(data, pose_backend=f"detector-model:{profile}", config=config)
+    tracking = ("mota", "idf1", "id_switches")
     return {m: {"count": r.metrics.overall.count, "rel_error_pct": r.metrics.overall.rel_error_pct,
-                **r.metrics.calibration} for m, r in results.items()}
+                **r.metrics.calibration, **{k: (r.metrics.tracking or {}).get(k) for k in tracking}}
+            for m, r in results.items()}
+
+
+def nees_breakdown(profile: str, config: Config, duration_s: float) -> dict:
+    """Where the fused method's error and NEES on the synthetic scenes come from, under the
+    paper's matching: each match is a false positive (its keypoints lie off every true
+    skeleton: median miss over 5 px and 10 % of the height), a person matched to a
+    neighbour (the nearest overlapping box in x-y is someone else's), or the person
+    itself; with each group's count, share of the summed relative error and mean NEES,
+    and the NEES of the non-ghost matches against their own person."""
+    from dataclasses import replace
+
+    from pedenv.evaluation.matching import match_to_ground_truth
+    from pedenv.io.datasets.memory import MemoryDataset
+    from pedenv.model import PedestrianEnvironmentModel
+    from pedenv.pose import create_pose_backend
+    from pedenv.synthetic import generate_scenes
+
+    data = MemoryDataset(generate_scenes(0, terrain=True, duration_s=duration_s), name="terrain-seed0")
+    backend = create_pose_backend(f"detector-model:{profile}")
+    model = PedestrianEnvironmentModel(configure(config, "fused"))
+    rows = []  # (group, relative error %, NEES, NEES against the own person)
+    for scene in data.scene_names():
+        model.reset()
+        for frame in data.frames(scene):
+            frame = replace(frame, detections=backend(frame))
+            peds, gt = model.update(frame).pedestrians, frame.ground_truth
+            if gt is None or not len(peds.track_ids) or gt.keypoints is None:
+                continue
+            match = match_to_ground_truth(peds.boxes, peds.positions[:, :2], gt.boxes, gt.positions[:, :2])
+            inv = np.linalg.inv(peds.covariances + 1e-9 * np.eye(2))
+            for i in np.flatnonzero(match >= 0):
+                miss = np.median(np.linalg.norm(gt.keypoints - peds.keypoints[i], axis=-1), axis=1)
+                tall = np.ptp(gt.keypoints[..., 1], axis=1)
+                own = int(np.argmin(miss / np.maximum(tall, 1.0)))
+                ghost = miss[own] > max(5.0, 0.1 * tall[own])
+                e = peds.positions[i, :2] - gt.positions[match[i], :2]
+                e_own = peds.positions[i, :2] - gt.positions[own, :2]
+                rel = 100.0 * np.linalg.norm(e) / np.linalg.norm(gt.positions[match[i], :2] - frame.ego.translation[:2])
+                group = "false positive" if ghost else ("neighbour" if own != match[i] else "own person")
+                rows.append((group, rel, float(e @ inv[i] @ e), np.nan if ghost else float(e_own @ inv[i] @ e_own)))
+    rel_sum = sum(r[1] for r in rows)
+    out = {g: {"count": len(sel), "share_of_error_pct": 100.0 * sum(r[1] for r in sel) / rel_sum,
+               "mean_nees": float(np.mean([r[2] for r in sel]))}
+           for g in ("false positive", "neighbour", "own person") if (sel := [r for r in rows if r[0] == g])}
+    out["all"] = {"count": len(rows), "rel_error_pct": rel_sum / len(rows),
+                  "mean_nees": float(np.mean([r[2] for r in rows])),
+                  "mean_nees_against_own_person": float(np.nanmean([r[3] for r in rows]))}
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -145,6 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scenes", default="", help="comma-separated synthetic scene names (default: all)")
     parser.add_argument("--duration", type=float, default=8.0, help="seconds of each synthetic scene")
     parser.add_argument("--persons", action="store_true", help="print every real person's row")
+    parser.add_argument("--breakdown", action="store_true",
+                        help="with --profile: the synthetic error and NEES by false positives, neighbours, own person")
     args = parser.parse_args(argv)
     config = Config()
     result = {}
@@ -156,6 +211,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.profile:
         result["synthetic"] = synthetic(args.profile, [s for s in args.scenes.split(",") if s] or None, config,
                                         args.duration)
+        if args.breakdown:
+            result["synthetic_breakdown"] = nees_breakdown(args.profile, config, args.duration)
     print(json.dumps(result, indent=1))
     return 0
 

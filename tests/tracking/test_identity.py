@@ -6,6 +6,7 @@ import pytest
 
 from pedenv.config import TrackingConfig
 from pedenv.tracking.projection import CameraView, foot_points, pixel_distances
+from pedenv.tracking.recall import EXPECTED_DISTANCE_2DOF, ground_terms
 from pedenv.tracking.tracker import Tracker
 
 F, CX, CY, W, H = 1000.0, 640.0, 360.0, 1280, 720
@@ -48,6 +49,28 @@ def test_projection_puts_a_standing_person_on_their_foot_point():
 def test_a_point_behind_the_camera_is_never_near():
     d2 = pixel_distances(view(0.0), box(10, 0)[None], np.array([[-5.0, 0.0]]), 0.01 * np.eye(2)[None])
     assert np.isinf(d2[0, 0])
+
+
+@pytest.mark.parametrize("std_m, near", [(0.05, False), (0.4, None)])
+def test_a_prediction_whose_spread_reaches_behind_the_camera_is_not_projected(std_m, near):
+    """A track predicted 1.1 m ahead (a person the car has nearly passed): with 5 cm spread it
+    projects far below a detection 80 m away; with 0.4 m its spread reaches behind the camera,
+    the linearized projection (thousands of pixels wide) would take that detection in, so the
+    distance is infinite: no recall, and the ground gate abstains."""
+    far = box(80.0, 0.5)[None]
+    d2 = pixel_distances(view(0.0), far, np.array([[1.1, 0.3]]), std_m**2 * np.eye(2)[None])
+    if near is None:
+        assert np.isinf(d2[0, 0])
+    else:
+        assert np.isfinite(d2[0, 0]) and d2[0, 0] > 20
+    tracker = Tracker(TrackingConfig(**FUSED))
+    tracker.update(box(5.0, 0.3)[None], view=view(0.0))
+    f = tracker.table.filter
+    f.x[0], f.P[0], f.started[0] = (1.1, 0.0, 0.3, 0.0), np.diag([std_m**2, 0.1, std_m**2, 0.1]), True
+    allowed, cost = ground_terms(far, f, view(0.1), tracker.config)
+    assert allowed[0, 0] == (near is None)
+    if near is None:
+        assert cost[0, 0] == pytest.approx(EXPECTED_DISTANCE_2DOF / 4.0)  # abstains: the expected cost
 
 
 @pytest.mark.parametrize("gate, swapped", [(0.0, True), (4.0, False)])

@@ -33,6 +33,12 @@ ROAD_HEIGHT_STD_M, ROAD_GRADE_STD = 0.1, 0.02
 RANGE_BIAS_STD = 0.08
 #: Points nearer than this in front of the camera (metres) are not projected.
 MIN_DEPTH_M = 0.5
+#: A predicted position is projected only when it lies in front of the camera by this
+#: many standard deviations of its depth (plus :data:`MIN_DEPTH_M`): the linearization
+#: holds only where the whole spread is in front. A track predicted 1 m ahead with 0.4 m
+#: spread (a person the car has nearly passed) projects to thousands of pixels of spread
+#: below the image, which a far detection near the horizon would otherwise fall inside.
+FRONT_SIGMAS = 3.0
 _LOOSE = 1e8  # variance (px^2) of a coordinate that carries no information
 
 
@@ -70,7 +76,8 @@ class CameraView:
     def jacobian(self, xy: np.ndarray, with_height: bool = False):
         """Pixels (T, 2) of ground positions ``xy`` (T, 2), d pixel / d xy (T, 2, 2) and
         whether each lies at least :data:`MIN_DEPTH_M` in front of the camera (T,); with
-        ``with_height`` also d pixel / d z (T, 2), the ground point raised off the road."""
+        ``with_height`` also d pixel / d z (T, 2), the ground point raised off the road,
+        the depths (T,) metres and their gradients d depth / d (x, y, z) (T, 3)."""
         R, t, K = self.world_to_cam[:3, :3], self.world_to_cam[:3, 3], self.intrinsics
         pc = self.ground_points(xy) @ R.T + t
         depth = pc[:, 2]
@@ -85,7 +92,8 @@ class CameraView:
         d_pix[:, 0, 0], d_pix[:, 0, 2] = fx / z, -fx * pc[:, 0] / z**2
         d_pix[:, 1, 1], d_pix[:, 1, 2] = fy / z, -fy * pc[:, 1] / z**2
         if with_height:
-            return pixels, d_pix @ d_cam, front, d_pix @ R[:, 2]
+            d_depth = np.broadcast_to(np.append(d_cam[2], R[2, 2]), (len(xy), 3))
+            return pixels, d_pix @ d_cam, front, d_pix @ R[:, 2], depth, d_depth
         return pixels, d_pix @ d_cam, front
 
 
@@ -110,20 +118,26 @@ def project_ground(view: CameraView, xy: np.ndarray, cov_xy: np.ndarray):
 
     The covariance adds a range bias (:data:`RANGE_BIAS_STD`) along the line of sight and
     the road's height under the point (:data:`ROAD_HEIGHT_STD_M`, :data:`ROAD_GRADE_STD`).
+    ``in front`` holds where the position lies :data:`FRONT_SIGMAS` standard deviations of
+    its depth beyond :data:`MIN_DEPTH_M` in front of the camera: elsewhere the linearized
+    projection means nothing (its spread is not Gaussian, part of it is behind the camera).
     """
-    pixels, J, front, J_z = view.jacobian(xy, with_height=True)
+    pixels, J, _, J_z, depth, d_depth = view.jacobian(xy, with_height=True)
     sight = xy - view.cam_to_world[:2, 3]
     r = np.linalg.norm(sight, axis=1)
     cov = cov_xy + (RANGE_BIAS_STD**2) * np.einsum("ti,tj->tij", sight, sight)
     z_var = (ROAD_HEIGHT_STD_M + ROAD_GRADE_STD * r) ** 2
     pix = J @ cov @ np.transpose(J, (0, 2, 1)) + z_var[:, None, None] * np.einsum("ti,tj->tij", J_z, J_z)
+    g = d_depth[:, :2]
+    depth_var = np.einsum("ti,tij,tj->t", g, cov, g) + z_var * d_depth[:, 2] ** 2
+    front = depth - FRONT_SIGMAS * np.sqrt(np.maximum(depth_var, 0.0)) > MIN_DEPTH_M
     return pixels, pix, front
 
 
 def pixel_distances(view: CameraView, boxes: np.ndarray, xy: np.ndarray, cov_xy: np.ndarray) -> np.ndarray:
     """(N, T) squared Mahalanobis distances of the foot points of ``boxes`` (N, 4) pixels
     from the projected ground positions ``xy`` (T, 2) (covariance ``cov_xy`` (T, 2, 2), m^2);
-    inf for a position behind the camera."""
+    inf for a position not surely in front of the camera (see :func:`project_ground`)."""
     pixels, cov, front = project_ground(view, xy, cov_xy)
     e = foot_points(boxes)[:, None, :] - pixels[None]  # (N, T, 2)
     S = cov[None] + foot_covariance(boxes, view.height)[:, None]

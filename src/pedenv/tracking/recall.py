@@ -50,12 +50,15 @@ def predicted_ground(filters: FilterColumns, rows: np.ndarray | slice = slice(No
 def ground_terms(boxes: np.ndarray, filters: FilterColumns, view: CameraView | None, config: TrackingConfig):
     """The ground gate's ``(allowed (N, T) bool, extra_cost (N, T))`` for detections
     ``boxes`` (N, 4) pixels and every track row, or ``(None, None)`` when it is off
-    (``config.ground_gate`` = 0 or no view). Tracks whose filter holds no state pass the
-    gate with the expected cost."""
+    (``config.ground_gate`` = 0 or no view). Tracks whose filter holds no state, or whose
+    prediction is not surely in front of the camera (its projection means nothing there,
+    :func:`~pedenv.tracking.projection.project_ground`), pass the gate with the expected
+    cost: the gate abstains and the boxes decide."""
     if view is None or config.ground_gate <= 0 or not len(boxes) or not len(filters.x):
         return None, None
     xy, cov, started = predicted_ground(filters)
     d2 = pixel_distances(view, boxes, xy, cov)
+    started = started & np.isfinite(d2).all(axis=0)
     allowed = (d2 <= config.ground_gate) | ~started[None]
     d2 = np.where(started[None], np.minimum(d2, config.ground_gate), EXPECTED_DISTANCE_2DOF)
     return allowed, config.ground_cost_weight * d2 / config.ground_gate

@@ -34,10 +34,11 @@ def test_fused_beats_paper_with_exact_skeletons(dataset, tmp_path):
     assert paper.overall.rel_error_pct > 10.0
     still, driving = (dict(fused.scenes)[s].rel_error_pct for s in SCENES)
     assert still < driving + 1.0  # the ego standing still is no worse than driving
-    # exact skeletons leave little but the body's sideways spread, which the covariance
-    # carries for real networks: a little over-covered (0.607 / 0.863 with seed 0)
-    assert 0.30 <= fused.calibration["within_1sigma"] <= 0.64
-    assert fused.calibration["within_2sigma"] >= 0.80
+    # exact skeletons leave little but the body's sideways spread and a standing foot's
+    # place, which the covariance carries for real walkers and networks: over-covered
+    # (0.648 / 0.891, mean NEES 1.82 with seed 0)
+    assert 0.30 <= fused.calibration["within_1sigma"] <= 0.67
+    assert fused.calibration["within_2sigma"] >= 0.85
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert set(saved["methods"]) == {"paper", "fused"}
     assert (tmp_path / "error_by_distance.png").exists() and (tmp_path / "fused" / "metrics.json").exists()
@@ -55,9 +56,10 @@ def test_fused_beats_paper_with_the_detector_model(dataset):
     assert fused.overall.rel_error_pct < 9.2
     assert 0.30 <= fused.calibration["within_1sigma"] <= 0.50
     assert fused.calibration["within_2sigma"] >= 0.78
-    # ideal 2; 2.84 before the fused preset's identity tracker, 3.99 with it: a few long
-    # errors of re-identified tracks carry the mean (issue 11's goal of 3.0 is not met here)
-    assert fused.calibration["mean_nees"] <= 4.2
+    # ideal 2; 2.84 before the fused preset's identity tracker, 3.99 with it (re-identified
+    # tracks projected from behind the camera, variances scaled at a stale range, the
+    # body's sideways spread averaged by the filter, a standing foot trusted to the mm): 2.74
+    assert fused.calibration["mean_nees"] <= 2.9
 
 
 def test_compare_rejects_unknown_methods(dataset):

@@ -96,3 +96,12 @@ def test_a_lifted_swing_foot_is_left_out(distance):
 def test_noisy_standing_ankles_are_both_kept():
     frame = lift_left_ankle(make_frame(np.array([[40.0, 0.0, 0.0]])), 0.02)  # within pixel noise
     assert skeletons_of(frame).stance[0].all()
+
+
+@pytest.mark.parametrize("reference, scaled_at", [(21.0, 21.0), (np.nan, 20.0), (3.0, 20.0), (150.0, 20.0)])
+def test_the_variance_is_scaled_at_the_tracks_last_range_only_while_this_range_agrees(reference, scaled_at):
+    """21 m lies within the cue's spread of 20 m: the track's range scales the variance. A
+    last range of 3 m or 150 m belongs to someone else (or a long gap): this frame's does."""
+    cue = run_height(make_frame(np.array([[20.0, 0.0, 0.0]])), reference_range=np.array([reference]))
+    per_person = np.hypot(0.09 / 1.72, FusedConfig().keypoint_span_std)
+    assert np.sqrt(cue.bias_covariances[0, 0, 0]) == pytest.approx(scaled_at * per_person, rel=0.02)

@@ -50,8 +50,9 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
     """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
 
     skeletons: the frame's rays (world) and stance ankles. The frame-to-frame covariance
-    holds the pixel noise, the ankle's lift and the body's lateral spread; the per-person
-    part the road's unknown height under the pedestrian.
+    holds the pixel noise, the ankle's lift and where the foot stands against the body
+    (``stance_std_m``, it changes with each step); the per-person part the road's unknown
+    height under the pedestrian and the body's lateral spread.
     Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
     """
     n, ankles, origin = len(skeletons), list(ANKLE_KEYPOINTS), skeletons.origin
@@ -97,9 +98,13 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
     lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
                         config.ankle_height_std_m)
     lift, lat = lift_std**2, config.lateral_std_m**2  # the foot's lift changes with the gait
-    frame_cov = symmetric_2x2(pxx + lift * ax * ax + lat, pxy + lift * ax * ay, pyy + lift * ay * ay + lat)
-    # the road under a pedestrian r metres away stays off the vehicle's plane frame after frame
+    # a standing foot lies up to half a step ahead of or behind the body (walking direction
+    # unknown: the same each way); the midpoint of two standing feet half as far
+    stance = config.stance_std_m**2 / count.clip(1) ** 2
+    frame_cov = symmetric_2x2(pxx + lift * ax * ax + stance, pxy + lift * ax * ay, pyy + lift * ay * ay + stance)
+    # the road under a pedestrian r metres away stays off the vehicle's plane frame after
+    # frame, and so does the body's sideways spread about its ground point (lean: the person's)
     r = np.sqrt((xy[:, 0] - origin[0]) ** 2 + (xy[:, 1] - origin[1]) ** 2)
     road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2) ** 2
-    bias = symmetric_2x2(road * ax * ax, road * ax * ay, road * ay * ay)
+    bias = symmetric_2x2(road * ax * ax + lat, road * ax * ay, road * ay * ay + lat)
     return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)

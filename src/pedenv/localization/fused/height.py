@@ -60,6 +60,11 @@ PASSES = 2
 MIN_RANGE_M = 0.3
 #: Relative determinant below which the straight-line fit is singular.
 MIN_RELATIVE_DET = 1e-12
+#: A track's last range scales this frame's variance only while this frame's range lies
+#: within this many of the cue's standard deviations of it; farther, the track has taken
+#: someone else (or a false detection) or come back after a long gap, and a variance scaled
+#: at the old range would be far too small (a 15 px ghost 150 m away scaled at 20 m).
+REFERENCE_RANGE_SIGMAS = 3.0
 
 
 def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.ndarray, used: np.ndarray,
@@ -106,7 +111,8 @@ def height_cue(skeletons: FrameSkeletons, focal_px: float, config: FusedConfig,
     metres, the range at which to scale the variance (NaN or None: this frame's range).
     The variance grows with the range squared; scaled at this frame's noisy range, a
     too-near estimate would count more than a too-far one and a filter averaging them
-    would drift near, so a tracked pedestrian's variance is scaled at its last range.
+    would drift near, so a tracked pedestrian's variance is scaled at its last range, as
+    long as this frame's range agrees with it (:data:`REFERENCE_RANGE_SIGMAS`).
     Declines with ``no-keypoints`` (fewer than two usable levels), ``short-extent``
     (they span too little of the body) or ``inconsistent`` (no positive range fits).
     """
@@ -134,11 +140,16 @@ def height_cue(skeletons: FrameSkeletons, focal_px: float, config: FusedConfig,
     r2 = r**2
     frame_rel = np.where(good, (var_pix + var_frac) / r2, 1.0)
     bias_rel = (hs / hm) ** 2 + config.keypoint_span_std**2  # height spread and posture, per person
-    scale = r if reference_range is None else np.where(np.isfinite(reference_range), reference_range, r)
+    scale = r
+    if reference_range is not None:
+        ref = np.asarray(reference_range, float)
+        with np.errstate(invalid="ignore"):  # NaN: no reference
+            agrees = (r - ref) ** 2 <= REFERENCE_RANGE_SIGMAS**2 * (frame_rel + bias_rel) * np.fmax(r, ref) ** 2
+        scale = np.where(agrees, ref, r)
     mean_ray = np.where(used[..., None], skeletons.rays[:, idx], 0.0).sum(axis=1)
     bearing = horizontal_bearing(mean_ray)
     xy = skeletons.origin[:2] + r[:, None] * bearing
     s2 = scale**2
-    across = (scale * skeletons.noise) ** 2 + config.lateral_std_m**2
+    across = (scale * skeletons.noise) ** 2  # the body's own sideways spread is the person's
     return CueEstimate(NAME, xy, range_bearing_covariance(bearing, frame_rel * s2, across),
-                       range_bearing_covariance(bearing, bias_rel * s2, 0.0), good, reasons)
+                       range_bearing_covariance(bearing, bias_rel * s2, config.lateral_std_m**2), good, reasons)

@@ -158,11 +158,11 @@ def triangulation_cue(tri: Triangulated, skeletons: FrameSkeletons, config: Fuse
     share = good / np.maximum(count, 1)[:, None]  # (N, 4)
     xy = (share[..., None] * np.where(good[..., None], tri.points[:, TORSO_KEYPOINTS, :2], 0.0)).sum(axis=1)
     cov = (share[..., None] * np.where(good[..., None], tri.covariances[:, TORSO_KEYPOINTS], 0.0)).sum(axis=1)
-    lat = config.lateral_std_m**2
-    frame_cov = symmetric_2x2(cov[:, 0] + lat, cov[:, 1], cov[:, 2] + lat)
+    lat = config.lateral_std_m**2  # the body's own spread about its ground point: the person's
+    frame_cov = symmetric_2x2(cov[:, 0], cov[:, 1], cov[:, 2])
     drift = (share * tri.drift_var[:, TORSO_KEYPOINTS]).sum(axis=1)
     bearing = horizontal_bearing((share[..., None] * skeletons.rays[:, TORSO_KEYPOINTS]).sum(axis=1))
     bx, by = bearing[:, 0], bearing[:, 1]
-    bias = symmetric_2x2(drift * bx * bx, drift * bx * by, drift * by * by)
+    bias = symmetric_2x2(drift * bx * bx + lat, drift * bx * by, drift * by * by + lat)
     reasons = np.where(valid, 0, np.where(tri.reasons == 0, REASON_CODE["degenerate"], tri.reasons))
     return CueEstimate(NAME, xy, frame_cov, bias, valid, reasons)
