@@ -335,6 +335,67 @@ class FusedConfig:
 
 
 @dataclass(frozen=True)
+class RedetectConfig:
+    """Re-detection of missed tracks in high-resolution crops (``pedenv.pose.redetect``).
+
+    Beyond the paper, off by default; the ``fused`` preset turns it on. Before the model
+    takes a frame, every live track whose predicted box overlaps no detection of the main
+    pass is searched for again: the pose network runs on an upscaled crop around the
+    predicted box, and the person found there is merged with the frame's detections by the
+    skeleton-aware NMS (``pedenv.pose.merge``), so nobody appears twice. Needs the ``onnx``
+    backend; each crop is one extra network pass.
+
+    enabled: run the re-detection.
+    crop_margin: context added on every side of the predicted box, as a share of its height
+        (0..2). Raising it tolerates worse predictions, with fewer input pixels per person.
+    crop_scale: crop pixels -> network input pixels (0.25..4; 2 = twice the native size),
+        lowered where the input would exceed ``max_input_px``. Raising it finds smaller people.
+    min_crop_px, max_crop_px: each side of the crop region is clamped to this range, image
+        pixels (32..4096); a tiny box still gets context, a huge one a bounded crop.
+    max_input_px: the longest side of a crop's network input, pixels (multiple of 32,
+        64..1280). Raising it keeps the scale for larger people, at more cost per crop.
+    max_crops: at most this many crops per frame (0..64); the tracks seen most often go
+        first. Bounds the extra cost per frame.
+    missed_iou: a track whose predicted box overlaps every detection by at most this IoU
+        (0..1) counts as missed. Raising it searches more tracks.
+    match_iou: a person found in a crop re-detects the track when their box overlaps the
+        predicted box by at least this IoU (0..1); the best one is kept, the rest of the
+        crop ignored. Raising it accepts fewer, closer re-detections.
+    min_hits: only tracks detected at least this many times are searched (1..1000), so a
+        one-frame false positive is not chased.
+    """
+
+    enabled: bool = False
+    crop_margin: float = 0.5
+    crop_scale: float = 2.0
+    min_crop_px: int = 128
+    max_crop_px: int = 960
+    max_input_px: int = 640
+    max_crops: int = 4
+    missed_iou: float = 0.3
+    match_iou: float = 0.3
+    min_hits: int = 2
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.enabled, bool):
+            raise InputError(f"redetect.enabled must be true or false, got {self.enabled!r}")
+        _check_range("redetect.crop_margin", self.crop_margin, 0.0, 2.0)
+        _check_range("redetect.crop_scale", self.crop_scale, 0.25, 4.0)
+        for name, low, high in (("min_crop_px", 32, 4096), ("max_crop_px", 32, 4096), ("max_input_px", 64, 1280),
+                                ("max_crops", 0, 64), ("min_hits", 1, 1000)):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
+                raise InputError(f"redetect.{name} must be an integer in [{low}, {high}], got {value!r}")
+        if self.min_crop_px > self.max_crop_px:
+            raise InputError(f"redetect.min_crop_px ({self.min_crop_px}) must not exceed "
+                             f"redetect.max_crop_px ({self.max_crop_px})")
+        if self.max_input_px % 32:
+            raise InputError(f"redetect.max_input_px must be a multiple of 32, got {self.max_input_px}")
+        _check_range("redetect.missed_iou", self.missed_iou, 0.0, 1.0)
+        _check_range("redetect.match_iou", self.match_iou, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
 class Config:
     """Everything the environment model needs besides the data.
 
@@ -348,6 +409,7 @@ class Config:
     paper: PaperConfig = field(default_factory=PaperConfig)
     kalman: KalmanConfig = field(default_factory=KalmanConfig)
     fused: FusedConfig = field(default_factory=FusedConfig)
+    redetect: RedetectConfig = field(default_factory=RedetectConfig)
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method:
@@ -411,4 +473,4 @@ class Config:
 
 #: Section name -> its class.
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
-                             "fused": FusedConfig}
+                             "fused": FusedConfig, "redetect": RedetectConfig}

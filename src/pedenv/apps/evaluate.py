@@ -23,6 +23,7 @@ from pedenv.io.outputs import write_outputs
 from pedenv.io.sinks import ExtraOutputs
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose import PoseBackend, create_pose_backend
+from pedenv.pose.redetect import with_redetection
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 
@@ -53,6 +54,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
     backend = _backend(pose_backend or dataset.default_pose_backend)
     names = resolve_scenes(dataset, scenes)
     model = model_factory(config)
+    backend = with_redetection(backend, model, config.redetect)  # missed tracks searched in crops (fused)
     samples = {name: ErrorSamples() for name in names}
     tracking = TrackingAccumulator()
     busiest, busiest_n = None, -1

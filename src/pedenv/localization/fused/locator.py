@@ -104,10 +104,11 @@ class FusedLocator:
     """
 
     #: What the method changes besides ``Config.method``, beyond the paper: the tracker's
-    #: height-ratio rule and motion prediction and the filter's restart gate.
+    #: height-ratio rule and motion prediction and the filter's restart gate, and the
+    #: re-detection of missed tracks in crops (onnx backend, :mod:`pedenv.pose.redetect`).
     PRESET = {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
                            "ground_gate": 4.0, "memory_s": 2.0},
-              "kalman": {"restart_gate": 25.0}}
+              "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}}
 
     def __init__(self, config: Config) -> None:
         self.config = config
