@@ -58,7 +58,7 @@ def _write_poses(path: Path, timestamps: np.ndarray, vehicle_to_world: np.ndarra
         w.writerow(POSE_HEADER)
         for t, pose in zip(timestamps, vehicle_to_world):
             q = rotation_to_quaternion(pose[:3, :3])
-            w.writerow([f"{t:.6f}", *(f"{v:.6f}" for v in pose[:3, 3]), *(f"{v:.9f}" for v in q)])
+            w.writerow([f"{t:.9f}", *(f"{v:.6f}" for v in pose[:3, 3]), *(f"{v:.9f}" for v in q)])
 
 
 def _link_images(images: Path, frames: list[tuple[Path, float]]) -> None:
@@ -67,7 +67,7 @@ def _link_images(images: Path, frames: list[tuple[Path, float]]) -> None:
         w.writerow(["filename", "timestamp"])
         for source, t in frames:
             (images / source.name).symlink_to(source.resolve())
-            w.writerow([source.name, f"{t:.6f}"])
+            w.writerow([source.name, f"{t:.9f}"])
 
 
 def write_kitti_recording(training: str | Path, sequence: str, out: str | Path,
