@@ -64,6 +64,24 @@ def mot17_sequences(samples: Path, workdir: Path):
         yield f"mot17/{folder.name}", list(rec.frames()), gt, "whole"
 
 
+FIELDS = ("keypoints", "confidences", "boxes", "scores")
+
+
+def load_cache(path: Path | None) -> dict:
+    """Main detections by ``<sequence>/<frame index>`` from an .npz written by :func:`save_cache`."""
+    from pedenv.records import Detections
+
+    if path is None or not path.is_file():
+        return {}
+    data = np.load(path)
+    keys = {k.rsplit(":", 1)[0] for k in data.files}
+    return {k: Detections(*(data[f"{k}:{f}"] for f in FIELDS)) for k in keys}
+
+
+def save_cache(path: Path, cache: dict) -> None:
+    np.savez_compressed(path, **{f"{k}:{f}": getattr(d, f) for k, d in cache.items() for f in FIELDS})
+
+
 def duplicate_pairs(boxes: np.ndarray, threshold: float = 0.5) -> int:
     """Pairs of boxes (N, 4) px overlapping by IoU > ``threshold``."""
     from pedenv.boxes import iou_matrix
@@ -125,6 +143,10 @@ def main(argv=None) -> int:
     parser.add_argument("--detection", default="far", choices=["far", "fast"])
     parser.add_argument("--only", choices=["kitti", "mot17"], default=None)
     parser.add_argument("--json", type=Path, default=None, help="Also write the figures here.")
+    parser.add_argument("--cache", type=Path, default=None,
+                        help="An .npz (outside the repository) keeping the main detections between runs.")
+    parser.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="A redetect setting for the 'on' run, e.g. --set min_hits=1.")
     args = parser.parse_args(argv)
 
     from pedenv.config import Config
@@ -136,6 +158,8 @@ def main(argv=None) -> int:
     backend = create_pose_backend("onnx", detection=args.detection,
                                   score_threshold=fused.tracking.pose_score_threshold)
     image_only = {"ground_gate": 0.0, "memory_s": 0.0}
+    settings = {k: json.loads(v) for k, v in (item.split("=", 1) for item in args.set)}
+    cache = load_cache(args.cache)
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
         groups = {"kitti": lambda: kitti_sequences(args.samples),
@@ -147,12 +171,14 @@ def main(argv=None) -> int:
             main_seconds, main_frames = 0.0, 0
             for name, frames, gt, tiling in sequences():
                 t0 = time.perf_counter()
-                main = [backend.detect(frame_image(f), None) if tiling == "whole" else backend(f) for f in frames]
+                main = [cache.get(f"{name}/{f.index}") or (backend.detect(frame_image(f), None) if tiling == "whole"
+                                                          else backend(f)) for f in frames]
                 main_seconds += time.perf_counter() - t0
                 main_frames += len(frames)
+                cache.update({f"{name}/{f.index}": d for f, d in zip(frames, main)})
                 base = fused if tiling is None else fused.replace(tracking=image_only)
                 for variant, enabled in (("off", False), ("on", True)):
-                    config = base.replace(redetect={"enabled": enabled})
+                    config = base.replace(redetect={"enabled": enabled, **(settings if enabled else {})})
                     acc, counts = run_sequence(frames, gt, main, config, backend)
                     runs[variant][0].append(acc)
                     runs[variant][1].append(counts)
@@ -161,7 +187,10 @@ def main(argv=None) -> int:
                 figures = summarise(accs, counts)
                 figures["main_ms_per_frame"] = 1e3 * main_seconds / max(main_frames, 1)
                 results[f"{group}/{variant}"] = figures
-    print(f"re-detection of missed tracks, detection {args.detection}, fused preset")
+    if args.cache:
+        save_cache(args.cache, cache)
+    print(f"re-detection of missed tracks, detection {args.detection}, fused preset, "
+          f"'on' with {settings or 'defaults'}")
     print(f"{'run':12s} {'gt':>5s} {'recall':>7s} {'FP':>4s} {'IDSW':>5s} {'IDF1':>6s} {'MOTA':>6s} "
           f"{'crops/fr':>8s} {'found':>5s} {'ms/crop':>8s} {'ms main':>8s} {'dup':>4s}")
     for key, r in results.items():

@@ -5,8 +5,6 @@ import json
 
 import numpy as np
 import pytest
-from cli_in_process import pedenv
-from shared_paths import REAL_SAMPLES
 
 from pedenv.boxes import iou_matrix
 from pedenv.config import Config
@@ -17,6 +15,9 @@ from pedenv.io.footage_writer import write_kitti_recording, write_mot17_recordin
 from pedenv.io.jsonl import read_environment
 from pedenv.io.real import kitti
 from pedenv.localization import configure
+
+from cli_in_process import pedenv
+from shared_paths import REAL_SAMPLES
 
 KITTI = REAL_SAMPLES / "kitti" / "tracking_mini"
 MOT17 = REAL_SAMPLES / "mot17"
@@ -53,6 +54,19 @@ def test_a_mot17_recording_has_a_labelled_guessed_camera_and_a_standing_ego(tmp_
     assert frames[-1].ego.translation.tolist() == [0.0, 0.0, 0.0]
     with pytest.raises(InputError, match="camera_height_m"):
         write_mot17_recording(MOT17 / "MOT17-05-FRCNN", tmp_path / "other", camera_height_m=0.0)
+
+
+def test_a_guessed_downward_pitch_makes_far_tile_the_whole_image(tmp_path):
+    from pedenv.pose.tiling import CameraGeometry, DetectionConfig, far_band
+
+    far = DetectionConfig.named("far")
+    level = next(_load(write_mot17_recording(MOT17 / "MOT17-04-FRCNN", tmp_path / "level")).frames())
+    down = next(_load(write_mot17_recording(MOT17 / "MOT17-04-FRCNN", tmp_path / "down", pitch_down_deg=30)).frames())
+    band = far_band(CameraGeometry.from_frame(level), 1920, 1080, far)
+    assert band is not None and band.top < 540 < band.bottom  # a level camera: the band holds the horizon
+    assert far_band(CameraGeometry.from_frame(down), 1920, 1080, far) is None
+    forward = down.camera.cam_to_vehicle[:3, 2]
+    assert forward[2] == pytest.approx(-0.5)  # the optical axis points 30 deg below the horizon
 
 
 def _ids_and_duplicates(environment, gt):

@@ -13,9 +13,9 @@ left), ego poses from the ORB-SLAM3 trajectory (every frame of it, so the gaps i
 or a standing ego without one; 10 Hz timestamps from the frame numbers.
 MOT17 (:func:`write_mot17_recording`): **no calibration exists**. The camera written is a
 guess, labelled as such in the YAML: focal length ``focal_px`` (default: the image width, about
-53 deg across), principal point at the image centre, level, ``camera_height_m`` above the
-road. The ego stands still (identity poses): right for the static sequences, wrong for
-MOT17-05/10/11/13 (moving cameras). Timestamps from ``frameRate``.
+53 deg across), principal point at the image centre, level unless ``pitch_down_deg`` says
+otherwise, ``camera_height_m`` above the road. The ego stands still (identity poses): right
+for the static sequences, wrong for MOT17-05/10/11/13 (moving cameras). Timestamps from ``frameRate``.
 """
 
 from __future__ import annotations
@@ -102,15 +102,18 @@ def write_kitti_recording(training: str | Path, sequence: str, out: str | Path,
 
 
 def write_mot17_recording(folder: str | Path, out: str | Path, camera_height_m: float = 1.5,
-                          focal_px: float | None = None) -> Path:
+                          focal_px: float | None = None, pitch_down_deg: float = 0.0) -> Path:
     """Write the MOT17 sequence in ``folder`` as a recording in ``out`` with a **guessed** camera
-    (module doc); returns ``out``."""
+    (module doc), tilted down by ``pitch_down_deg`` (-89..89; a camera looking down more than
+    ``DetectionConfig.max_pitch_down_deg`` gets the whole image tiled by ``far``); returns ``out``."""
     out = Path(out)
     seq = mot17.read_sequence(folder)
     if not seq.frames:
         raise InputError(f"{folder}: no images")
     if not 0.1 <= camera_height_m <= 100.0:
         raise InputError(f"camera_height_m must be in [0.1, 100], got {camera_height_m!r}")
+    if not -89.0 <= pitch_down_deg <= 89.0:
+        raise InputError(f"pitch_down_deg must be in [-89, 89], got {pitch_down_deg!r}")
     info = seq.info
     f = float(focal_px) if focal_px is not None else float(info.width)
     if not f > 0:
@@ -118,11 +121,13 @@ def write_mot17_recording(folder: str | Path, out: str | Path, camera_height_m: 
     images = _prepare(out)
     K = np.array([[f, 0.0, info.width / 2.0], [0.0, f, info.height / 2.0], [0.0, 0.0, 1.0]])
     mount = np.eye(4)
-    mount[:3, :3] = CAMERA_TO_VEHICLE_AXES
+    a = np.radians(pitch_down_deg)
+    pitch = np.array([[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]])  # about y (left)
+    mount[:3, :3] = pitch @ CAMERA_TO_VEHICLE_AXES
     mount[2, 3] = camera_height_m
     _write_calibration(out / "calibration.yaml", K, info.width, info.height, mount,
                        f"{info.name}: GUESSED camera (MOT17 has no calibration): focal {f:g} px, principal point "
-                       f"at the centre, level, {camera_height_m} m above the road")
+                       f"at the centre, pitched down {pitch_down_deg:g} deg, {camera_height_m} m above the road")
     stamps = np.array([seq.frames[0] - 1, seq.frames[-1]], float) / info.frame_rate
     _write_poses(out / "ego_poses.csv", stamps, np.repeat(np.eye(4)[None], 2, axis=0))
     _link_images(images, [(seq.image_path(n), (n - 1) / info.frame_rate) for n in seq.frames])
