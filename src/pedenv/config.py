@@ -358,9 +358,13 @@ class RedetectConfig:
         first. Bounds the extra cost per frame.
     missed_iou: a track whose predicted box overlaps every detection by at most this IoU
         (0..1) counts as missed. Raising it searches more tracks.
-    match_iou: a person found in a crop re-detects the track when their box overlaps the
-        predicted box by at least this IoU (0..1); the best one is kept, the rest of the
-        crop ignored. Raising it accepts fewer, closer re-detections.
+    match_distance: a whole person found in a crop re-detects the track when their box
+        centre lies within this many predicted box heights of the predicted box's centre
+        (0..2); the nearest is kept, the rest of the crop ignored (people the main pass found
+        are merged away in any case). Raising it tolerates worse predictions (frames far
+        apart, a turning walker), with more chance of taking a neighbour.
+    match_height_ratio: and when their box height lies within this factor of the predicted
+        box's (1..5). Lowering it refuses more re-detections of another size.
     min_hits: only tracks detected at least this many times are searched (1..1000), so a
         one-frame false positive is not chased.
     """
@@ -373,7 +377,8 @@ class RedetectConfig:
     max_input_px: int = 640
     max_crops: int = 4
     missed_iou: float = 0.3
-    match_iou: float = 0.3
+    match_distance: float = 0.6
+    match_height_ratio: float = 1.5
     min_hits: int = 2
 
     def __post_init__(self) -> None:
@@ -392,7 +397,8 @@ class RedetectConfig:
         if self.max_input_px % 32:
             raise InputError(f"redetect.max_input_px must be a multiple of 32, got {self.max_input_px}")
         _check_range("redetect.missed_iou", self.missed_iou, 0.0, 1.0)
-        _check_range("redetect.match_iou", self.match_iou, 0.0, 1.0)
+        _check_range("redetect.match_distance", self.match_distance, 0.0, 2.0)
+        _check_range("redetect.match_height_ratio", self.match_height_ratio, 1.0, 5.0)
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ from pedenv.boxes import iou_matrix
 from pedenv.config import Config, RedetectConfig
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.redetect import RedetectingPose, crop_pass, missed_tracks, with_redetection
+from pedenv.pose.redetect import RedetectingPose, crop_pass, missed_tracks, nearest_person, with_redetection
 from pedenv.records import Detections, EgoPose, Frame
 
 ON = RedetectConfig(enabled=True)
@@ -40,6 +40,21 @@ def test_missed_tracks_stops_at_max_crops():
     assert missed_tracks(predicted, np.arange(6) + 2, np.zeros((0, 4)), (480, 640), replace(ON, max_crops=0)).size == 0
 
 
+@pytest.mark.parametrize("boxes, whole, expected", [
+    # the nearest of two; one 0.3 heights off, one 0.1
+    ([[130, 100, 170, 200], [110, 100, 150, 200]], [True, True], [1]),
+    # a cut one does not count
+    ([[130, 100, 170, 200], [110, 100, 150, 200]], [True, False], [0]),
+    # too far (0.8 heights) or of another size (2x): none
+    ([[180, 100, 220, 200], [100, 0, 160, 200]], [True, True], []),
+    ([], [], []),
+])
+def test_nearest_person(boxes, whole, expected):
+    found = nearest_person(np.array([100.0, 100, 140, 200]), np.array(boxes, float).reshape(-1, 4),
+                           np.array(whole, bool), ON)
+    assert found.tolist() == expected
+
+
 def test_crop_pass_holds_the_box_with_context_inside_the_image():
     # a 60 px person: margin 0.5 -> 60 + 60 px tall, min 128 px; scale 2 -> input 256
     step = crop_pass(np.array([500.0, 200, 524, 260]), (370, 1224), ON)
@@ -63,6 +78,8 @@ def test_crop_pass_holds_the_box_with_context_inside_the_image():
     ("min_crop_px", 2000, "redetect.min_crop_px .* must not exceed redetect.max_crop_px"),
     ("max_input_px", 650, "redetect.max_input_px must be a multiple of 32"),
     ("missed_iou", 1.5, "redetect.missed_iou"),
+    ("match_distance", 3.0, "redetect.match_distance"),
+    ("match_height_ratio", 0.5, "redetect.match_height_ratio"),
     ("min_hits", 0, "redetect.min_hits"),
     ("enabled", "yes", "redetect.enabled must be true or false"),
 ])

@@ -5,7 +5,7 @@ The apps run ``frame = replace(frame, detections=backend(frame)); state = model.
 where its live tracks are expected (:meth:`~pedenv.model.PedestrianEnvironmentModel.predicted_boxes`),
 takes the tracks whose predicted box no detection overlaps (:func:`missed_tracks`), runs
 the pose network once per such track on an upscaled crop around the predicted box
-(:func:`crop_pass`), keeps the one whole person there who overlaps the predicted box, and
+(:func:`crop_pass`), keeps the one whole person there nearest the predicted box, and
 merges them with the main detections by the skeleton-aware NMS
 (:func:`pedenv.pose.merge.merge_detections`), so no person appears twice.
 Settings: :class:`pedenv.config.RedetectConfig` (the ``fused`` preset turns it on).
@@ -62,6 +62,18 @@ def missed_tracks(predicted: np.ndarray, hits: np.ndarray, detections: np.ndarra
     rows = np.flatnonzero(usable)
     rows = rows[np.argsort(-np.asarray(hits)[rows], kind="stable")]
     return rows[: config.max_crops]
+
+
+def nearest_person(box: np.ndarray, boxes: np.ndarray, whole: np.ndarray, config: RedetectConfig) -> np.ndarray:
+    """Index array (0 or 1 entries) of the box of ``boxes`` (M, 4) px nearest the predicted
+    ``box`` (4,) px: among the ``whole`` (M,) ones, centre within ``match_distance`` predicted
+    heights and height within ``match_height_ratio`` of the predicted one."""
+    height = max(float(box[3] - box[1]), 1.0)
+    heights = np.maximum(boxes[:, 3] - boxes[:, 1], 1e-9)
+    distance = np.linalg.norm(0.5 * (boxes[:, :2] + boxes[:, 2:] - box[:2] - box[2:]), axis=1) / height
+    ratio = np.maximum(heights / height, height / heights)
+    ok = whole & (distance <= config.match_distance) & (ratio <= config.match_height_ratio)
+    return np.flatnonzero(ok)[np.argsort(distance[ok])[:1]]
 
 
 def crop_pass(box: np.ndarray, image_size: tuple[int, int], config: RedetectConfig) -> Pass:
@@ -126,7 +138,7 @@ class RedetectingPose:
         return merged
 
     def _search(self, image: np.ndarray, box: np.ndarray, image_size: tuple[int, int]) -> Detections:
-        """The one whole person in the crop around ``box`` overlapping it best, or none."""
+        """The one whole person in the crop around ``box`` nearest to it, or none."""
         b = self.backend
         step = crop_pass(box, image_size, self.config)
         size = step.input_size if b.dynamic else b.input_size
@@ -136,9 +148,7 @@ class RedetectingPose:
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
         margin = b.detection.edge_margin_px / scale if b.detection is not None else 0.0
         whole = ~cut_by_inner_edge(dets.boxes, step.region, image_size, margin)
-        overlap = np.where(whole, iou_matrix(box[None], dets.boxes)[0], 0.0)
-        best = int(np.argmax(overlap))
-        return dets.take(np.array([best])) if overlap[best] >= self.config.match_iou else Detections.empty()
+        return dets.take(nearest_person(box, dets.boxes, whole, self.config))
 
     def describe(self) -> dict:
         """The wrapped backend's description with the re-detection settings and counts."""
