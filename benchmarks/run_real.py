@@ -7,8 +7,9 @@ Each sequence is written as a recording (:mod:`pedenv.io.footage_writer`: KITTI 
 calibration and ORB-SLAM3 poses; MOT17 with a GUESSED camera 1.5 m up, focal = image width,
 level except MOT17-04's, guessed 30 deg down (:data:`MOT17_PITCH_GUESS_DEG`), and a standing
 ego) into a temporary folder and run by :func:`pedenv.apps.run.run_recording`
-(what ``pedenv run`` calls) with the default config (``paper``) and the ``fused`` preset (a
-``config.json`` as a user would pass with ``--config``). The output ``environment.jsonl`` is
+(what ``pedenv run`` calls) with the default config (``paper``), the ``fused`` preset (a
+``config.json`` as a user would pass with ``--config``) and ``fused-image``, the preset without
+its ground gate and memory, which need a true camera (MOT17's is a guess). The output ``environment.jsonl`` is
 compared with the ground truth: recall (IoU >= 0.5), false positives, ID switches, IDF1
 (motmetrics; MOT17's ignore classes count as false positives), and the pairs of reported
 people overlapping by IoU > 0.5 in one frame (a person reported twice, e.g. from a tile seam).
@@ -107,7 +108,10 @@ def main(argv=None) -> int:
     from pedenv.config import Config
     from pedenv.localization import configure
 
-    configs = {"paper": Config(), "fused": configure(Config(), "fused")}
+    fused = configure(Config(), "fused")
+    # the preset without the steps that need a true camera (ground gate, memory): for MOT17's guess
+    configs = {"paper": Config(), "fused": fused, "fused-image": fused.replace(tracking={"ground_gate": 0.0,
+                                                                                         "memory_s": 0.0})}
     totals: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, write, gt in sequences(args.samples, args.only):
@@ -124,7 +128,7 @@ def main(argv=None) -> int:
                 totals.setdefault((name.split("/")[0], cname), []).append((name, acc, counts))
                 print(f"  {name} {cname}: {counts}", file=sys.stderr)
     print(f"pedenv run --detection {args.detection} on the real samples (MOT17: guessed camera, standing ego)")
-    print(f"{'data':6s} {'config':6s} {'frames':>6s} {'gt':>4s} {'recall':>6s} {'FP':>4s} {'IDSW':>4s} {'IDF1':>6s} "
+    print(f"{'data':6s} {'config':11s} {'frames':>6s} {'gt':>4s} {'recall':>6s} {'FP':>4s} {'IDSW':>4s} {'IDF1':>6s} "
           f"{'dup':>4s} {'crops':>5s} {'s/frame':>7s}")
     results = {}
     for (group, cname), runs in totals.items():
@@ -140,7 +144,7 @@ def main(argv=None) -> int:
              "seconds_per_frame": sum(c["seconds"] for _, _, c in runs) / max(frames, 1),
              "id_switches_by_sequence": {n: int(df.loc[n, "num_switches"]) for n, _, _ in runs}}
         results[f"{group}/{cname}"] = r
-        print(f"{group:6s} {cname:6s} {frames:6d} {r['gt']:4d} {r['recall']:6.3f} {r['false_positives']:4d} "
+        print(f"{group:6s} {cname:11s} {frames:6d} {r['gt']:4d} {r['recall']:6.3f} {r['false_positives']:4d} "
               f"{r['id_switches']:4d} {r['idf1']:6.3f} {r['duplicate_pairs']:4d} {r['crops']:5d} "
               f"{r['seconds_per_frame']:7.2f}")
     if args.json:

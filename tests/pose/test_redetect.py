@@ -9,7 +9,14 @@ from pedenv.boxes import iou_matrix
 from pedenv.config import Config, RedetectConfig
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.redetect import RedetectingPose, crop_pass, missed_tracks, nearest_person, with_redetection
+from pedenv.pose.redetect import (
+    RedetectingPose,
+    crop_pass,
+    missed_tracks,
+    nearest_person,
+    nearest_track,
+    with_redetection,
+)
 from pedenv.records import Detections, EgoPose, Frame
 
 ON = RedetectConfig(enabled=True)
@@ -53,6 +60,13 @@ def test_nearest_person(boxes, whole, expected):
     found = nearest_person(np.array([100.0, 100, 140, 200]), np.array(boxes, float).reshape(-1, 4),
                            np.array(whole, bool), ON)
     assert found.tolist() == expected
+
+
+def test_nearest_track_measures_in_each_tracks_heights():
+    predicted = np.array([[100.0, 100, 140, 200], [160, 150, 170, 175]])  # a 100 px and a 25 px tall track
+    # 40 px from the first's centre (0.4 heights), 33 px from the second's (1.3 heights)
+    assert nearest_track(np.array([140.0, 100, 180, 200]), predicted) == 0
+    assert nearest_track(np.array([158.0, 150, 170, 176]), predicted) == 1
 
 
 def test_crop_pass_holds_the_box_with_context_inside_the_image():

@@ -5,9 +5,9 @@ The apps run ``frame = replace(frame, detections=backend(frame)); state = model.
 where its live tracks are expected (:meth:`~pedenv.model.PedestrianEnvironmentModel.predicted_boxes`),
 takes the tracks whose predicted box no detection overlaps (:func:`missed_tracks`), runs
 the pose network once per such track on an upscaled crop around the predicted box
-(:func:`crop_pass`), keeps the one whole person there nearest the predicted box, and
-merges them with the main detections by the skeleton-aware NMS
-(:func:`pedenv.pose.merge.merge_detections`), so no person appears twice.
+(:func:`crop_pass`), keeps the one whole person there nearest the predicted box (and nearer
+it than any other track's), and merges them with the main detections by the skeleton-aware
+NMS (:func:`pedenv.pose.merge.merge_detections`), so no person appears twice.
 Settings: :class:`pedenv.config.RedetectConfig` (the ``fused`` preset turns it on).
 """
 
@@ -76,6 +76,14 @@ def nearest_person(box: np.ndarray, boxes: np.ndarray, whole: np.ndarray, config
     return np.flatnonzero(ok)[np.argsort(distance[ok])[:1]]
 
 
+def nearest_track(box: np.ndarray, predicted: np.ndarray) -> int:
+    """Row of the predicted box (T, 4) px whose centre lies nearest the centre of ``box`` (4,) px,
+    in heights of each predicted box."""
+    heights = np.maximum(predicted[:, 3] - predicted[:, 1], 1.0)
+    distance = np.linalg.norm(0.5 * (predicted[:, :2] + predicted[:, 2:] - box[:2] - box[2:]), axis=1) / heights
+    return int(np.argmin(distance))
+
+
 def crop_pass(box: np.ndarray, image_size: tuple[int, int], config: RedetectConfig) -> Pass:
     """The network pass around one predicted ``box`` (4,) px in an image of ``image_size``
     (height, width): the box with ``crop_margin`` times its height on every side, each side
@@ -126,7 +134,8 @@ class RedetectingPose:
         image = frame_image(frame)
         image_size = (image.shape[0], image.shape[1])
         found = [self._search(image, predicted[r], image_size) for r in rows]
-        found = [d for d in found if len(d)]
+        # a person nearer another track's predicted box is that track's business (or a neighbour)
+        found = [d for d, r in zip(found, rows) if len(d) and nearest_track(d.boxes[0], predicted) == r]
         self.crops += len(rows)
         if not found:
             return detections
