@@ -351,14 +351,82 @@ DEFAULT_METHOD = "fused"
 #: Per method, the fields whose defaults differ from the section classes' own defaults
 #: (which are the paper's values). ``fused`` turns on the tracker's height-ratio rule,
 #: low-score second pass, motion prediction, ground gate and track memory, and the
-#: filter's restart gate (on the golden ``terrain2/fused/detector-model`` case 75 identity
+#: filter's restart gate, and the re-detection of missed tracks in crops (onnx backend,
+#: :mod:`pedenv.pose.redetect`) (on the golden ``terrain2/fused/detector-model`` case 75 identity
 #: switches with them, 200 without).
 METHOD_PRESETS: dict[str, dict[str, dict]] = {
     "paper": {},
     "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
                            "ground_gate": 4.0, "memory_s": 2.0},
-              "kalman": {"restart_gate": 25.0}},
+              "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}},
 }
+
+
+@dataclass(frozen=True)
+class RedetectConfig:
+    """Re-detection of missed tracks in high-resolution crops (``pedenv.pose.redetect``).
+
+    Beyond the paper, off by default; the ``fused`` preset turns it on. Before the model
+    takes a frame, every live track whose predicted box overlaps no detection of the main
+    pass is searched for again: the pose network runs on an upscaled crop around the
+    predicted box, and the person found there is merged with the frame's detections by the
+    skeleton-aware NMS (``pedenv.pose.merge``), so nobody appears twice. Needs the ``onnx``
+    backend; each crop is one extra network pass.
+
+    enabled: run the re-detection.
+    crop_margin: context added on every side of the predicted box, as a share of its height
+        (0..2). Raising it tolerates worse predictions, with fewer input pixels per person.
+    crop_scale: crop pixels -> network input pixels (0.25..4; 2 = twice the native size),
+        lowered where the input would exceed ``max_input_px``. Raising it finds smaller people.
+    min_crop_px, max_crop_px: each side of the crop region is clamped to this range, image
+        pixels (32..4096); a tiny box still gets context, a huge one a bounded crop.
+    max_input_px: the longest side of a crop's network input, pixels (multiple of 32,
+        64..1280). Raising it keeps the scale for larger people, at more cost per crop.
+    max_crops: at most this many crops per frame (0..64); the tracks seen most often go
+        first. Bounds the extra cost per frame.
+    missed_iou: a track whose predicted box overlaps every detection by at most this IoU
+        (0..1) counts as missed. Raising it searches more tracks.
+    match_distance: a whole person found in a crop re-detects the track when their box
+        centre lies within this many predicted box heights of the predicted box's centre
+        (0..2); the nearest is kept, the rest of the crop ignored (people the main pass found
+        are merged away in any case). Raising it tolerates worse predictions (frames far
+        apart, a turning walker), with more chance of taking a neighbour.
+    match_height_ratio: and when their box height lies within this factor of the predicted
+        box's (1..5). Lowering it refuses more re-detections of another size.
+    min_hits: only tracks detected at least this many times are searched (1..1000), so a
+        one-frame false positive is not chased.
+    """
+
+    enabled: bool = False
+    crop_margin: float = 0.5
+    crop_scale: float = 2.0
+    min_crop_px: int = 128
+    max_crop_px: int = 960
+    max_input_px: int = 640
+    max_crops: int = 4
+    missed_iou: float = 0.3
+    match_distance: float = 0.6
+    match_height_ratio: float = 1.5
+    min_hits: int = 2
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.enabled, bool):
+            raise InputError(f"redetect.enabled must be true or false, got {self.enabled!r}")
+        _check_range("redetect.crop_margin", self.crop_margin, 0.0, 2.0)
+        _check_range("redetect.crop_scale", self.crop_scale, 0.25, 4.0)
+        for name, low, high in (("min_crop_px", 32, 4096), ("max_crop_px", 32, 4096), ("max_input_px", 64, 1280),
+                                ("max_crops", 0, 64), ("min_hits", 1, 1000)):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= high:
+                raise InputError(f"redetect.{name} must be an integer in [{low}, {high}], got {value!r}")
+        if self.min_crop_px > self.max_crop_px:
+            raise InputError(f"redetect.min_crop_px ({self.min_crop_px}) must not exceed "
+                             f"redetect.max_crop_px ({self.max_crop_px})")
+        if self.max_input_px % 32:
+            raise InputError(f"redetect.max_input_px must be a multiple of 32, got {self.max_input_px}")
+        _check_range("redetect.missed_iou", self.missed_iou, 0.0, 1.0)
+        _check_range("redetect.match_distance", self.match_distance, 0.0, 2.0)
+        _check_range("redetect.match_height_ratio", self.match_height_ratio, 1.0, 5.0)
 
 
 @dataclass(frozen=True)
@@ -382,6 +450,7 @@ class Config:
     paper: PaperConfig = None  # type: ignore[assignment]
     kalman: KalmanConfig = None  # type: ignore[assignment]
     fused: FusedConfig = None  # type: ignore[assignment]
+    redetect: RedetectConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method:
@@ -452,4 +521,4 @@ class Config:
 
 #: Section name -> its class.
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
-                             "fused": FusedConfig}
+                             "fused": FusedConfig, "redetect": RedetectConfig}

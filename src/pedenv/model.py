@@ -28,7 +28,7 @@ from pedenv.localization.bounds import bound_measurement, clamp_reported
 from pedenv.records import Detections, Frame
 from pedenv.stage_timer import StageTimer
 from pedenv.state import EnvironmentState, Pedestrians
-from pedenv.tracking.egomotion import yaw_change, yaw_shift_pixels
+from pedenv.tracking.egomotion import shift_u, yaw_change, yaw_shift_pixels
 from pedenv.tracking.projection import CameraView
 from pedenv.tracking.table import TrackTable
 from pedenv.tracking.tracker import Tracker
@@ -78,6 +78,25 @@ class PedestrianEnvironmentModel:
         self.timer.add(t2 - t1, (t1 - t0) + (time.perf_counter() - t2), len(det))  # the filter counts as position
         self._last = frame
         return EnvironmentState(frame.index, frame.timestamp, frame.ego, peds, frame.scene)
+
+    def predicted_boxes(self, frame: Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Where the live tracks are expected in ``frame``, before it is added (read-only).
+
+        Returns ``ids (T,) int64``, ``boxes (T, 4) float`` pixels of ``frame`` (the tracks'
+        last boxes moved as the tracker will move them: the ego-yaw shift, then the image
+        velocity when ``tracking.predict_motion``) and ``hits (T,) int64``. Tracks only
+        remembered after an occlusion (``tracking.memory_s``) are left out. Used by the
+        re-detection of missed tracks (:mod:`pedenv.pose.redetect`).
+        """
+        tr = self.tracks.tracks
+        live = ~tr.lost
+        boxes = tr.boxes[live]
+        if len(boxes):
+            shift = self._yaw_shift(frame)
+            boxes = shift_u(boxes, shift) if shift else boxes.copy()
+            if self.config.tracking.predict_motion:
+                boxes = boxes + tr.velocities[live]
+        return tr.ids[live].copy(), boxes, tr.hits[live].copy()
 
     def _view(self, frame: Frame) -> CameraView | None:
         """The camera view the tracker's ground gate and memory need; None while both are off."""

@@ -20,6 +20,7 @@ from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
+from pedenv.pose.redetect import with_redetection
 from pedenv.visualize.overlay import draw_environment, write_image
 from pedenv.visualize.plots import plot_birds_eye
 
@@ -64,11 +65,11 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
             pose_backend, pose_model, pose_input_size, detection, cfg.tracking.pose_score_threshold))
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
-    describe = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
-    summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": describe,
+    model = PedestrianEnvironmentModel(cfg)
+    backend = with_redetection(backend, model, cfg.redetect)  # missed tracks searched in crops (fused preset)
+    summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(out / "environment.jsonl")}
-    model = PedestrianEnvironmentModel(cfg)
     writer_video, last = None, None
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
@@ -97,6 +98,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     finally:
         if writer_video is not None:
             writer_video.release()
+        summary["pose_backend"] = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
         if last is not None:
             summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
         summary["files"] = [str(p) for p in sinks.files]

@@ -26,6 +26,7 @@ from pedenv.geometry import inverse_2x2
 from pedenv.io.jsonl import environment_line
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.pose import PoseBackend
+from pedenv.pose.redetect import with_redetection
 from pedenv.records import Frame
 from pedenv.stage_timer import StageTimer
 from pedenv.state import EnvironmentState
@@ -66,6 +67,7 @@ def evaluate_scene(name: str, frames: Iterable[Frame], *, config: Config, backen
     An InputError from a bad frame propagates; what ``on_frame`` wrote stays written.
     """
     model = model_factory(config)
+    backend = with_redetection(backend, model, config.redetect)  # missed tracks searched in crops (fused)
     tracking = TrackingAccumulator()
     result = SceneResult(name, timer=model.timer, lines=[] if collect_lines else None)
     for frame in frames:
