@@ -103,8 +103,10 @@ def test_bad_settings_are_refused(field, value, message):
 
 
 def test_the_fused_preset_turns_it_on():
-    assert not Config().redetect.enabled
-    assert configure(Config(), "fused").redetect.enabled
+    assert not Config(method="paper").redetect.enabled
+    assert Config().redetect.enabled  # fused, the default method
+    assert configure(Config(method="paper"), "fused").redetect.enabled
+    assert not configure(Config(), "paper").redetect.enabled
     assert Config.from_dict({"redetect": {"max_crops": 2}}).redetect.max_crops == 2
 
 
