@@ -68,7 +68,7 @@ def test_a_level_without_calibration_follows_the_fit_or_waits_for_it():
     assert len({(p.region[1], p.region[3]) for p in tiles}) == 1  # one band
     assert (tiles[0].region[1], tiles[0].region[3]) == pytest.approx((410 - margin, 500 + margin), abs=1)
     assert "fit to 5" in note and all(p.kind == "band" for p in tiles)
-    tiles, note = plan_level(Level(1.0, 80.0, 240.0), 1920, 1080, config, None, None)
+    tiles, note = plan_level(Level(1.0, 80.0, 240.0), 1920, 1080, config, None, None)  # 2.07 megapixels
     assert [p.region for p in tiles] == [(0, 0, 1920, 1080)] and "whole image" in note
 
 
@@ -85,3 +85,8 @@ def test_level_filter_drops_fragments_and_unlikely_skeletons_of_finer_levels_onl
     assert level_filter(dets, band, DetectionConfig()).tolist() == [True, False, True, False]
     full = Pass((0, 0, 1600, 900), (384, 640), "full")
     assert level_filter(dets, full, DetectionConfig()).all()
+
+
+def test_a_small_uncalibrated_image_gets_the_finest_level_over_all_of_it():
+    tiles, note = plan_level(Level(2.0, 40.0, 80.0), 640, 480, DetectionConfig(), None, None)
+    assert [(p.region, p.input_size) for p in tiles] == [((0, 0, 640, 480), (960, 1280))] and "whole image" in note

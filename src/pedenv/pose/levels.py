@@ -7,8 +7,8 @@ only over the rows where such people can stand: from the calibration (the ground
 distances where a 1.5-2.2 m person has that height), or, without a usable calibration
 (none, or a camera looking down), from a :class:`HeightLine` fitted to the people the
 coarser levels found (on flat ground a person's height in px grows linearly with the row of
-their feet, and is zero at the horizon). With neither, a level up to ``whole_image_scale``
-covers the whole image and finer ones are skipped.
+their feet, and is zero at the horizon). With neither, a level covers the whole image if
+that costs at most ``whole_image_max_mpx`` network input megapixels, else it is skipped.
 """
 
 from __future__ import annotations
@@ -119,7 +119,7 @@ def plan_level(level: Level, width: int, height: int, config: DetectionConfig, g
     elif line is not None:
         margin = config.fit_margin * min(level.max_height_px, height) + config.band_margin_px
         band, how = line.rows(level.min_height_px, level.max_height_px, margin, height), f"fit to {line.people}"
-    elif level.scale <= config.whole_image_scale:
+    elif width * height * level.scale**2 <= config.whole_image_max_mpx * 1e6:
         band, how = Band(0, height), "whole image: no calibration, no fit"
     else:
         return [], f"x{level.scale:g} skipped: no calibration, too few people to fit"

@@ -119,7 +119,7 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
         parts += _run_level(infer, image, more, fixed_input, score_threshold, iou_threshold, max_detections, config)
         passes += more
     if len(passes) == 1:
-        return parts[0][0], passes, "one pass"
+        return parts[0][0], passes, "; ".join(notes) or "one pass"
     return merge_detections(parts, merge, max_detections), passes, "; ".join(notes)
 
 

@@ -47,8 +47,9 @@ class DetectionConfig:
         is trusted to find (20..400); lowering it hands people to coarser, cheaper levels.
     max_person_px: a level detection taller than this in its network input, px, is dropped
         (100..4000): a fragment of someone too large for that level (whole-frame pass exempt).
-    whole_image_scale: the finest level (scale <= this, 0.25..4) run over the whole image
-        when its rows are unknown (no usable calibration and no fit); finer levels wait for a fit.
+    whole_image_max_mpx: a level whose rows are unknown (no usable calibration, too few
+        people found to fit them) runs over the whole image when that costs at most this many
+        network input megapixels (0.1..50); else it is skipped.
     near_m, far_m: distances bounding every band, metres (0.5 <= near < far <= 1000).
     top_m: height above the ground the band reaches, metres (0.5..5; a tall person 2 m); the
         tallest person assumed when heights in px are turned into distances.
@@ -75,7 +76,7 @@ class DetectionConfig:
     level_scales: tuple[float, ...] = (1.0, 2.0)
     min_person_px: float = 80.0
     max_person_px: float = 480.0
-    whole_image_scale: float = 1.0
+    whole_image_max_mpx: float = 2.1
     near_m: float = 5.0
     far_m: float = 150.0
     top_m: float = 2.2
@@ -95,7 +96,7 @@ class DetectionConfig:
             raise ValueError(f"DetectionConfig.mode must be one of {', '.join(MODES)}, got {self.mode!r}")
         ranges = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "tile_overlap": (0.0, 0.5),
                   "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
-                  "whole_image_scale": (0.25, 4.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
+                  "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
                   "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "band_margin_px": (0, 200),
                   "fit_min_people": (2, 100), "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0),
                   "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
