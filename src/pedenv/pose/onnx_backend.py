@@ -43,13 +43,17 @@ class OnnxPose:
         suppressed (0.7). Lowering it merges nearby persons more readily.
     max_detections: at most this many persons per image (300).
     threads: onnxruntime intra-op threads (1..64; 2 suits a 2-core machine).
+    spin_wait: let onnxruntime's idle threads spin for work (False). Spinning saves a little
+        on an otherwise idle machine; on a busy one (the tracker, other processes) it burns
+        the cores the network needs: a 384x640 pass took twice as long with it at load 19
+        on 2 cores (median 767 vs 372 ms).
     """
 
     name = "onnx"
 
     def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
                  iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2,
-                 detection: str | DetectionConfig | None = None) -> None:
+                 detection: str | DetectionConfig | None = None, spin_wait: bool = False) -> None:
         require_extra("onnxruntime", "pose", "the onnx pose backend")
         import onnxruntime as ort
 
@@ -80,6 +84,7 @@ class OnnxPose:
         options.intra_op_num_threads = threads
         options.inter_op_num_threads = 1
         options.log_severity_level = 3
+        options.add_session_config_entry("session.intra_op.allow_spinning", "1" if spin_wait else "0")
         try:
             self._session = ort.InferenceSession(str(self.model_path), options, providers=["CPUExecutionProvider"])
         except Exception as exc:
