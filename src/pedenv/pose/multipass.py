@@ -16,9 +16,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.merge import MergeConfig, merge_detections
 from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
-from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
@@ -76,8 +76,12 @@ def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.nd
     return (heights <= config.max_person_px) & plausible
 
 
+#: Per pass: its persons (px of the image) and which of them an inner tile edge cuts, (N,) bool.
+Parts = list[tuple[Detections, np.ndarray]]
+
+
 def _run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, score_threshold: float,
-               iou_threshold: float, max_detections: int, config: DetectionConfig) -> list[tuple[Detections, np.ndarray]]:
+               iou_threshold: float, max_detections: int, config: DetectionConfig) -> Parts:
     parts = []
     image_size = (image.shape[0], image.shape[1])
     for step in passes:
