@@ -111,7 +111,8 @@ def test_far_plan_on_kitti_puts_each_level_where_its_people_stand():
     # x2 is for people 40-80 px tall: 13.3 m (1.5 m tall) to 38.9 m (2.2 m) away, feet to head
     f, cy, margin = 707.05, 180.51, 16
     top, bottom = double[0].region[1], double[0].region[3]
-    assert top == pytest.approx(cy - f * (2.2 - 1.65) / 13.3 - margin, abs=3)  # the nearest one's head
+    # the top: the highest head of a person at most 80 px tall, a 2.2 m one at f * 2.2 / 80 = 19.4 m
+    assert top == pytest.approx(cy - f * (2.2 - 1.65) / (f * 2.2 / 80) - margin, abs=3)
     assert bottom == pytest.approx(cy + f * 1.65 / 13.3 + margin, abs=3)
     assert double[0].region[0] == 0 and double[-1].region[2] == 1224  # the whole width
     assert all(p.input_size[0] % 32 == 0 and p.input_size[1] % 32 == 0 for p in passes)

@@ -101,13 +101,14 @@ def calibrated(geometry: CameraGeometry | None, width: int, height: int, config:
 def calibrated_rows(level: Level, geometry: CameraGeometry, width: int, height: int,
                     config: DetectionConfig) -> Band | None:
     """Rows where the calibration puts the level's people: the ground where a person
-    ``short_person_m``..``top_m`` tall has the level's heights in px, within ``near_m``..``far_m``."""
+    ``short_person_m``..``top_m`` tall has the level's heights in px, within ``near_m``..``far_m``,
+    up to the head of the tallest of them (taller people there belong to a coarser level)."""
     focal = float(geometry.K[1, 1])
     near = max(config.near_m, focal * config.short_person_m / level.max_height_px)
     far = min(config.far_m, focal * config.top_m / level.min_height_px)
     if near >= far:
         return None
-    return ground_rows(geometry, width, height, near, far, config)
+    return ground_rows(geometry, width, height, near, far, config, level.max_height_px)
 
 
 def plan_level(level: Level, width: int, height: int, config: DetectionConfig, geometry: CameraGeometry | None,

@@ -200,8 +200,9 @@ def usable_calibration(geometry: CameraGeometry | None, config: DetectionConfig)
 
 
 def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float, far_m: float,
-                config: DetectionConfig) -> Band | None:
+                config: DetectionConfig, max_height_px: float = math.inf) -> Band | None:
     """Rows where a person ``near_m``..``far_m`` away stands (the ground there up to ``top_m``,
+    or up to the height a person ``max_height_px`` tall in the image has there, if lower;
     +-72 deg around the optical axis, plus ``band_margin_px``); None when they miss the image."""
     R, K = geometry.cam_to_level, geometry.K
     forward = R[:, 2]
@@ -210,7 +211,8 @@ def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float
     left = np.cross([0.0, 0.0, 1.0], horizontal)
     d = np.geomspace(near_m, far_m, 24)[:, None, None]
     lateral = np.linspace(-3.0, 3.0, 61)[None, :, None] * d  # +-72 deg around the axis
-    z = np.array([-geometry.height_m, config.top_m - geometry.height_m])[None, None, :]
+    top = np.minimum(config.top_m, max_height_px * d / float(K[1, 1]))  # (24, 1, 1) metres
+    z = np.concatenate(np.broadcast_arrays(np.full_like(top, -geometry.height_m), top - geometry.height_m), axis=2)
     points = d[..., None] * horizontal + lateral[..., None] * left + z[..., None] * np.array([0, 0, 1.0])
     cam = points.reshape(-1, 3) @ R  # level -> camera: R^T p, as row vectors
     ahead = cam[:, 2] > 0.1
