@@ -211,8 +211,9 @@ def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float
     left = np.cross([0.0, 0.0, 1.0], horizontal)
     d = np.geomspace(near_m, far_m, 24)[:, None, None]
     lateral = np.linspace(-3.0, 3.0, 61)[None, :, None] * d  # +-72 deg around the axis
-    top = np.minimum(config.top_m, max_height_px * d / float(K[1, 1]))  # (24, 1, 1) metres
-    z = np.concatenate(np.broadcast_arrays(np.full_like(top, -geometry.height_m), top - geometry.height_m), axis=2)
+    head_m = np.minimum(config.top_m, max_height_px * d / float(K[1, 1]))  # (24, 1, 1) metres
+    z = np.concatenate(np.broadcast_arrays(np.full_like(head_m, -geometry.height_m), head_m - geometry.height_m),
+                       axis=2)
     points = d[..., None] * horizontal + lateral[..., None] * left + z[..., None] * np.array([0, 0, 1.0])
     cam = points.reshape(-1, 3) @ R  # level -> camera: R^T p, as row vectors
     ahead = cam[:, 2] > 0.1
