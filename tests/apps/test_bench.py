@@ -2,6 +2,7 @@
 model people behind it (which the model refuses as absurd pixels)."""
 
 import numpy as np
+import pytest
 
 from pedenv.apps.bench import bench_core, bench_frames
 
@@ -18,3 +19,18 @@ def test_bench_frames_hold_only_people_in_view():
 def test_bench_core_runs_the_default_hundred_frames():
     rows = bench_core(pedestrian_counts=(10,), n_frames=100)
     assert rows[0]["pedestrians"] == 10 and rows[0]["tracking_per_frame"] > 0
+
+
+@pytest.mark.onnx_model
+@pytest.mark.slow
+def test_detection_modes_side_by_side_with_their_cost():
+    from pedenv.apps.bench import bench_detection_modes, format_detection_modes
+
+    rows = bench_detection_modes(repeats=1)
+    fast, far = rows
+    assert (fast["mode"], far["mode"]) == ("fast", "far")
+    assert fast["passes"] == 1 and fast["units"] == pytest.approx(1.0)
+    # far on a level camera 1.5 m high: the whole frame, the x1 band and the x2 band
+    assert far["passes"] == 3 and 3.0 < far["units"] < 7.0
+    assert all(r["ms"] > 0 and r["cpus"] >= 1 and "recall" not in r for r in rows)
+    assert format_detection_modes(rows).row_count == 2

@@ -57,6 +57,20 @@ def test_optional_boxes_are_neither_hits_nor_false_positives():
     assert m.hit.tolist() == [False, False] and m.false_positives == 1
 
 
+def test_the_visible_part_of_an_occluded_person_is_counted_apart_once():
+    # an optional (mostly occluded) person 200 px tall; the detector sees their upper 80 px
+    sample = DetectionSample("mot17", "x", REAL_SAMPLES, np.array([[0, 0, 50, 200], [200, 0, 250, 200.0]]),
+                             np.array([200.0, 200.0]), np.full(2, np.nan), np.array([False, True]))
+    upper = np.array([[2, 0, 48, 80], [5, 10, 45, 90], [100, 0, 140, 80.0]])  # twice in it, once beside
+    m = match_detections(sample, upper, np.array([0.9, 0.8, 0.7]))
+    assert (m.occluded_parts, m.false_positives) == (1, 2)
+    summary = summarize([sample], [m], [1.0])["all"]
+    assert summary["occluded_parts"] == 1 and summary["precision"] == summary["precision_strict"] == 0.0
+    hit = match_detections(sample, np.vstack([upper, [[200, 0, 250, 200.0]]]), np.array([0.9, 0.8, 0.7, 0.95]))
+    summary = summarize([sample], [hit], [1.0])["all"]
+    assert summary["precision"] == pytest.approx(1 / 3) and summary["precision_strict"] == pytest.approx(1 / 4)
+
+
 def test_one_detection_matches_one_person_only():
     sample = DetectionSample("kitti", "x", REAL_SAMPLES, np.array([[0, 0, 10, 40], [1, 0, 11, 40.0]]),
                              np.array([40.0, 40.0]), np.array([10.0, 20.0]), np.ones(2, bool))

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from pedenv.errors import InputError
+from pedenv.pose.levels import plan_passes
 from pedenv.pose.tiling import (
     CameraGeometry,
     DetectionConfig,
     far_band,
     fit_input,
-    plan_passes,
 )
 
 NUSCENES_K = np.array([[1266.4, 0, 816.3], [0, 1266.4, 491.5], [0, 0, 1]])
@@ -31,7 +31,11 @@ def test_fit_input_follows_the_aspect(width, height, long_side, expected):
     ("base_long_side", 650, "multiple of 32"),
     ("base_long_side", 64, r"base_long_side must be an integer in \[160, 2048\]"),
     ("tile_overlap", 0.6, r"tile_overlap must be a number in \[0.0, 0.5\]"),
-    ("band_upscale", 0.5, "band_upscale"),
+    ("level_scales", (2.0, 1.0), "ascending without repeats"),
+    ("level_scales", (1.0, 5.0), r"level_scales must be a number in \[0.25, 4.0\]"),
+    ("level_scales", [1.0], "non-empty tuple"),
+    ("short_person_m", 2.3, "short_person_m .* must be below top_m"),
+    ("plausible_keypoint_conf", 1.5, "plausible_keypoint_conf"),
     ("near_m", 200.0, "near_m .* must be below far_m"),
     ("max_tiles", 0, "max_tiles"),
     ("top_m", True, "top_m"),
@@ -43,7 +47,7 @@ def test_config_fields_are_checked(field, value, message):
 
 def test_band_of_a_level_nuscenes_camera_matches_the_ground_at_15_and_150_m():
     geometry = CameraGeometry.level(NUSCENES_K, 1.5)
-    config = DetectionConfig(band_margin_px=0)
+    config = DetectionConfig(band_margin_px=0, near_m=15.0)
     band = far_band(geometry, 1600, 900, config)
     f, cy = 1266.4, 491.5
     assert band.bottom == pytest.approx(cy + f * 1.5 / 15, abs=2)  # feet at 15 m
@@ -72,7 +76,7 @@ def test_pitch_down_moves_the_band_up_and_roll_widens_it():
             "looking at the sky",
         ),
         (
-            CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-25)),
+            CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-29)),
             DetectionConfig(),
             "band below the image",
         ),
@@ -84,12 +88,12 @@ def test_pitch_down_moves_the_band_up_and_roll_widens_it():
         (CameraGeometry.level(NUSCENES_K, -1.0), DetectionConfig(), "camera below the ground"),
     ],
 )
-def test_no_band_falls_back_to_tiling_the_whole_image(geometry, config, why):
+def test_no_band_falls_back_to_the_whole_image_at_native_scale(geometry, config, why):
     assert far_band(geometry, 1600, 900, config) is None, why
     passes, note = plan_passes(1600, 900, config, geometry)
-    assert "whole image tiled" in note
+    assert "calibration" in note and "x2 skipped: no calibration, too few people to fit" in note
     tiles = passes[1:]
-    assert {p.kind for p in tiles} == {"tile"}
+    assert {p.kind for p in tiles} == {"tile"} and all(p.scale == pytest.approx(1.0, rel=0.03) for p in tiles)
     covered = np.zeros((900, 1600), bool)
     for p in tiles:
         x0, y0, x1, y1 = p.region
@@ -97,17 +101,21 @@ def test_no_band_falls_back_to_tiling_the_whole_image(geometry, config, why):
     assert covered.all()
 
 
-def test_far_plan_on_kitti_tiles_the_band_at_twice_the_resolution():
+def test_far_plan_on_kitti_puts_each_level_where_its_people_stand():
     passes, note = plan_passes(1224, 370, DetectionConfig(), CameraGeometry.level(KITTI_K, 1.65))
     assert passes[0].kind == "full" and passes[0].input_size == (224, 640)
-    band = passes[1:]
-    assert all(p.kind == "band" for p in band) and "band rows" in note
-    assert band[0].region[0] == 0 and band[-1].region[2] == 1224  # the whole width
-    for a, b in zip(band, band[1:]):
-        overlap = a.region[2] - b.region[0]
-        assert overlap >= 0.25 * (a.region[2] - a.region[0]) - 1  # neighbours overlap
+    assert all(p.kind == "band" for p in passes[1:]) and "(calibration)" in note
+    native = [p for p in passes[1:] if p.scale == pytest.approx(1.0, rel=0.03)]
+    double = [p for p in passes[1:] if p.scale == pytest.approx(2.0, rel=0.03)]
+    assert len(native) + len(double) == len(passes) - 1 and native and double
+    # x2 is for people 40-80 px tall: 13.3 m (1.5 m tall) to 38.9 m (2.2 m) away, feet to head
+    f, cy, margin = 707.05, 180.51, 16
+    top, bottom = double[0].region[1], double[0].region[3]
+    # the top: the highest head of a person at most 80 px tall, a 2.2 m one at f * 2.2 / 80 = 19.4 m
+    assert top == pytest.approx(cy - f * (2.2 - 1.65) / (f * 2.2 / 80) - margin, abs=3)
+    assert bottom == pytest.approx(cy + f * 1.65 / 13.3 + margin, abs=3)
+    assert double[0].region[0] == 0 and double[-1].region[2] == 1224  # the whole width
     assert all(p.input_size[0] % 32 == 0 and p.input_size[1] % 32 == 0 for p in passes)
-    assert all(p.input_size[1] / (p.region[2] - p.region[0]) == pytest.approx(2.0, rel=0.02) for p in band)
 
 
 def test_fast_is_one_pass():
@@ -119,11 +127,11 @@ def test_fast_is_one_pass():
 def test_tiny_and_huge_images_get_a_bounded_plan(width, height):
     config = DetectionConfig()
     passes, _ = plan_passes(width, height, config)
-    assert 1 <= len(passes) <= config.max_tiles + 1
+    assert 1 <= len(passes) <= len(config.level_scales) * config.max_tiles + 1
     for p in passes:
         x0, y0, x1, y1 = p.region
         assert 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height
-        assert p.input_size[0] <= 2048 and p.input_size[1] <= 2048
+        assert p.input_size[0] <= config.tile_width and p.input_size[1] <= config.tile_width
 
 
 def test_an_image_smaller_than_8_px_is_an_input_error():

@@ -37,7 +37,7 @@ def evaluate_detections(data_root: str | Path, detection="far", output: str | Pa
         dets = pose.detect(image, sample.geometry)
         ms.append(1e3 * (time.perf_counter() - start))
         cpu_ms.append(1e3 * (time.process_time() - cpu))
-        units.append(_network_units(pose, image, sample.geometry))
+        units.append(network_units(pose))
         matches.append(match_detections(sample, dets.boxes, dets.scores))
         if progress:
             progress(i + 1, len(samples))
@@ -60,13 +60,10 @@ def evaluate_detections(data_root: str | Path, detection="far", output: str | Pa
     return report
 
 
-def _network_units(pose, image, geometry) -> float:
-    """Network input pixels this backend spends on ``image``, in units of one 384x640 pass."""
-    if getattr(pose, "detection", None) is None:
-        h, w = pose.input_size
-        return h * w / (384 * 640)
-    passes, _ = pose.plan(image.shape[1], image.shape[0], geometry)
-    return sum(p.input_size[0] * p.input_size[1] for p in passes) / (384 * 640)
+def network_units(pose) -> float:
+    """Network input pixels of the passes ``pose`` ran on its last image, in units of one
+    384x640 pass (a load-independent cost; about 24 ms on two quiet cores, FORMATS.md)."""
+    return sum(p.input_size[0] * p.input_size[1] for p in pose.last_passes) / (384 * 640)
 
 
 def _mean(values: list[float], samples, dataset: str) -> float:

@@ -1,8 +1,13 @@
-"""Run the pose network over the planned passes (whole frame, tiles) and merge the persons.
+"""Run the pose network over the levels of the pyramid (whole frame, bands, tiles) and merge.
 
 ``infer(tensor (1, 3, h, w) float32) -> (1, 56, N)`` is the network; each pass crops its
 region, letterboxes it into its input size, decodes, shifts back to image pixels and
-marks the persons touching an inner tile edge as cut; :func:`merge_detections` merges.
+marks the persons touching an inner tile edge as cut. A finer level keeps a person only
+when they are not too tall for it (``max_person_px``: fragments of someone the coarser
+levels see whole) and, below ``sure_score``, when the skeleton looks like a person
+(mean keypoint confidence at least ``plausible_keypoint_conf``). Without a usable
+calibration each level's rows come from a line fitted to the people found so far
+(:mod:`pedenv.pose.levels`). :func:`merge_detections` merges everything.
 """
 
 from __future__ import annotations
@@ -11,9 +16,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.merge import MergeConfig, merge_detections
 from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
-from pedenv.pose.tiling import Pass
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
 #: The default merge settings (frozen, shared).
@@ -61,22 +67,71 @@ def run_pass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, step:
     return Detections(dets.keypoints + shift, dets.confidences, dets.boxes + np.tile(shift, 2), dets.scores)
 
 
-def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass], *,
-                     fixed_input: tuple[int, int] | None, score_threshold: float, iou_threshold: float,
-                     max_detections: int, edge_margin_px: float, merge: MergeConfig = DEFAULT_MERGE) -> Detections:
-    """All passes over ``image`` (H, W, 3) uint8 RGB, merged; ``fixed_input`` forces every pass's input size."""
-    if len(passes) == 1:
-        step = passes[0]
-        return run_pass(infer, image, step, fixed_input or step.input_size, score_threshold, iou_threshold,
-                        max_detections)
+def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.ndarray:
+    """(N,) bool: the persons of a finer level's pass to keep (module doc); all for ``full``."""
+    if step.kind == "full" or not len(dets):
+        return np.ones(len(dets), bool)
+    heights = (dets.boxes[:, 3] - dets.boxes[:, 1]) * step.scale
+    plausible = (dets.scores >= config.sure_score) | (dets.confidences.mean(1) >= config.plausible_keypoint_conf)
+    return (heights <= config.max_person_px) & plausible
+
+
+#: Per pass: its persons (px of the image) and which of them an inner tile edge cuts, (N,) bool.
+Parts = list[tuple[Detections, np.ndarray]]
+
+
+def _run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, score_threshold: float,
+               iou_threshold: float, max_detections: int, config: DetectionConfig) -> Parts:
     parts = []
+    image_size = (image.shape[0], image.shape[1])
     for step in passes:
         size = fixed_input or step.input_size
         dets = run_pass(infer, image, step, size, score_threshold, iou_threshold, max_detections)
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
-        margin = edge_margin_px / scale
-        image_size = (image.shape[0], image.shape[1])
+        margin = config.edge_margin_px / scale
         if len(dets):
-            dets = dets.take(~spans_the_region(dets.boxes, step.region, image_size, margin))
+            dets = dets.take(level_filter(dets, step, config) & ~spans_the_region(dets.boxes, step.region, image_size,
+                                                                                  margin))
         parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, image_size, margin)))
-    return merge_detections(parts, merge, max_detections)
+    return parts
+
+
+def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, config: DetectionConfig,
+                  geometry: CameraGeometry | None = None, *, fixed_input: tuple[int, int] | None = None,
+                  score_threshold: float = 0.25, iou_threshold: float = 0.7, max_detections: int = 300,
+                  base_input: tuple[int, int] | None = None,
+                  merge: MergeConfig = DEFAULT_MERGE) -> tuple[Detections, list[Pass], str]:
+    """The pyramid over ``image`` (H, W, 3) uint8 RGB, coarse to fine, merged.
+
+    geometry: the camera for the bands (None: rows fitted to the people found).
+    fixed_input: forces every pass's input size (a model with a fixed input).
+    base_input: the whole-frame pass's input (height, width) instead of the config's.
+    Returns the persons (px of ``image``), the passes run and a note per level.
+    """
+    height, width = image.shape[:2]
+    first = full_pass(width, height, config)
+    if base_input is not None:
+        first = Pass(first.region, base_input, "full")
+    parts = _run_level(infer, image, [first], fixed_input, score_threshold, iou_threshold, max_detections, config)
+    passes, notes = [first], []
+    for level in pyramid(width, height, config)[1:]:
+        whole = [d.take(~c & (d.scores >= config.sure_score)) for d, c in parts if len(d)]
+        boxes = np.concatenate([d.boxes for d in whole]) if whole else np.zeros((0, 4))
+        line = HeightLine.fit(boxes, config.fit_min_people, height)
+        more, note = plan_level(level, width, height, config, geometry, line)
+        notes.append(note)
+        parts += _run_level(infer, image, more, fixed_input, score_threshold, iou_threshold, max_detections, config)
+        passes += more
+    if len(passes) == 1:
+        return parts[0][0], passes, "; ".join(notes) or "one pass"
+    return merge_detections(parts, merge, max_detections), passes, "; ".join(notes)
+
+
+def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass], *,
+                     fixed_input: tuple[int, int] | None, score_threshold: float, iou_threshold: float,
+                     max_detections: int, edge_margin_px: float, merge: MergeConfig = DEFAULT_MERGE) -> Detections:
+    """Given passes over ``image`` (H, W, 3) uint8 RGB, merged, no level filter; ``fixed_input``
+    forces every pass's input size."""
+    config = DetectionConfig(edge_margin_px=int(edge_margin_px), max_person_px=4000.0, plausible_keypoint_conf=0.0)
+    parts = _run_level(infer, image, passes, fixed_input, score_threshold, iou_threshold, max_detections, config)
+    return parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)

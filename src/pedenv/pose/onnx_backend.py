@@ -14,9 +14,10 @@ import numpy as np
 
 from pedenv.errors import InputError, require_extra
 from pedenv.pose import models
-from pedenv.pose.multipass import detect_multipass
+from pedenv.pose.levels import plan_passes
+from pedenv.pose.multipass import detect_levels
 from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, plan_passes
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
 from pedenv.records import Detections, Frame
 
 
@@ -42,13 +43,17 @@ class OnnxPose:
         suppressed (0.7). Lowering it merges nearby persons more readily.
     max_detections: at most this many persons per image (300).
     threads: onnxruntime intra-op threads (1..64; 2 suits a 2-core machine).
+    spin_wait: let onnxruntime's idle threads spin for work (False). Spinning saves a little
+        on an otherwise idle machine; on a busy one (the tracker, other processes) it burns
+        the cores the network needs: a 384x640 pass took twice as long with it at load 19
+        on 2 cores (median 767 vs 372 ms).
     """
 
     name = "onnx"
 
     def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
                  iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2,
-                 detection: str | DetectionConfig | None = None) -> None:
+                 detection: str | DetectionConfig | None = None, spin_wait: bool = False) -> None:
         require_extra("onnxruntime", "pose", "the onnx pose backend")
         import onnxruntime as ort
 
@@ -79,6 +84,7 @@ class OnnxPose:
         options.intra_op_num_threads = threads
         options.inter_op_num_threads = 1
         options.log_severity_level = 3
+        options.add_session_config_entry("session.intra_op.allow_spinning", "1" if spin_wait else "0")
         try:
             self._session = ort.InferenceSession(str(self.model_path), options, providers=["CPUExecutionProvider"])
         except Exception as exc:
@@ -96,6 +102,9 @@ class OnnxPose:
             assert height is not None and width is not None  # not dynamic: both sides fixed
             self.input_size = (height, width)
         self._input_name = self._session.get_inputs()[0].name
+        #: The passes the last :meth:`detect` ran, and how their rows were chosen.
+        self.last_passes: list[Pass] = []
+        self.last_note = ""
 
     def __call__(self, frame: Frame) -> Detections:
         return self.detect(frame_image(frame), CameraGeometry.from_frame(frame))
@@ -104,7 +113,9 @@ class OnnxPose:
         return self._session.run(None, {self._input_name: tensor})[0]
 
     def plan(self, width: int, height: int, geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
-        """The passes this backend runs on a ``width`` x ``height`` image, and how they were chosen."""
+        """The passes this backend runs on a ``width`` x ``height`` image before any detection,
+        and how they were chosen (levels whose rows wait for a fit to the people found are
+        only named in the note; :attr:`last_passes` holds what :meth:`detect` ran)."""
         if self.detection is None:
             raise InputError(f"{self.model_path}: no detection mode set (one pass at {self.input_size}): "
                              "nothing to plan")
@@ -121,12 +132,14 @@ class OnnxPose:
         """
         if self.detection is None:
             padded, box = letterbox(image_rgb, self.input_size)
+            self.last_passes = [Pass((0, 0, image_rgb.shape[1], image_rgb.shape[0]), self.input_size, "full")]
             return decode(self._infer(to_input_tensor(padded)), box, self.score_threshold, self.iou_threshold,
                           self.max_detections)
-        passes, _ = self.plan(image_rgb.shape[1], image_rgb.shape[0], geometry)
-        return detect_multipass(self._infer, image_rgb, passes, fixed_input=None if self.dynamic else self.input_size,
-                                score_threshold=self.score_threshold, iou_threshold=self.iou_threshold,
-                                max_detections=self.max_detections, edge_margin_px=self.detection.edge_margin_px)
+        dets, self.last_passes, self.last_note = detect_levels(
+            self._infer, image_rgb, self.detection, geometry, fixed_input=None if self.dynamic else self.input_size,
+            score_threshold=self.score_threshold, iou_threshold=self.iou_threshold,
+            max_detections=self.max_detections, base_input=self._base_input)
+        return dets
 
     def describe(self) -> dict:
         """What to save next to results: backend, model file, input size, detection mode, thresholds."""

@@ -1,11 +1,11 @@
-"""Where to spend the pose network's pixels: the detection config, the far-person band, the passes.
+"""Where to spend the pose network's pixels: the detection config, the ground band, the passes.
 
 ``fast``: one pass over the whole frame, the input fitted to the frame's aspect.
-``far``: that pass plus tiles at native or upscaled resolution over the image band where a
-person ``near_m``..``far_m`` away can stand (the ground there, up to ``top_m`` above it),
-computed from the camera's intrinsics, height and tilt (ego pitch and roll included). A
-camera looking down, one without calibration, or a band that misses the image gets the
-whole image tiled instead (the plan says why).
+``far``: that pass plus finer levels (:mod:`pedenv.pose.levels`), each over the image band
+where its people can stand: the ground at the distances where they have the level's
+heights in px, up to ``top_m`` above it, from the camera's intrinsics, height and tilt
+(ego pitch and roll included). This module holds the config, the camera geometry, the band
+of a distance range and the tiling of a region.
 """
 
 from __future__ import annotations
@@ -25,34 +25,67 @@ STRIDE = 32
 class DetectionConfig:
     """Tunables of the detection passes (validated; a bad value raises ValueError naming the field).
 
-    mode: ``fast`` (one pass) or ``far`` (the pass plus tiles).
+    ``far`` runs a pyramid of *levels*: the whole-frame pass, then one level per scale of
+    ``level_scales``, each over the image rows where the people it is for can stand. A level
+    at scale ``s`` is for people whose height in the image lies in
+    ``[min_person_px / s, min_person_px / s_coarser)`` px (the whole-frame pass: at least
+    ``min_person_px / its scale``). Those rows come from the calibration (the ground at the
+    distances where such people stand) or, without a usable calibration, from a line fitted
+    to the heights and foot rows of the people the coarser levels found.
+
+    mode: ``fast`` (one pass) or ``far`` (the levels).
     base_long_side: long side of the whole-frame pass's input, px (multiple of 32, 160..2048);
         the short side follows the frame's aspect. Raising it finds smaller people, costs more.
-    tile_width: width of one tile's network input, px (multiple of 32, 160..1280).
+    tile_width: longest side of one tile's network input, px (multiple of 32, 160..4096); a
+        level's rows wider than this are cut into overlapping tiles.
     tile_overlap: overlap of neighbouring tiles, a fraction of the tile (0..0.5); it must exceed
         the width of the widest person the tiles are meant for, so each is whole in one tile.
-    band_upscale: scale of the band tiles (1 = native pixels, 1..4); raising it finds
-        farther people, costs its square.
-    whole_image_scale: scale of the tiles when the whole image is tiled (0.25..4).
-    near_m, far_m: distances bounding the band, metres (0.5 <= near < far <= 1000).
-    top_m: height above the ground the band reaches, metres (0.5..5; a tall person 2 m).
-    band_margin_px: rows added above and below the band, px (0..200), for pitch noise.
-    max_pitch_down_deg: a camera tilted down more than this is "looking down": whole image tiled (1..89).
-    max_pitch_up_deg: a camera tilted up more than this sees sky, no ground: whole image tiled (1..89).
-    max_tiles: at most this many tiles; the tile scale is lowered to fit (1..64).
+    level_scales: scales of the far levels, ascending, each in [0.25, 4] (1 = native pixels);
+        a scale at or below the whole-frame pass's is skipped. Adding a finer scale finds
+        smaller people and costs its square times the width of its rows.
+    min_person_px: height in a level's network input, px, of the smallest person that level
+        is trusted to find (20..400); lowering it hands people to coarser, cheaper levels.
+    max_person_px: a level detection taller than this in its network input, px, is dropped
+        (100..4000): a fragment of someone too large for that level (whole-frame pass exempt).
+    whole_image_max_mpx: a level whose rows are unknown (no usable calibration, too few
+        people found to fit them) runs over the whole image when that costs at most this many
+        network input megapixels (0.1..50); else it is skipped.
+    near_m, far_m: distances bounding every band, metres (0.5 <= near < far <= 1000).
+    top_m: height above the ground the band reaches, metres (0.5..5; a tall person 2 m); the
+        tallest person assumed when heights in px are turned into distances.
+    short_person_m: the shortest person assumed when heights in px are turned into
+        distances, metres (0.5..2.5, below top_m).
+    band_margin_px: rows added above and below each band, px (0..200), for pitch noise.
+    fit_min_people: people (whole, scoring at least sure_score) needed to fit the rows of
+        finer levels without calibration (2..100).
+    fit_margin: rows added above and below a fitted band, a fraction of the level's tallest
+        person (0..2), for people taller or shorter than the fit and for its error.
+    sure_score: level detections scoring at least this are kept without the skeleton check (0..1).
+    plausible_keypoint_conf: a level detection scoring below sure_score is kept only when its
+        17 keypoint confidences average at least this (0..1): a person, not a pole or a cone.
+    max_pitch_down_deg: a camera tilted down more than this is "looking down": fitted rows (1..89).
+    max_pitch_up_deg: a camera tilted up more than this sees sky, no ground: fitted rows (1..89).
+    max_tiles: at most this many tiles per level; the level's scale is lowered to fit (1..64).
     edge_margin_px: a detection within this many input px of an inner tile edge counts as cut (0..64).
     """
 
     mode: str = "far"
     base_long_side: int = 640
-    tile_width: int = 640
+    tile_width: int = 3840
     tile_overlap: float = 0.25
-    band_upscale: float = 2.0
-    whole_image_scale: float = 1.0
-    near_m: float = 15.0
+    level_scales: tuple[float, ...] = (1.0, 2.0)
+    min_person_px: float = 80.0
+    max_person_px: float = 480.0
+    whole_image_max_mpx: float = 2.1
+    near_m: float = 5.0
     far_m: float = 150.0
     top_m: float = 2.2
+    short_person_m: float = 1.5
     band_margin_px: int = 16
+    fit_min_people: int = 3
+    fit_margin: float = 0.5
+    sure_score: float = 0.5
+    plausible_keypoint_conf: float = 0.5
     max_pitch_down_deg: float = 20.0
     max_pitch_up_deg: float = 30.0
     max_tiles: int = 12
@@ -61,23 +94,30 @@ class DetectionConfig:
     def __post_init__(self) -> None:
         if self.mode not in MODES:
             raise ValueError(f"DetectionConfig.mode must be one of {', '.join(MODES)}, got {self.mode!r}")
-        ranges = {"base_long_side": (160, 2048), "tile_width": (160, 1280), "tile_overlap": (0.0, 0.5),
-                  "band_upscale": (1.0, 4.0), "whole_image_scale": (0.25, 4.0), "near_m": (0.5, 1000.0),
-                  "far_m": (0.5, 1000.0), "top_m": (0.5, 5.0), "band_margin_px": (0, 200),
-                  "max_pitch_down_deg": (1.0, 89.0), "max_pitch_up_deg": (1.0, 89.0), "max_tiles": (1, 64),
-                  "edge_margin_px": (0, 64)}
+        ranges = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "tile_overlap": (0.0, 0.5),
+                  "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
+                  "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
+                  "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "band_margin_px": (0, 200),
+                  "fit_min_people": (2, 100), "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0),
+                  "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
+                  "max_pitch_up_deg": (1.0, 89.0), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
         for name, (low, high) in ranges.items():
-            value = getattr(self, name)
-            integer = isinstance(low, int)
-            ok = not isinstance(value, bool) and isinstance(value, int if integer else (int, float))
-            if not ok or not low <= value <= high:
-                kind = "an integer" if integer else "a number"
-                raise ValueError(f"DetectionConfig.{name} must be {kind} in [{low}, {high}], got {value!r}")
+            _check_range(name, getattr(self, name), low, high)
+        scales = self.level_scales
+        if not isinstance(scales, tuple) or not scales:
+            raise ValueError(f"DetectionConfig.level_scales must be a non-empty tuple of numbers, got {scales!r}")
+        for value in scales:
+            _check_range("level_scales", value, 0.25, 4.0)
+        if list(scales) != sorted(set(scales)):
+            raise ValueError(f"DetectionConfig.level_scales must be ascending without repeats, got {scales!r}")
         for name in ("base_long_side", "tile_width"):
             if getattr(self, name) % STRIDE:
                 raise ValueError(f"DetectionConfig.{name} must be a multiple of {STRIDE}, got {getattr(self, name)}")
         if self.near_m >= self.far_m:
             raise ValueError(f"DetectionConfig.near_m ({self.near_m}) must be below far_m ({self.far_m})")
+        if self.short_person_m >= self.top_m:
+            raise ValueError(f"DetectionConfig.short_person_m ({self.short_person_m}) must be below top_m "
+                             f"({self.top_m})")
 
     @classmethod
     def named(cls, mode: str, **changes) -> DetectionConfig:
@@ -87,7 +127,15 @@ class DetectionConfig:
         return replace(cls(mode=mode), **changes)
 
     def to_dict(self) -> dict:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+
+
+def _check_range(name: str, value, low, high) -> None:
+    integer = isinstance(low, int)
+    ok = not isinstance(value, bool) and isinstance(value, int if integer else (int, float))
+    if not ok or not low <= value <= high:
+        kind = "an integer" if integer else "a number"
+        raise ValueError(f"DetectionConfig.{name} must be {kind} in [{low}, {high}], got {value!r}")
 
 
 def _round32(value: float) -> int:
@@ -142,26 +190,30 @@ class Band:
     reason: str = ""
 
 
-def far_band(geometry: CameraGeometry | None, width: int, height: int, config: DetectionConfig) -> Band | None:
-    """The image rows where a person ``near_m``..``far_m`` away stands; None -> tile the whole image.
+def usable_calibration(geometry: CameraGeometry | None, config: DetectionConfig) -> bool:
+    """Whether the calibration can place the far band: given, the camera above the ground,
+    tilted down by at most ``max_pitch_down_deg`` and up by at most ``max_pitch_up_deg``."""
+    if geometry is None or geometry.height_m <= 0:
+        return False
+    pitch_down = math.degrees(math.asin(float(np.clip(-geometry.cam_to_level[2, 2], -1.0, 1.0))))
+    return pitch_down <= config.max_pitch_down_deg and -pitch_down <= config.max_pitch_up_deg
 
-    None comes back (with no error) for: no calibration, a camera looking down by more than
-    ``max_pitch_down_deg`` or up by more than ``max_pitch_up_deg``, a camera below the
-    ground, or a band that lies wholly above or below the image.
-    """
-    if geometry is None:
-        return None
+
+def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float, far_m: float,
+                config: DetectionConfig, max_height_px: float = math.inf) -> Band | None:
+    """Rows where a person ``near_m``..``far_m`` away stands (the ground there up to ``top_m``,
+    or up to the height a person ``max_height_px`` tall in the image has there, if lower;
+    +-72 deg around the optical axis, plus ``band_margin_px``); None when they miss the image."""
     R, K = geometry.cam_to_level, geometry.K
     forward = R[:, 2]
-    pitch_down = math.degrees(math.asin(float(np.clip(-forward[2], -1.0, 1.0))))
-    if pitch_down > config.max_pitch_down_deg or -pitch_down > config.max_pitch_up_deg or geometry.height_m <= 0:
-        return None
     horizontal = np.array([forward[0], forward[1], 0.0])
-    horizontal /= np.linalg.norm(horizontal)
+    horizontal /= max(float(np.linalg.norm(horizontal)), 1e-9)
     left = np.cross([0.0, 0.0, 1.0], horizontal)
-    d = np.geomspace(config.near_m, config.far_m, 24)[:, None, None]
+    d = np.geomspace(near_m, far_m, 24)[:, None, None]
     lateral = np.linspace(-3.0, 3.0, 61)[None, :, None] * d  # +-72 deg around the axis
-    z = np.array([-geometry.height_m, config.top_m - geometry.height_m])[None, None, :]
+    head_m = np.minimum(config.top_m, max_height_px * d / float(K[1, 1]))  # (24, 1, 1) metres
+    z = np.concatenate(np.broadcast_arrays(np.full_like(head_m, -geometry.height_m), head_m - geometry.height_m),
+                       axis=2)
     points = d[..., None] * horizontal + lateral[..., None] * left + z[..., None] * np.array([0, 0, 1.0])
     cam = points.reshape(-1, 3) @ R  # level -> camera: R^T p, as row vectors
     ahead = cam[:, 2] > 0.1
@@ -178,14 +230,34 @@ def far_band(geometry: CameraGeometry | None, width: int, height: int, config: D
     return Band(top, bottom)
 
 
+def far_band(geometry: CameraGeometry | None, width: int, height: int, config: DetectionConfig) -> Band | None:
+    """The image rows where a person ``near_m``..``far_m`` away stands; None -> no usable band.
+
+    None comes back (with no error) for: no calibration, a camera looking down by more than
+    ``max_pitch_down_deg`` or up by more than ``max_pitch_up_deg``, a camera below the
+    ground, or a band that lies wholly above or below the image.
+    """
+    if not usable_calibration(geometry, config):
+        return None
+    assert geometry is not None
+    return ground_rows(geometry, width, height, config.near_m, config.far_m, config)
+
+
 @dataclass(frozen=True)
 class Pass:
     """One network pass: the image region ``(x0, y0, x1, y1)`` (px, end exclusive) scaled into
-    ``input_size`` (height, width); ``kind`` is ``full``, ``band`` or ``tile`` (whole image tiled)."""
+    ``input_size`` (height, width); ``kind`` is ``full`` (the whole-frame pass), ``band``
+    (a level over rows from the calibration or a fit) or ``tile`` (a level over the whole image)."""
 
     region: tuple[int, int, int, int]
     input_size: tuple[int, int]
     kind: str
+
+    @property
+    def scale(self) -> float:
+        """Network input px per image px."""
+        x0, y0, x1, y1 = self.region
+        return min(self.input_size[0] / (y1 - y0), self.input_size[1] / (x1 - x0))
 
 
 def _starts(length: int, window: int, overlap: float) -> list[int]:
@@ -198,42 +270,30 @@ def _starts(length: int, window: int, overlap: float) -> list[int]:
 
 def _tiles(region: tuple[int, int, int, int], scale: float, config: DetectionConfig, kind: str) -> list[Pass]:
     x0, y0, x1, y1 = region
-    window_w = max(1, int(round(config.tile_width / scale)))
-    window_h = max(1, int(round(config.tile_width / scale)))  # square tiles at most; bands are shorter
+    window = max(1, int(round(config.tile_width / scale)))  # square tiles at most; bands are shorter
     tiles = []
-    for ty in _starts(y1 - y0, window_h, config.tile_overlap):
-        th = min(window_h, y1 - y0)
-        for tx in _starts(x1 - x0, window_w, config.tile_overlap):
-            tw = min(window_w, x1 - x0)
+    for ty in _starts(y1 - y0, window, config.tile_overlap):
+        th = min(window, y1 - y0)
+        for tx in _starts(x1 - x0, window, config.tile_overlap):
+            tw = min(window, x1 - x0)
             box = (x0 + tx, y0 + ty, x0 + tx + tw, y0 + ty + th)
             tiles.append(Pass(box, (_round32(th * scale), _round32(tw * scale)), kind))
     return tiles
 
 
-def plan_passes(width: int, height: int, config: DetectionConfig,
-                geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
-    """The passes for a ``width`` x ``height`` image, and a note on how the tiles were chosen.
-
-    Raises InputError for an image smaller than 8x8 px.
-    """
-    if width < 8 or height < 8:
-        raise InputError(f"image of {width}x{height} px is too small for the pose network (at least 8x8)")
-    passes = [Pass((0, 0, width, height), fit_input(width, height, config.base_long_side), "full")]
-    if config.mode == "fast":
-        return passes, "one pass"
-    band = far_band(geometry, width, height, config)
-    if band is None:
-        region, scale, kind = (0, 0, width, height), config.whole_image_scale, "tile"
-        note = "no calibration" if geometry is None else "camera looks down or up, or the band misses the image"
-        note = f"whole image tiled ({note})"
-    else:
-        region, scale, kind = (0, band.top, width, band.bottom), config.band_upscale, "band"
-        note = f"band rows {band.top}-{band.bottom}"
+def tile_region(region: tuple[int, int, int, int], scale: float, config: DetectionConfig,
+                kind: str) -> tuple[list[Pass], float]:
+    """Tiles of ``region`` (px) at ``scale``, at most ``max_tiles`` (the scale lowered to fit);
+    returns the tiles and the scale they run at."""
     tiles = _tiles(region, scale, config, kind)
     while len(tiles) > config.max_tiles and scale > 0.05:
         scale *= 0.85  # bigger windows: fewer tiles, at a lower scale
         tiles = _tiles(region, scale, config, kind)
-    base_scale = passes[0].input_size[1] / width if width >= height else passes[0].input_size[0] / height
-    if scale <= base_scale * 1.05:
-        return passes, note + "; tiles would add nothing over the whole-frame pass"
-    return passes + tiles, f"{note}; {len(tiles)} tiles at scale {scale:.2f}"
+    return tiles, scale
+
+
+def full_pass(width: int, height: int, config: DetectionConfig) -> Pass:
+    """The whole-frame pass of a ``width`` x ``height`` image; InputError below 8x8 px."""
+    if width < 8 or height < 8:
+        raise InputError(f"image of {width}x{height} px is too small for the pose network (at least 8x8)")
+    return Pass((0, 0, width, height), fit_input(width, height, config.base_long_side), "full")
