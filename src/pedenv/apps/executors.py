@@ -139,7 +139,7 @@ class RayExecutor:
 
         remote = ray.remote(num_cpus=1, max_retries=self.max_retries)(_run_on_worker)
         refs = {key: ray.put(value) for key, value in (shared or {}).items()}
-        queue = Queue() if on_progress else None
+        queue = Queue(actor_options={"num_cpus": 0}) if on_progress else None  # no CPU slot taken from the tasks
         limit = self.workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
         waiting: list = list(items)
         pending: dict = {}
