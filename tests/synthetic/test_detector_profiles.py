@@ -41,6 +41,10 @@ def test_synthetic_recall_matches_the_real_network_in_every_bin(profile, default
     assert counts.min() >= 50  # every bin has persons to compare
     for (low, _), r, s in zip(BINS, real, synthetic):
         assert abs(r - s) <= 0.10, f"bin from {low} px: real {r:.2f}, synthetic {s:.2f}"
+    fit = table["fit"]
+    if "synthetic_recall_by_bin" in fit:  # fitted to the recall table: the model gives what the fit recorded
+        assert synthetic == pytest.approx(fit["synthetic_recall_by_bin"], abs=1e-4)
+        assert max(abs(r - s) for r, s in zip(real, synthetic)) == pytest.approx(fit["largest_bin_gap"], abs=1e-4)
 
 
 def test_curve_fit_recovers_a_known_logistic():

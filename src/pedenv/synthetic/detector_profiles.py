@@ -19,9 +19,14 @@ lower bound of the error against the truth. False positives: MOT17 and KITTI fra
 fitted to the frame's aspect), measured the same way: as blind as the single pass
 (recall 0 / 0 / 6 / 72 % in the bins <50, 50-100, 100-200, >=200 px).
 
-``yolo11n-pose-far``: the ``far`` mode (whole frame plus tiles over the band where people
-15-150 m away stand, from each sample's calibration; MOT17 has none and is tiled whole):
-recall 0 / 27 / 85 / 99 %, 50 % at 102 px box height, 0.29 false positives per frame.
+``yolo11n-pose-far``: the ``far`` mode (:mod:`pedenv.pose.levels`: a pyramid of the whole
+frame and x1, x2 levels over the rows where people of each level's heights stand):
+recall 3 / 57 / 86 / 99 % in the bins <50, 50-100, 100-200, >=200 px, 0.33 false positives
+per frame. Its recall rises steeply at the finest level's smallest person and then flattens,
+which a per-person logistic fit misses by up to 19 points in a bin; the curve here is fitted
+to the recall table as the synthetic scenes see it (``fit_detector_model.py
+--fit-recall-table``: 50 % at 55 px keypoint extent, i.e. 68 px box height; largest bin gap
+9 points: 11 / 48 / 95 / 99 %).
 
 ``yolo11n-pose-native``: the same network over the whole frame at the frame's own
 resolution (sides rounded up to 32 px; a dynamic-input ONNX export), the reference for the
@@ -55,8 +60,8 @@ PROFILES = MappingProxyType({
         "noise_px_small": 0.22, "noise_px_large": 0.84}),
     "yolo11n-pose-far": MappingProxyType({
         **_DEFAULT,
-        "half_detection_height_px": 82.1, "detection_slope_px": 16.6, "false_positives_per_frame": 0.29,
-        "noise_px_small": 0.21, "noise_px_large": 0.75}),
+        "half_detection_height_px": 55.0, "detection_slope_px": 13.0, "false_positives_per_frame": 0.333,
+        "noise_px_small": 0.28, "noise_px_large": 0.745}),
     "yolo11n-pose-native": MappingProxyType({
         **_DEFAULT,
         "half_detection_height_px": 88.7, "detection_slope_px": 12.4, "false_positives_per_frame": 0.125,
