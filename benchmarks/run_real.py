@@ -6,12 +6,13 @@ anyone appear twice?
 Each sequence is written as a recording (:mod:`pedenv.io.footage_writer`: KITTI with its
 calibration and ORB-SLAM3 poses; MOT17 with a GUESSED camera 1.5 m up, focal = image width,
 level except MOT17-04's, guessed 30 deg down (:data:`MOT17_PITCH_GUESS_DEG`), and a standing
-ego) into a temporary folder and run by :func:`pedenv.apps.run.run_recording`
-(what ``pedenv run`` calls) with the paper's method (``--method paper``), the ``fused`` preset (the default) and ``fused-image``, the preset without
-its ground gate and memory, which need a true camera (MOT17's is a guess). The output ``environment.jsonl`` is
-compared with the ground truth: recall (IoU >= 0.5), false positives, ID switches, IDF1
-(motmetrics; MOT17's ignore classes count as false positives), and the pairs of reported
-people overlapping by IoU > 0.5 in one frame (a person reported twice, e.g. from a tile seam).
+ego) into a temporary folder and run by :func:`pedenv.apps.run.run_recording` (what ``pedenv
+run`` calls) with the paper's method (``--method paper``), the ``fused`` preset (the default)
+and ``fused-image``, the preset without its ground gate and memory, which need a true camera
+(MOT17's is a guess). The output ``environment.jsonl`` is compared with the ground truth:
+recall (IoU >= 0.5), false positives, ID switches, IDF1 (motmetrics; MOT17's ignore classes
+count as false positives), and the pairs of reported people overlapping by IoU > 0.5 in one
+frame (a person reported twice, e.g. from a tile seam).
 """
 
 from __future__ import annotations
@@ -109,8 +110,8 @@ def main(argv=None) -> int:
 
     fused = configure(Config(), "fused")
     # the preset without the steps that need a true camera (ground gate, memory): for MOT17's guess
-    configs = {"paper": Config(method="paper"), "fused": fused, "fused-image": fused.replace(tracking={"ground_gate": 0.0,
-                                                                                         "memory_s": 0.0})}
+    image_only = fused.replace(tracking={"ground_gate": 0.0, "memory_s": 0.0})
+    configs = {"paper": Config(method="paper"), "fused": fused, "fused-image": image_only}
     totals: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, write, gt in sequences(args.samples, args.only):
