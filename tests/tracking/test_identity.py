@@ -165,7 +165,7 @@ def test_lost_rows_are_carried_with_every_column():
 @pytest.mark.parametrize("field, value", [
     ("low_score_threshold", 0.3), ("low_score_threshold", -0.1), ("start_score_threshold", 1.5),
     ("ground_gate", -1.0), ("ground_cost_weight", 11.0), ("memory_s", -1.0), ("memory_s", 100.0),
-    ("memory_gate", 0.0)])
+    ("memory_gate", 0.0), ("camera_check", 1.5), ("camera_check", -0.1)])
 def test_identity_fields_are_checked(field, value):
     with pytest.raises(ValueError, match=f"tracking.{field}"):
         TrackingConfig(**{field: value})
@@ -179,3 +179,37 @@ def test_the_low_band_reaches_the_tracker_only_when_it_is_on():
     assert "score_threshold" not in backend_options("onnx")  # the paper's input: the backend's own 0.25
     assert backend_options("onnx", score_threshold=0.1)["score_threshold"] == 0.1
     assert backend_options("ultralytics", score_threshold=0.1)["score_threshold"] == 0.1
+
+
+def _three_walkers(tracker: Tracker, states: dict, t: float = 0.1):
+    """Three people 2 m apart at 10-14 m, seen at t = 0, then again at ``t`` in place; their
+    filters hold ``states`` (what the model's filter made of them)."""
+    people = np.stack([box(10, 2.0), box(12, 0.0), box(14, -2.0)])
+    tracker.update(people, view=view(0.0))
+    set_filters(tracker, states)
+    return tracker.update(people, view=view(t))
+
+
+def test_a_camera_the_image_contradicts_leaves_the_boxes_to_decide():
+    """The filters, fed through a wrong calibration, put everyone 2.5x farther than where
+    their foot points project; the ground gate would split every track. The unambiguous
+    box matches disagree with the camera, so the gate abstains and all keep their ids."""
+    wrong = {1: (25, 0, 5.0, 0), 2: (30, 0, 0.0, 0), 3: (35, 0, -5.0, 0)}
+    right = {1: (10, 0, 2.0, 0), 2: (12, 0, 0.0, 0), 3: (14, 0, -2.0, 0)}
+    for states, check, kept in ((right, 0.5, True), (wrong, 0.5, True), (wrong, 1.0, False)):
+        tracker = Tracker(TrackingConfig(**FUSED, camera_check=check))
+        step = _three_walkers(tracker, states)
+        assert (list(tracker.ids[step.detection_rows]) == [1, 2, 3]) == kept
+        assert tracker.camera_trusted == (states is right or check == 1.0)
+
+
+def test_the_camera_check_needs_three_unambiguous_matches():
+    from pedenv.tracking.recall import camera_disagrees
+
+    boxes = np.stack([box(10, 2.0), box(12, 0.0), box(14, -2.0)])
+    outside = np.zeros((3, 3), bool)
+    rows = np.arange(3)
+    assert camera_disagrees(outside, boxes, boxes, rows, TrackingConfig(camera_check=0.5))
+    assert not camera_disagrees(outside[:2], boxes[:2], boxes, rows, TrackingConfig(camera_check=0.5))
+    assert not camera_disagrees(np.eye(3, dtype=bool), boxes, boxes, rows, TrackingConfig(camera_check=0.5))
+    assert not camera_disagrees(outside, boxes, boxes, rows, TrackingConfig(camera_check=1.0))

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from pedenv.boxes import iou_matrix
 from pedenv.config import TrackingConfig
 from pedenv.tracking.projection import CameraView, pixel_distances
 from pedenv.tracking.table import FilterColumns
@@ -62,6 +63,23 @@ def ground_terms(boxes: np.ndarray, filters: FilterColumns, view: CameraView | N
     allowed = (d2 <= config.ground_gate) | ~started[None]
     d2 = np.where(started[None], np.minimum(d2, config.ground_gate), EXPECTED_DISTANCE_2DOF)
     return allowed, config.ground_cost_weight * d2 / config.ground_gate
+
+
+def camera_disagrees(allowed: np.ndarray, detection_boxes: np.ndarray, track_boxes: np.ndarray,
+                     rows: np.ndarray, config: TrackingConfig) -> bool:
+    """Whether the camera's projections contradict the image in this frame: more than
+    ``config.camera_check`` of the unambiguous box matches (detection and live track
+    ``rows`` each other's best, IoU >= 0.5; at least 3) lie outside the ground gate
+    ``allowed`` (N, T over every row). A wrong calibration, not people, is then the cause."""
+    if config.camera_check >= 1.0 or not len(detection_boxes) or not len(rows):
+        return False
+    iou = iou_matrix(detection_boxes, track_boxes[rows])
+    best_track, best_detection = iou.argmax(axis=1), iou.argmax(axis=0)
+    d = np.flatnonzero((best_detection[best_track] == np.arange(len(iou))) & (iou.max(axis=1) >= 0.5))
+    if len(d) < 3:
+        return False
+    outside = ~allowed[d, rows[best_track[d]]]
+    return bool(outside.mean() > config.camera_check)
 
 
 def recall_remembered(view: CameraView, boxes: np.ndarray, filters: FilterColumns, rows: np.ndarray,

@@ -22,7 +22,7 @@ from pedenv.config import TrackingConfig
 from pedenv.tracking.association import associate
 from pedenv.tracking.egomotion import shift_u
 from pedenv.tracking.projection import CameraView
-from pedenv.tracking.recall import ground_terms, recall_remembered, split_by_score
+from pedenv.tracking.recall import camera_disagrees, ground_terms, recall_remembered, split_by_score
 from pedenv.tracking.table import TrackTable
 
 #: Weight of the newest displacement in a track's image velocity (exponential smoothing).
@@ -81,6 +81,8 @@ class Tracker:
         """Forget every track (every column of the table) and restart the ids."""
         self.table.clear()
         self.id_counter.reset()
+        #: whether the last frame's ground gate agreed with the image (:func:`camera_disagrees`)
+        self.camera_trusted = True
 
     def __len__(self) -> int:
         return len(self.table)
@@ -117,7 +119,7 @@ class Tracker:
             pairs, remembered = [m], np.zeros(0, np.int64)
         else:
             pairs, free, fresh, remembered = self._associate_beyond(boxes, scores, view)
-        if view is not None and memory and len(fresh) and len(remembered) + len(free):
+        if view is not None and memory and self.camera_trusted and len(fresh) and len(remembered) + len(free):
             # the remembered tracks and the live ones the image left without a detection
             candidates = np.concatenate([free, remembered])
             m = recall_remembered(view, boxes[fresh], self.table.filter, candidates, cfg.memory_gate)
@@ -174,6 +176,9 @@ class Tracker:
         stage = np.concatenate([first, second])  # one assignment; the low band pays its cost
         live = np.flatnonzero(~tr.lost)
         allowed, extra = ground_terms(boxes, self.table.filter, view, cfg)
+        self.camera_trusted = allowed is None or not camera_disagrees(allowed[first], boxes[first], tr.boxes, live, cfg)
+        if not self.camera_trusted:  # a wrong calibration: the gate abstains, the boxes decide
+            allowed, extra = None, None
         sub = np.ix_(stage, live)
         extra = None if extra is None else extra[sub]
         if len(second):
