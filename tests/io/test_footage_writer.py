@@ -110,21 +110,11 @@ def test_pedenv_run_far_on_kitti_0016_keeps_ids_and_reports_nobody_twice(tmp_pat
 @pytest.mark.slow
 @pytest.mark.onnx_model
 def test_pedenv_run_far_on_mot17_05_keeps_ids_and_reports_nobody_twice(tmp_path, monkeypatch, capsys):
-    from pedenv.io.real import mot17
-
-    rec = write_mot17_recording(MOT17 / "MOT17-05-FRCNN", tmp_path / "rec")
-    code, out, err = pedenv(monkeypatch, capsys, "run", "--calibration", rec / "calibration.yaml",
-                            "--ego-poses", rec / "ego_poses.csv", "--images", rec / "images",
-                            "--output", tmp_path / "run", "--detection", "far")
-    assert code == 0, err
-    seq = mot17.read_sequence(MOT17 / "MOT17-05-FRCNN")
-    gt = [(rows.ids, rows.boxes) for rows in (seq.pedestrians.in_frame(f) for f in seq.frames)]
-    found, duplicates = _ids_and_duplicates(tmp_path / "run" / "environment.jsonl", gt)
+    matched, switches, duplicates = _run_mot17("MOT17-05-FRCNN", tmp_path, monkeypatch, capsys)
     assert duplicates == 0
-    switches = sum(found[k][i] != found[k - 1][i] for k in range(1, len(found)) for i in found[k] if i in found[k - 1])
     # measured (guessed camera, default config): 21 of the 45 boxes matched one to one, no id switch
     assert switches == 0
-    assert sum(len(f) for f in found) >= 19
+    assert matched >= 19
 
 
 @pytest.mark.slow
@@ -133,18 +123,24 @@ def test_a_guessed_camera_does_not_split_the_fused_tracks_on_mot17_04(tmp_path, 
     """MOT17-04 looks down from high up; its camera is guessed (30 deg down, 1.5 m up). The
     fused default's ground gate would split nearly every track (210 id switches in 8 frames
     before tracking.camera_check); the image contradicts that camera, so the boxes decide."""
+    matched, switches, duplicates = _run_mot17("MOT17-04-FRCNN", tmp_path, monkeypatch, capsys, pitch_down_deg=30)
+    assert duplicates == 0
+    # measured: 240 of the boxes matched one to one, no id switch (the paper's tracker: 0 too)
+    assert matched >= 228 and switches <= 2
+
+
+def _run_mot17(name: str, tmp_path, monkeypatch, capsys, **camera) -> tuple[int, int, int]:
+    """``pedenv run --detection far`` (default config) on a MOT17 sample written as a recording
+    with a guessed ``camera``: (boxes matched one to one, id switches, people reported twice)."""
     from pedenv.io.real import mot17
 
-    rec = write_mot17_recording(MOT17 / "MOT17-04-FRCNN", tmp_path / "rec", pitch_down_deg=30)
+    rec = write_mot17_recording(MOT17 / name, tmp_path / "rec", **camera)
     code, out, err = pedenv(monkeypatch, capsys, "run", "--calibration", rec / "calibration.yaml",
                             "--ego-poses", rec / "ego_poses.csv", "--images", rec / "images",
                             "--output", tmp_path / "run", "--detection", "far")
     assert code == 0, err
-    seq = mot17.read_sequence(MOT17 / "MOT17-04-FRCNN")
+    seq = mot17.read_sequence(MOT17 / name)
     gt = [(rows.ids, rows.boxes) for rows in (seq.pedestrians.in_frame(f) for f in seq.frames)]
     found, duplicates = _ids_and_duplicates(tmp_path / "run" / "environment.jsonl", gt)
     switches = sum(found[k][i] != found[k - 1][i] for k in range(1, len(found)) for i in found[k] if i in found[k - 1])
-    matched = sum(len(f) for f in found)
-    assert duplicates == 0
-    # measured: 240 of the boxes matched one to one, no id switch (the paper's tracker: 0 too)
-    assert matched >= 228 and switches <= 2
+    return sum(len(f) for f in found), switches, duplicates
