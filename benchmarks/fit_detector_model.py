@@ -21,12 +21,15 @@ height) and the noise power law to the jitter table.
 
 With ``--fit-recall-table`` the detection curve is instead fitted to the binned recall table
 as the synthetic scenes see it (:func:`fit_to_recall_table`; used for ``far``, whose recall
-a per-person logistic misses by up to 20 points in a bin).
+a per-person logistic misses by up to 20 points in a bin). With ``--person-offsets`` it also
+measures how far each person's skeleton sits, persistently, from their true ground point
+(:mod:`person_offsets`: KITTI and nuScenes 3D truth, MOT17 boxes as a cross-check) and fits
+the model's ``person_offset_u`` / ``person_offset_v`` to what the synthetic skeletons lack.
 
     PYTHONPATH=src python benchmarks/fit_detector_model.py --detections /work/cache-h7/det-single.npz \
         --out benchmarks/results/detector_yolo11n-pose-single.json
     PYTHONPATH=src python benchmarks/fit_detector_model.py --detections /work/cache-h14/det-far.npz \
-        --fit-recall-table --check-synthetic --out benchmarks/results/detector_yolo11n-pose-far.json
+        --fit-recall-table --person-offsets --check-synthetic --out benchmarks/results/detector_yolo11n-pose-far.json
 """
 
 from __future__ import annotations
@@ -326,6 +329,34 @@ def fit_to_recall_table(result: dict) -> dict:
     return out
 
 
+def fit_person_offsets(samples: Path, dets: dict, result: dict) -> dict:
+    """``result`` with the persistent per-person offsets (:mod:`person_offsets`): the real ones
+    against the 3D truth (MOT17's boxes as a cross-check), the synthetic skeletons' own with
+    the fitted model before and after, and ``fit.person_offset_u/v``."""
+    from person_offsets import real_offsets
+
+    from pedenv.synthetic import generate_scenes
+    from pedenv.synthetic.detector import DetectorModel
+    from pedenv.synthetic.detector_fit import fit_person_offset, synthetic_offsets
+
+    truth3d, boxes2d = real_offsets(samples, dets)
+    keys = ("half_detection_height_px", "detection_slope_px", "noise_px_small", "noise_px_large",
+            "false_positives_per_frame")
+    fitted = {k: result["fit"][k] for k in keys}
+    scenes = generate_scenes(0)
+    before, ratio = synthetic_offsets(DetectorModel(seed=0, **fitted), scenes)
+    real = truth3d.summary()
+    offsets = fit_person_offset(real, before.summary(), ratio)
+    after, _ = synthetic_offsets(DetectorModel(seed=0, **fitted, **offsets), scenes)
+    out = dict(result)
+    out["person_offset"] = {"unit": "annotated box height", "real_3d_truth": real,
+                            "real_mot17_boxes": boxes2d.summary(), "synthetic_without": before.summary(),
+                            "synthetic_with": after.summary(),
+                            "synthetic_box_over_extent": ratio}
+    out["fit"] = {**result["fit"], **{k: round(v, 4) for k, v in offsets.items()}}
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--detections", type=Path, required=True, help="cache written by real_detections.py")
@@ -337,12 +368,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--fit-recall-table", action="store_true",
                         help="fit the detection curve to the recall table on the synthetic scenes (minimax per-bin "
                              "gap, fit_to_recall_table) instead of per person by maximum likelihood")
+    parser.add_argument("--person-offsets", action="store_true",
+                        help="also measure each person's persistent skeleton offset against the 3D truth and fit "
+                             "the model's person_offset_u/v to it (person_offsets.py)")
     args = parser.parse_args(argv)
     dets = load(args.detections)
     mode = str(dets.pop("_meta")["mode"][0])
     result = reduce(measure(args.samples, dets), mode)
     if args.fit_recall_table:
         result = fit_to_recall_table(result)
+    if args.person_offsets:
+        result = fit_person_offsets(args.samples, dets, result)
     text = json.dumps(finite(result), indent=1, allow_nan=False)
     if args.out:
         args.out.write_text(text + "\n")

@@ -80,6 +80,24 @@ def test_unseen_keypoints_are_guessed_inside_the_image():
     assert (det.keypoints[..., 0] >= 0).all() and (det.keypoints[..., 0] <= 1599).all()
 
 
+def test_person_offset_stays_with_the_person_and_scales_with_height():
+    model = DetectorModel(seed=4, false_positives_per_frame=0.0, half_detection_height_px=0.0, detection_slope_px=1.0,
+                          noise_px_small=0.0, noise_px_large=0.0, person_offset_u=0.03, person_offset_v=0.02)
+
+    def offset(index, scene, height_px=200.0):  # (2,) px: the one person's mean keypoint shift
+        frame = person_frame(index, height_px, scene=scene)
+        return (model(frame).keypoints[0] - frame.ground_truth.keypoints[0]).mean(axis=0)
+
+    persons = np.array([offset(0, f"street-{k}") for k in range(400)])  # person 0 of 400 scenes
+    assert np.std(persons[:, 0]) / 200.0 == pytest.approx(0.03, rel=0.15)
+    assert np.std(persons[:, 1]) / 200.0 == pytest.approx(0.02, rel=0.15)
+    for k in range(3):  # the same person keeps their offset from frame to frame, scaled by their height
+        assert np.allclose([offset(i, f"street-{k}") for i in range(10)], persons[k], atol=1e-9)
+        assert np.allclose(offset(7, f"street-{k}", height_px=100.0), persons[k] / 2, atol=1e-9)
+    plain = DetectorModel(seed=4)(person_frame(0, 200.0)).keypoints
+    assert np.array_equal(plain, DetectorModel(seed=4, person_offset_u=0.0)(person_frame(0, 200.0)).keypoints)
+
+
 def test_deterministic_per_seed_scene_and_frame():
     frame = person_frame(5, 60.0, people=8)
     a, b = DetectorModel(seed=1)(frame), DetectorModel(seed=1)(frame)
@@ -92,7 +110,8 @@ def test_deterministic_per_seed_scene_and_frame():
 
 @pytest.mark.parametrize("kwargs", [{"seed": "x"}, {"noise_px_large": -1.0}, {"noise_px_small": 100.0},
                                     {"detection_slope_px": 0.0}, {"false_positives_per_frame": 50.0},
-                                    {"extremity_noise_factor": 0.5}, {"half_detection_height_px": True}])
+                                    {"extremity_noise_factor": 0.5}, {"half_detection_height_px": True},
+                                    {"person_offset_u": -0.1}, {"person_offset_v": 0.9}])
 def test_options_are_range_checked(kwargs):
     with pytest.raises(ValueError):
         DetectorModel(**kwargs)

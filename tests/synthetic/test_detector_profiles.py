@@ -10,7 +10,8 @@ import pytest
 
 from pedenv.pose import create_pose_backend
 from pedenv.synthetic.detector import PROFILES, DetectorModel
-from pedenv.synthetic.detector_fit import BINS, fit_detection_curve, logistic, recall_by_bin, synthetic_recall
+from pedenv.synthetic.detector_fit import (BINS, fit_detection_curve, logistic, recall_by_bin, synthetic_offsets,
+                                           synthetic_recall)
 
 RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"
 FITTED = {name: RESULTS / f"detector_{name}.json" for name in ("yolo11n-pose-single", "yolo11n-pose-fast",
@@ -27,6 +28,21 @@ def test_profile_holds_the_fitted_values(profile):
     for name in ("half_detection_height_px", "detection_slope_px", "noise_px_small", "noise_px_large",
                  "false_positives_per_frame"):
         assert params[name] == pytest.approx(fit[name], rel=0.02, abs=0.01), name
+    for name in ("person_offset_u", "person_offset_v"):  # measured for far only; 0 where not measured
+        assert params[name] == pytest.approx(fit.get(name, 0.0), abs=1e-4), name
+
+
+def test_far_profile_gives_each_person_the_real_networks_persistent_offset(default_scenes):
+    """The spread across persons of the skeleton's offset from the true ground point, in box
+    heights: the fitted model on the synthetic scenes reproduces what the fit recorded, and
+    that lies within 25 % of the real network's against the 3D truth (KITTI, nuScenes)."""
+    offsets = measured("yolo11n-pose-far")["person_offset"]
+    acc, _ = synthetic_offsets(DetectorModel(seed=0, profile="yolo11n-pose-far"), default_scenes)
+    synthetic = acc.summary()
+    for key in ("foot_across_persons", "column_across_persons"):
+        assert synthetic[key] == pytest.approx(offsets["synthetic_with"][key], abs=1e-4), key
+        assert synthetic[key] == pytest.approx(offsets["real_3d_truth"][key], rel=0.25), key
+        assert offsets["synthetic_without"][key] < 0.6 * offsets["real_3d_truth"][key], key  # what the fit added
 
 
 @pytest.mark.parametrize("profile", sorted(FITTED))

@@ -18,7 +18,7 @@ import numpy as np
 
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.evaluation.matching import match_to_ground_truth, position_errors
+from pedenv.evaluation.matching import match_one_to_one, match_to_ground_truth, position_errors
 from pedenv.evaluation.metrics import ErrorSamples, Metrics
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
@@ -122,8 +122,10 @@ def score_frame(frame: Frame, state: EnvironmentState, samples: ErrorSamples, tr
     if sel.any():
         pred, truth = peds.positions[sel, :2], gt.positions[match[sel], :2]
         abs_err, rel_err, dist = position_errors(pred, truth, frame.ego.translation[:2])
-        e = pred - truth
-        cov = peds.covariances[sel] + 1e-9 * np.eye(2)
+        same = match_one_to_one(peds.boxes, gt.boxes)  # the covariances are judged against their own person
+        own = same >= 0
+        e = peds.positions[own, :2] - gt.positions[same[own], :2]
+        cov = peds.covariances[own] + 1e-9 * np.eye(2)
         maha = np.sqrt(np.einsum("ni,nij,nj->n", e, inverse_2x2(cov), e))
         samples.add(abs_err, rel_err, dist, maha)
         if pairs is not None:

@@ -33,7 +33,7 @@ class ErrorSamples:
     abs_err: list = field(default_factory=list)
     rel_err: list = field(default_factory=list)
     distance: list = field(default_factory=list)
-    mahalanobis: list = field(default_factory=list)
+    mahalanobis: list = field(default_factory=list)  # one-to-one pairs (match_one_to_one): may be fewer
 
     def add(self, abs_err, rel_err, distance, mahalanobis) -> None:
         self.abs_err.append(abs_err)
@@ -61,7 +61,8 @@ def error_by_distance(distance: np.ndarray, abs_err: np.ndarray, rel_err: np.nda
 
 def calibration(mahalanobis: np.ndarray) -> dict:
     """How well the reported covariances describe the errors, from the errors' Mahalanobis
-    distances (N,) (NaN: no covariance).
+    distances (N,) (NaN: no covariance), each against the person the estimate is of
+    (:func:`pedenv.evaluation.matching.match_one_to_one`).
 
     within_1sigma, within_2sigma: share of errors inside the 1- and 2-sigma ellipses (ideal
     0.393 and 0.865). mean_nees: mean normalized estimation error squared, the mean squared

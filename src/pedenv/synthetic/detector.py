@@ -9,6 +9,10 @@ The model imitates a YOLO-pose style network from each frame's exact skeletons:
   ``noise_px_small`` at 30 px tall to ``noise_px_large`` at 300 px (a power law in
   ``h``), larger on wrists and ankles, and much larger on keypoints the camera does
   not see (outside the image or hidden), which are still guessed inside the image;
+* each person's whole skeleton is also shifted by an offset that stays with that person
+  from frame to frame (``person_offset_u`` sideways, ``person_offset_v`` up or down, as
+  standard deviations in units of the person's keypoint extent): a real network places one
+  person's ankles or body centre consistently off, and tracks do not average that away;
 * per-keypoint confidences are high for large persons, lower for small ones, near the
   image border and on wrists and ankles, and low for unseen keypoints;
 * a few small skeleton-shaped false positives appear (``false_positives_per_frame``).
@@ -16,7 +20,8 @@ The model imitates a YOLO-pose style network from each frame's exact skeletons:
 The numbers come from a named profile (:mod:`pedenv.synthetic.detector_profiles`): the
 hand-set ``default``, or values fitted to a real network on real images.
 
-Random numbers depend only on ``(seed, scene name, frame index)``: reruns reproduce.
+Random numbers depend only on ``(seed, scene name, frame index)``, a person's offset only on
+``(seed, scene name, person id)``: reruns reproduce.
 """
 
 from __future__ import annotations
@@ -64,6 +69,10 @@ class DetectorModel:
         share of its height (the box comes from the network's box head, not from the noisy
         keypoints). Raising it makes boxes, and so the association, less precise.
     box_min_confidence: a false positive's box spans its keypoints at least this confident.
+    person_offset_u, person_offset_v: standard deviations of each person's persistent
+        skeleton offset, sideways and vertical, as shares of the person's keypoint extent
+        (0 in the hand-set profile). Raising them makes each track's bias, which no filter
+        averages away, larger.
     """
 
     name = "detector-model"
@@ -72,7 +81,8 @@ class DetectorModel:
                  noise_px_small: float | None = None, extremity_noise_factor: float | None = None,
                  unseen_noise_factor: float | None = None, half_detection_height_px: float | None = None,
                  detection_slope_px: float | None = None, false_positives_per_frame: float | None = None,
-                 box_noise_fraction: float | None = None, box_min_confidence: float | None = None) -> None:
+                 box_noise_fraction: float | None = None, box_min_confidence: float | None = None,
+                 person_offset_u: float | None = None, person_offset_v: float | None = None) -> None:
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise InputError(f"DetectorModel seed must be an integer, got {seed!r}")
         self.seed = int(seed)
@@ -81,7 +91,8 @@ class DetectorModel:
                  "extremity_noise_factor": extremity_noise_factor, "unseen_noise_factor": unseen_noise_factor,
                  "half_detection_height_px": half_detection_height_px, "detection_slope_px": detection_slope_px,
                  "false_positives_per_frame": false_positives_per_frame, "box_noise_fraction": box_noise_fraction,
-                 "box_min_confidence": box_min_confidence}
+                 "box_min_confidence": box_min_confidence, "person_offset_u": person_offset_u,
+                 "person_offset_v": person_offset_v}
         values = {**profile_parameters(self.profile), **{k: v for k, v in given.items() if v is not None}}
         self.noise_px_large = _check("noise_px_large", values["noise_px_large"], 0.0, 50.0)
         self.noise_px_small = _check("noise_px_small", values["noise_px_small"], 0.0, 50.0)
@@ -94,6 +105,8 @@ class DetectorModel:
                                                 0.0, 20.0)
         self.box_min_confidence = _check("box_min_confidence", values["box_min_confidence"], 0.0, 1.0)
         self.box_noise_fraction = _check("box_noise_fraction", values["box_noise_fraction"], 0.0, 1.0)
+        self.person_offset_u = _check("person_offset_u", values["person_offset_u"], 0.0, 0.5)
+        self.person_offset_v = _check("person_offset_v", values["person_offset_v"], 0.0, 0.5)
 
     def noise_std_px(self, height_px: np.ndarray) -> np.ndarray:
         """Keypoint noise standard deviation (px) of persons ``height_px`` (N,) pixels tall."""
@@ -127,7 +140,7 @@ class DetectorModel:
         sigma = np.repeat(self.noise_std_px(height)[:, None], kp.shape[1], axis=1)
         sigma[:, _EXTREMITIES] *= self.extremity_noise_factor
         sigma = np.where(seen, sigma, self.unseen_noise_factor * sigma + 0.03 * height[:, None])
-        noisy = kp + rng.normal(size=kp.shape) * sigma[..., None]
+        noisy = kp + rng.normal(size=kp.shape) * sigma[..., None] + self._person_offsets(frame.scene, gt.ids, height)
         noisy = np.clip(noisy, 0.0, [w - 1.0, h - 1.0])  # networks place guesses inside the image
 
         size = 1.0 / (1.0 + np.exp(-(height - 40.0) / 20.0))  # 0.27 at 20 px .. 1 for large persons
@@ -152,6 +165,15 @@ class DetectorModel:
                                     np.maximum(true_box[:, :2], true_box[:, 2:])])
         boxes = np.concatenate([true_box, boxes_from_keypoints(fp_kp, fp_conf >= self.box_min_confidence)])
         return Detections(keypoints[order], confidences[order], np.clip(boxes[order], 0.0, [w - 1.0, h - 1.0] * 2))
+
+    def _person_offsets(self, scene: str, ids: np.ndarray, height_px: np.ndarray) -> np.ndarray:
+        """(N, 1, 2) pixel offsets of persons ``ids`` (N,) whose keypoints span ``height_px`` (N,)."""
+        if self.person_offset_u == 0.0 and self.person_offset_v == 0.0:
+            return np.zeros((len(ids), 1, 2))
+        crc = zlib.crc32(scene.encode())
+        unit = np.array([np.random.default_rng([self.seed & 0xFFFFFFFF, crc, int(i) & 0xFFFFFFFF, 1]).normal(size=2)
+                         for i in ids]).reshape(-1, 2)
+        return (unit * [self.person_offset_u, self.person_offset_v] * np.asarray(height_px)[:, None])[:, None, :]
 
     def _false_positives(self, rng: np.random.Generator, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
         """Small skeleton-shaped ghosts near the horizon: (F, 17, 2) pixels, (F, 17) confidences."""

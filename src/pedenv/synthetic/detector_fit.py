@@ -1,4 +1,5 @@
-"""Fitting the detector model to a real network: matching, height bins and the two fits.
+"""Fitting the detector model to a real network: matching, height bins, the two fits and
+the persistent per-person skeleton offsets.
 
 Shared by ``benchmarks/fit_detector_model.py`` (which measures the network on real images)
 and the tests that check a fitted profile reproduces those measurements.
@@ -8,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import minimize
+
+from pedenv.records import boxes_from_keypoints
 
 #: Person height bins (pixels, ground-truth box height): [low, high).
 BINS: tuple[tuple[float, float], ...] = ((0.0, 50.0), (50.0, 100.0), (100.0, 200.0), (200.0, float("inf")))
@@ -119,3 +122,84 @@ def synthetic_recall(frames, model, span_over_box: float) -> tuple[np.ndarray, n
     if not heights:
         return np.zeros(0), np.zeros(0, bool)
     return np.concatenate(heights), np.concatenate(detected)
+
+
+# Persistent per-person skeleton offsets (benchmarks/person_offsets.py measures the real ones).
+#: Ankles and hips (COCO-17 indices), the person score and keypoint confidence they are measured above.
+ANKLES, HIPS = [15, 16], [11, 12]
+SCORE, KP_CONF = 0.25, 0.3
+
+
+def robust_std(x: np.ndarray) -> float:
+    x = np.asarray(x, float)
+    return float(1.4826 * np.median(np.abs(x - np.median(x)))) if len(x) else float("nan")
+
+
+class Offsets:
+    """Per-person lists of (foot, column, box height px) rows."""
+
+    def __init__(self) -> None:
+        self.rows: dict[tuple, list[tuple[float, float, float]]] = {}
+
+    def add(self, key_of, keypoints, confidences, scores, boxes, ground_uv, counted) -> None:
+        """One image: detections (N, 17, 2) px, (N, 17), (N,); truth boxes (M, 4) px, true ground
+        points (M, 2) px, counted (M,) bool; ``key_of(g)`` names truth person g."""
+        keep = np.asarray(scores) > SCORE
+        kp, cf, sc = np.asarray(keypoints)[keep], np.asarray(confidences)[keep], np.asarray(scores)[keep]
+        dboxes = np.asarray(detection_boxes(kp, cf)) if boxes is None else np.asarray(boxes)[keep]
+        for d, g in greedy_match(iou_matrix(dboxes, self._truth), sc, 0.5):
+            if not counted[g] or (cf[d, ANKLES + HIPS] < KP_CONF).any():
+                continue
+            h = self._truth[g, 3] - self._truth[g, 1]
+            foot = (kp[d, ANKLES, 1].mean() - ground_uv[g, 1]) / h
+            column = (kp[d, ANKLES + HIPS, 0].mean() - ground_uv[g, 0]) / h
+            self.rows.setdefault(key_of(g), []).append((float(foot), float(column), float(h)))
+
+    def with_truth(self, truth_boxes: np.ndarray) -> Offsets:
+        self._truth = np.asarray(truth_boxes, float).reshape(-1, 4)
+        return self
+
+    def summary(self, min_height_px: float = 0.0) -> dict:
+        """Median offsets and their spread across persons (robust std), in box heights."""
+        per = np.array([np.median(np.array(v), axis=0) for v in self.rows.values()]).reshape(-1, 3)
+        per = per[per[:, 2] >= min_height_px]
+        within = [np.array(v)[:, :2] - np.median(np.array(v)[:, :2], axis=0) for v in self.rows.values() if len(v) > 1]
+        w = np.concatenate(within) if within else np.zeros((0, 2))
+        return {"persons": int(len(per)), "detections": int(sum(len(v) for v in self.rows.values())),
+                "median_box_height_px": float(np.median(per[:, 2])) if len(per) else None,
+                "foot_median": float(np.median(per[:, 0])), "foot_across_persons": robust_std(per[:, 0]),
+                "column_median": float(np.median(per[:, 1])), "column_across_persons": robust_std(per[:, 1]),
+                "foot_within_person": robust_std(w[:, 0]), "column_within_person": robust_std(w[:, 1])}
+
+
+def detection_boxes(keypoints: np.ndarray, confidences: np.ndarray) -> np.ndarray:
+    return boxes_from_keypoints(keypoints, confidences >= KP_CONF)
+
+
+def synthetic_offsets(model, scenes) -> tuple[Offsets, float]:
+    """Offsets of ``model``'s detections against the projected true positions on ``scenes``,
+    and the median ratio of box height to keypoint extent of the persons measured."""
+    from pedenv.geometry import invert_transform, project
+
+    acc, ratios = Offsets(), []
+    for scene in scenes:
+        for frame in scene.frames:
+            gt = frame.ground_truth
+            if gt is None or not len(gt.ids):
+                continue
+            det = model(frame)
+            uv, _ = project(gt.positions, frame.camera.intrinsics, invert_transform(frame.cam_to_world))
+            acc.with_truth(gt.boxes).add(lambda g, s=scene.name, ids=gt.ids: (s, int(ids[g])), det.keypoints,
+                                         det.confidences, det.scores, det.boxes, uv, np.ones(len(gt.ids), bool))
+            ratios.append((gt.boxes[:, 3] - gt.boxes[:, 1]) / np.maximum(np.ptp(gt.keypoints[..., 1], axis=1), 1.0))
+    return acc, float(np.median(np.concatenate(ratios)))
+
+
+def fit_person_offset(real: dict, synthetic: dict, box_over_extent: float) -> dict[str, float]:
+    """The detector model's per-person offsets (in keypoint extents) that bring the synthetic
+    spread across persons up to the real one: ``sqrt(real**2 - synthetic**2)``, 0 where the
+    synthetic spread is already as large."""
+    def extra(key):
+        return float(np.sqrt(max(real[key] ** 2 - synthetic[key] ** 2, 0.0)) * box_over_extent)
+
+    return {"person_offset_u": extra("column_across_persons"), "person_offset_v": extra("foot_across_persons")}
