@@ -90,3 +90,27 @@ def test_correct_leaves_tracks_with_a_non_finite_measurement_alone():
     assert np.isfinite(x2).all() and np.isfinite(P2).all()
     np.testing.assert_array_equal(x2[1:], x[1:])
     assert 5.0 < x2[0, 0] < 5.5
+
+
+def test_measurement_exact_along_the_direction_the_state_is_exact_stays_finite():
+    """The state and the measurement each certain along the same direction (a box range taken
+    as exact, twice): the innovation covariance is singular there. Seen on a real recording
+    as a jump of 2.4 m and 37 m/s in one frame; the measurement's variance is floored instead."""
+    along = np.array([1.0, -1.73]) / np.hypot(1.0, 1.73)
+    across = np.array([-along[1], along[0]])
+    x = np.array([[3.888, 1.686, 1.235, 2.344]])
+    P = np.zeros((1, 4, 4))
+    P[0][np.ix_([0, 2], [0, 2])] = 0.2 * np.outer(across, across)  # certain along ``along``
+    P[0][np.ix_([1, 3], [1, 3])] = 2.0 * np.eye(2)
+    r = np.array([0.25 * np.outer(across, across)])
+    z = np.array([[3.179, 1.144]])
+    new, P_new = kalman.update(x, P, z, r)
+    assert np.isfinite(new).all() and np.isfinite(P_new).all()
+    position = new[0, [0, 2]]
+    assert np.linalg.norm(position - z[0]) < np.linalg.norm(x[0, [0, 2]] - z[0])  # between prior and measurement
+    assert np.abs(new[0, [1, 3]]).max() < 5.0  # the velocity is left about where it was
+    assert np.linalg.eigvalsh(P_new[0]).min() > -1e-9
+    r_floor = kalman.floor_variance(r)
+    assert np.linalg.eigvalsh(r_floor[0]).min() == pytest.approx(kalman.MIN_MEASUREMENT_VARIANCE)
+    ordinary = np.array([np.diag([0.04, 0.01])])
+    assert kalman.floor_variance(ordinary) is ordinary  # a proper covariance is left as it is

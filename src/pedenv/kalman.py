@@ -16,6 +16,10 @@ from pedenv.geometry import inverse_2x2
 
 #: Measurement matrix: the filter observes x and y.
 H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
+#: Smallest variance (m^2, a 1 mm std) a measurement may claim in any direction. A
+#: measurement exact along one direction, met by a state that is exact along the same
+#: direction, would make the innovation covariance singular and the gain explode.
+MIN_MEASUREMENT_VARIANCE = 1e-6
 
 
 def transition(dt: float, acceleration_std: float) -> tuple[np.ndarray, np.ndarray]:
@@ -53,7 +57,7 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarray) -> tuple[
 
     Joseph form, so P stays symmetric positive semi-definite.
     """
-    R = r[:, None, None] * np.eye(2) if r.ndim == 1 else r
+    R = floor_variance(r[:, None, None] * np.eye(2) if r.ndim == 1 else r)
     S = H @ P @ H.T + R
     PHt = P @ H.T
     K = PHt @ inverse_2x2(S)
@@ -62,6 +66,19 @@ def update(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarray) -> tuple[
     I_KH = np.eye(4) - K @ H
     P = I_KH @ P @ np.transpose(I_KH, (0, 2, 1)) + K @ R @ np.transpose(K, (0, 2, 1))
     return x, P
+
+
+def floor_variance(R: np.ndarray) -> np.ndarray:
+    """Covariances (N, 2, 2) whose smaller eigenvalue lies below :data:`MIN_MEASUREMENT_VARIANCE`
+    raised to it (by adding the shortfall times the identity); the others as they are."""
+    a, b, d = R[:, 0, 0], 0.5 * (R[:, 0, 1] + R[:, 1, 0]), R[:, 1, 1]
+    smallest = 0.5 * (a + d) - np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
+    short = smallest < MIN_MEASUREMENT_VARIANCE
+    if not short.any():
+        return R
+    R = R.copy()
+    R[short] += (MIN_MEASUREMENT_VARIANCE - smallest[short])[:, None, None] * np.eye(2)
+    return R
 
 
 def innovation_distance(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarray) -> np.ndarray:

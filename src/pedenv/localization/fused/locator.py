@@ -36,6 +36,10 @@ from pedenv.localization.fused.triangulation import Triangulated, triangulate, t
 
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
 BOX_RELATIVE_STD = 0.5
+#: The part of it that changes from frame to frame: a box's height moves with the pose and
+#: with the detector's box edges (each off by about 3 % of the height), and so does its range.
+#: Without it the filter would take each box range as exact along the ray.
+BOX_FRAME_RELATIVE_STD = 0.05
 #: Pixel noise (pixels) and lateral spread (metres) across the box centre's ray.
 BOX_PIXEL_STD, BOX_LATERAL_STD_M = 5.0, 0.5
 #: Box ranges are clipped to this interval (metres).
@@ -50,14 +54,16 @@ MIN_ALONG = 1e-3
 def box_estimate(boxes: np.ndarray, centre_rays: np.ndarray, origin: np.ndarray, focal_px: float,
                  height_m: float) -> CueEstimate:
     """Last resort: range ``f H / box height`` along the box centre's ray, 50 % spread
-    (the person's own height and pose: per-person); across the ray frame-to-frame.
+    (the person's own height and pose: per-person, 5 % of it frame-to-frame); across the ray
+    frame-to-frame.
 
     boxes: (N, 4) pixels. centre_rays: (N, 3) unit, world. origin: (3,) world, metres.
     """
     r = np.clip(focal_px * height_m / np.maximum(boxes[:, 3] - boxes[:, 1], 1.0), *BOX_RANGE_M)
     bearing = horizontal_bearing(centre_rays)
     across = across_variance(r, focal_px, BOX_PIXEL_STD, BOX_LATERAL_STD_M)
-    return CueEstimate("box", origin[:2] + r[:, None] * bearing, range_bearing_covariance(bearing, 0.0 * r, across),
+    frame = range_bearing_covariance(bearing, (BOX_FRAME_RELATIVE_STD * r) ** 2, across)
+    return CueEstimate("box", origin[:2] + r[:, None] * bearing, frame,
                        range_bearing_covariance(bearing, (BOX_RELATIVE_STD * r) ** 2, 0.0),
                        np.ones(len(r), bool), np.zeros(len(r), np.int64))
 
