@@ -101,8 +101,8 @@ class DetectionConfig:
                   "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
                   "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
                   "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "band_margin_px": (0, 200),
-                  "fit_min_people": (2, 100), "fit_min_score": (0.0, 1.0), "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0),
-                  "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
+                  "fit_min_people": (2, 100), "fit_min_score": (0.0, 1.0), "fit_margin": (0.0, 2.0),
+                  "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
                   "max_pitch_up_deg": (1.0, 89.0), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
         for name, (low, high) in ranges.items():
             _check_range(name, getattr(self, name), low, high)
