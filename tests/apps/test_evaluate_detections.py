@@ -18,11 +18,11 @@ from shared_paths import REAL_SAMPLES
 pytestmark = [pytest.mark.onnx_model, pytest.mark.ultralytics, pytest.mark.slow]
 
 #: mode -> (overall recall, recall >= 80 px, recall 40-80 px, precision): measured 2026-11-22
-#: (fast 0.175, 0.225, 0.00, 0.981; far, the pyramid: 0.772, 0.891, 0.429, 0.926, strict
-#: precision 0.878) minus 3 points.
+#: (fast 0.175, 0.225, 0.00, 0.981) and 2026-11-23 (far, the pyramid with its rows fitted to
+#: people scoring >= 0.35: 0.808, 0.911, 0.527, 0.939, strict precision 0.896) minus 3 points.
 MINIMA = {
     "fast": (0.14, 0.19, 0.0, 0.95),
-    "far": (0.74, 0.86, 0.39, 0.89),
+    "far": (0.77, 0.88, 0.49, 0.90),
 }
 
 

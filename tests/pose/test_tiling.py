@@ -38,6 +38,7 @@ def test_fit_input_follows_the_aspect(width, height, long_side, expected):
     ("plausible_keypoint_conf", 1.5, "plausible_keypoint_conf"),
     ("near_m", 200.0, "near_m .* must be below far_m"),
     ("max_tiles", 0, "max_tiles"),
+    ("fit_min_score", 1.2, r"fit_min_score must be a number in \[0.0, 1.0\]"),
     ("top_m", True, "top_m"),
 ])
 def test_config_fields_are_checked(field, value, message):

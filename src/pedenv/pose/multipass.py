@@ -115,7 +115,7 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
     parts = _run_level(infer, image, [first], fixed_input, score_threshold, iou_threshold, max_detections, config)
     passes, notes = [first], []
     for level in pyramid(width, height, config)[1:]:
-        whole = [d.take(~c & (d.scores >= config.sure_score)) for d, c in parts if len(d)]
+        whole = [d.take(~c & (d.scores >= config.fit_min_score)) for d, c in parts if len(d)]
         boxes = np.concatenate([d.boxes for d in whole]) if whole else np.zeros((0, 4))
         line = HeightLine.fit(boxes, config.fit_min_people, height)
         more, note = plan_level(level, width, height, config, geometry, line)

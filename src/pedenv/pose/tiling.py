@@ -56,8 +56,10 @@ class DetectionConfig:
     short_person_m: the shortest person assumed when heights in px are turned into
         distances, metres (0.5..2.5, below top_m).
     band_margin_px: rows added above and below each band, px (0..200), for pitch noise.
-    fit_min_people: people (whole, scoring at least sure_score) needed to fit the rows of
+    fit_min_people: people (whole, scoring at least fit_min_score) needed to fit the rows of
         finer levels without calibration (2..100).
+    fit_min_score: a person found by a coarser level counts for that fit when scoring at least
+        this (0..1). Lowering it fits more frames (a dark or sparse one) from less sure people.
     fit_margin: rows added above and below a fitted band, a fraction of the level's tallest
         person (0..2), for people taller or shorter than the fit and for its error.
     sure_score: level detections scoring at least this are kept without the skeleton check (0..1).
@@ -83,6 +85,7 @@ class DetectionConfig:
     short_person_m: float = 1.5
     band_margin_px: int = 16
     fit_min_people: int = 3
+    fit_min_score: float = 0.35
     fit_margin: float = 0.5
     sure_score: float = 0.5
     plausible_keypoint_conf: float = 0.5
@@ -98,8 +101,8 @@ class DetectionConfig:
                   "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
                   "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
                   "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "band_margin_px": (0, 200),
-                  "fit_min_people": (2, 100), "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0),
-                  "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
+                  "fit_min_people": (2, 100), "fit_min_score": (0.0, 1.0), "fit_margin": (0.0, 2.0),
+                  "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
                   "max_pitch_up_deg": (1.0, 89.0), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
         for name, (low, high) in ranges.items():
             _check_range(name, getattr(self, name), low, high)
