@@ -21,12 +21,12 @@ fitted to the frame's aspect), measured the same way: as blind as the single pas
 
 ``yolo11n-pose-far``: the ``far`` mode (:mod:`pedenv.pose.levels`: a pyramid of the whole
 frame and x1, x2 levels over the rows where people of each level's heights stand):
-recall 3 / 57 / 86 / 99 % in the bins <50, 50-100, 100-200, >=200 px, 0.33 false positives
+recall 5 / 70 / 87 / 99 % in the bins <50, 50-100, 100-200, >=200 px, 0.31 false positives
 per frame. Its recall rises steeply at the finest level's smallest person and then flattens,
 which a per-person logistic fit misses by up to 19 points in a bin; the curve here is fitted
 to the recall table as the synthetic scenes see it (``fit_detector_model.py
---fit-recall-table``: 50 % at 55 px keypoint extent, i.e. 68 px box height; largest bin gap
-9 points: 11 / 48 / 95 / 99 %). Each person's skeleton is also offset, the same in every
+--fit-recall-table``: 50 % at 47 px keypoint extent, i.e. 58 px box height; largest bin gap
+9 points: 14 / 63 / 96 / 99 %). Each person's skeleton is also offset, the same in every
 frame, by what the real network showed against the KITTI and nuScenes 3D truth beyond the
 synthetic skeletons' own spread (``--person-offsets``: across persons 3.5 % of the box
 height sideways and 2.3 % vertically, the synthetic skeletons alone 1.1 / 1.2 %). The other
@@ -64,8 +64,8 @@ PROFILES = MappingProxyType({
         "noise_px_small": 0.22, "noise_px_large": 0.84}),
     "yolo11n-pose-far": MappingProxyType({
         **_DEFAULT,
-        "half_detection_height_px": 55.0, "detection_slope_px": 13.0, "false_positives_per_frame": 0.333,
-        "noise_px_small": 0.28, "noise_px_large": 0.745, "person_offset_u": 0.0335, "person_offset_v": 0.0196}),
+        "half_detection_height_px": 47.0, "detection_slope_px": 11.0, "false_positives_per_frame": 0.3125,
+        "noise_px_small": 0.356, "noise_px_large": 0.665, "person_offset_u": 0.0336, "person_offset_v": 0.0196}),
     "yolo11n-pose-native": MappingProxyType({
         **_DEFAULT,
         "half_detection_height_px": 88.7, "detection_slope_px": 12.4, "false_positives_per_frame": 0.125,
