@@ -10,8 +10,14 @@ import pytest
 
 from pedenv.pose import create_pose_backend
 from pedenv.synthetic.detector import PROFILES, DetectorModel
-from pedenv.synthetic.detector_fit import (BINS, fit_detection_curve, logistic, recall_by_bin, synthetic_offsets,
-                                           synthetic_recall)
+from pedenv.synthetic.detector_fit import (
+    BINS,
+    fit_detection_curve,
+    logistic,
+    recall_by_bin,
+    synthetic_offsets,
+    synthetic_recall,
+)
 
 RESULTS = Path(__file__).resolve().parents[2] / "benchmarks" / "results"
 FITTED = {name: RESULTS / f"detector_{name}.json" for name in ("yolo11n-pose-single", "yolo11n-pose-fast",
