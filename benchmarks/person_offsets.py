@@ -43,8 +43,7 @@ def real_offsets(samples: Path, dets: dict) -> tuple[Offsets, Offsets]:
     from pedenv.io.real import kitti, mot17, nuscenes_cameras
 
     def add(acc, det, boxes, uv, counted, key_of):
-        acc.with_truth(boxes).add(key_of, det["keypoints"], det["confidences"], det["scores"], det["boxes"], uv,
-                                  counted)
+        acc.add(key_of, det["keypoints"], det["confidences"], det["scores"], det["boxes"], boxes, uv, counted)
 
     truth3d, boxes2d = Offsets(), Offsets()
     training = samples / "kitti" / "tracking_mini" / "training"

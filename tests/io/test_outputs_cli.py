@@ -10,15 +10,24 @@ import rerun.dataframe as rrd
 from mcap.reader import make_reader
 
 
-@pytest.mark.slow
-def test_evaluate_writes_the_tables_the_recording_and_the_mcap(tmp_path):
-    def pedenv(*args):
-        return subprocess.run([sys.executable, "-m", "pedenv", *map(str, args)], capture_output=True, text=True,
-                              timeout=600)
+def pedenv(*args):
+    """``pedenv ARGS`` in a subprocess, as a user runs it."""
+    return subprocess.run([sys.executable, "-m", "pedenv", *map(str, args)], capture_output=True, text=True,
+                          timeout=600)
 
-    assert pedenv("simulate", "--output", tmp_path / "sim", "--scenes", 1, "--seed", 4).returncode == 0
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    """One simulated scene (seed 4), written once for both tests."""
+    folder = tmp_path_factory.mktemp("outputs-cli") / "sim"
+    assert pedenv("simulate", "--output", folder, "--scenes", 1, "--seed", 4).returncode == 0
+    return folder
+
+
+@pytest.mark.slow
+def test_evaluate_writes_the_tables_the_recording_and_the_mcap(tmp_path, sim):
     out = tmp_path / "out"
-    done = pedenv("evaluate", "--dataset", "synthetic", "--data-root", tmp_path / "sim", "--output", out,
+    done = pedenv("evaluate", "--dataset", "synthetic", "--data-root", sim, "--output", out,
                   "--pose-backend", "ground-truth", "--parquet", "--rerun", out / "eval.rrd",
                   "--mcap", out / "eval.mcap")
     assert done.returncode == 0, done.stderr
@@ -36,14 +45,9 @@ def test_evaluate_writes_the_tables_the_recording_and_the_mcap(tmp_path):
 
 
 @pytest.mark.slow
-def test_evaluate_both_methods_writes_each_methods_tables_and_recordings(tmp_path):
-    def pedenv(*args):
-        return subprocess.run([sys.executable, "-m", "pedenv", *map(str, args)], capture_output=True, text=True,
-                              timeout=600)
-
-    assert pedenv("simulate", "--output", tmp_path / "sim", "--scenes", 1, "--seed", 4).returncode == 0
+def test_evaluate_both_methods_writes_each_methods_tables_and_recordings(tmp_path, sim):
     out = tmp_path / "out"
-    done = pedenv("evaluate", "--dataset", "synthetic", "--data-root", tmp_path / "sim", "--output", out,
+    done = pedenv("evaluate", "--dataset", "synthetic", "--data-root", sim, "--output", out,
                   "--pose-backend", "ground-truth", "--method", "both", "--parquet", "--rerun", out / "eval.rrd",
                   "--mcap", out / "eval.mcap")
     assert done.returncode == 0, done.stderr

@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.optimize import minimize
-
-from pedenv.records import boxes_from_keypoints
+from scipy.stats import median_abs_deviation
 
 #: Person height bins (pixels, ground-truth box height): [low, high).
 BINS: tuple[tuple[float, float], ...] = ((0.0, 50.0), (50.0, 100.0), (100.0, 200.0), (200.0, float("inf")))
@@ -131,8 +130,8 @@ SCORE, KP_CONF = 0.25, 0.3
 
 
 def robust_std(x: np.ndarray) -> float:
-    x = np.asarray(x, float)
-    return float(1.4826 * np.median(np.abs(x - np.median(x)))) if len(x) else float("nan")
+    """1.4826 x the median absolute deviation: the std of a normal sample, robust to outliers."""
+    return float(median_abs_deviation(x, scale="normal")) if len(x) else float("nan")
 
 
 class Offsets:
@@ -141,28 +140,24 @@ class Offsets:
     def __init__(self) -> None:
         self.rows: dict[tuple, list[tuple[float, float, float]]] = {}
 
-    def add(self, key_of, keypoints, confidences, scores, boxes, ground_uv, counted) -> None:
-        """One image: detections (N, 17, 2) px, (N, 17), (N,); truth boxes (M, 4) px, true ground
-        points (M, 2) px, counted (M,) bool; ``key_of(g)`` names truth person g."""
+    def add(self, key_of, keypoints, confidences, scores, boxes, truth_boxes, ground_uv, counted) -> None:
+        """One image: detections (N, 17, 2) px, (N, 17), (N,), boxes (N, 4) px; truth boxes
+        (M, 4) px, true ground points (M, 2) px, counted (M,) bool; ``key_of(g)`` names truth
+        person g."""
         keep = np.asarray(scores) > SCORE
         kp, cf, sc = np.asarray(keypoints)[keep], np.asarray(confidences)[keep], np.asarray(scores)[keep]
-        dboxes = np.asarray(detection_boxes(kp, cf)) if boxes is None else np.asarray(boxes)[keep]
-        for d, g in greedy_match(iou_matrix(dboxes, self._truth), sc, 0.5):
+        truth = np.asarray(truth_boxes, float).reshape(-1, 4)
+        for d, g in greedy_match(iou_matrix(np.asarray(boxes)[keep], truth), sc, 0.5):
             if not counted[g] or (cf[d, ANKLES + HIPS] < KP_CONF).any():
                 continue
-            h = self._truth[g, 3] - self._truth[g, 1]
+            h = truth[g, 3] - truth[g, 1]
             foot = (kp[d, ANKLES, 1].mean() - ground_uv[g, 1]) / h
             column = (kp[d, ANKLES + HIPS, 0].mean() - ground_uv[g, 0]) / h
             self.rows.setdefault(key_of(g), []).append((float(foot), float(column), float(h)))
 
-    def with_truth(self, truth_boxes: np.ndarray) -> Offsets:
-        self._truth = np.asarray(truth_boxes, float).reshape(-1, 4)
-        return self
-
-    def summary(self, min_height_px: float = 0.0) -> dict:
+    def summary(self) -> dict:
         """Median offsets and their spread across persons (robust std), in box heights."""
         per = np.array([np.median(np.array(v), axis=0) for v in self.rows.values()]).reshape(-1, 3)
-        per = per[per[:, 2] >= min_height_px]
         within = [np.array(v)[:, :2] - np.median(np.array(v)[:, :2], axis=0) for v in self.rows.values() if len(v) > 1]
         w = np.concatenate(within) if within else np.zeros((0, 2))
         return {"persons": int(len(per)), "detections": int(sum(len(v) for v in self.rows.values())),
@@ -170,10 +165,6 @@ class Offsets:
                 "foot_median": float(np.median(per[:, 0])), "foot_across_persons": robust_std(per[:, 0]),
                 "column_median": float(np.median(per[:, 1])), "column_across_persons": robust_std(per[:, 1]),
                 "foot_within_person": robust_std(w[:, 0]), "column_within_person": robust_std(w[:, 1])}
-
-
-def detection_boxes(keypoints: np.ndarray, confidences: np.ndarray) -> np.ndarray:
-    return boxes_from_keypoints(keypoints, confidences >= KP_CONF)
 
 
 def synthetic_offsets(model, scenes) -> tuple[Offsets, float]:
@@ -189,8 +180,8 @@ def synthetic_offsets(model, scenes) -> tuple[Offsets, float]:
                 continue
             det = model(frame)
             uv, _ = project(gt.positions, frame.camera.intrinsics, invert_transform(frame.cam_to_world))
-            acc.with_truth(gt.boxes).add(lambda g, s=scene.name, ids=gt.ids: (s, int(ids[g])), det.keypoints,
-                                         det.confidences, det.scores, det.boxes, uv, np.ones(len(gt.ids), bool))
+            acc.add(lambda g, s=scene.name, ids=gt.ids: (s, int(ids[g])), det.keypoints, det.confidences,
+                    det.scores, det.boxes, gt.boxes, uv, np.ones(len(gt.ids), bool))
             ratios.append((gt.boxes[:, 3] - gt.boxes[:, 1]) / np.maximum(np.ptp(gt.keypoints[..., 1], axis=1), 1.0))
     return acc, float(np.median(np.concatenate(ratios)))
 
