@@ -44,7 +44,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_detections import DEFAULT_SAMPLES  # noqa: E402
 
-from pedenv.io.real import kitti, mot17, nuscenes_cameras  # noqa: E402
+from pedenv.datasets import kitti_files as kitti
+from pedenv.datasets import mot17, nuscenes_cameras  # noqa: E402
 from pedenv.synthetic.detector_fit import BINS, bin_index, fit_detection_curve, fit_noise_law, greedy_match, iou_matrix  # noqa: E402
 
 SCORE = 0.25

@@ -31,8 +31,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_detections import DEFAULT_SAMPLES  # noqa: E402
 
 from pedenv.config import Config  # noqa: E402
+from pedenv.datasets import kitti_files as kitti
+from pedenv.datasets import nuscenes_cameras  # noqa: E402
 from pedenv.evaluation.metrics import calibration  # noqa: E402
-from pedenv.io.real import kitti, nuscenes_cameras  # noqa: E402
 from pedenv.localization import configure, create_locator  # noqa: E402
 from pedenv.localization.base import FrameGeometry  # noqa: E402
 from pedenv.records import Camera, Detections, EgoPose, Frame, default_cam_to_vehicle  # noqa: E402
@@ -131,7 +132,7 @@ def real_errors(samples: Path, detections: Path, config: Config) -> dict:
 
 def synthetic(profile: str, scenes: list[str] | None, config: Config, duration_s: float) -> dict:
     from pedenv.apps.compare import compare_methods
-    from pedenv.io.datasets.memory import MemoryDataset
+    from pedenv.datasets.memory import MemoryDataset
     from pedenv.synthetic import generate_scenes
 
     data = MemoryDataset(generate_scenes(0, scenes, terrain=True, duration_s=duration_s), name="terrain-seed0")
@@ -151,8 +152,8 @@ def nees_breakdown(profile: str, config: Config, duration_s: float) -> dict:
     and the NEES of the non-ghost matches against their own person."""
     from dataclasses import replace
 
+    from pedenv.datasets.memory import MemoryDataset
     from pedenv.evaluation.matching import match_to_ground_truth
-    from pedenv.io.datasets.memory import MemoryDataset
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.pose import create_pose_backend
     from pedenv.synthetic import generate_scenes

@@ -46,7 +46,7 @@ def cases(full: bool = False) -> dict:
     from pedenv.apps.demo import builtin_scenes
     from pedenv.apps.evaluate import run_evaluation
     from pedenv.config import Config
-    from pedenv.io.datasets.memory import MemoryDataset
+    from pedenv.datasets.memory import MemoryDataset
     from pedenv.localization import configure
     from pedenv.synthetic import generate_scenes
 

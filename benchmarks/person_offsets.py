@@ -40,7 +40,8 @@ def _project(P: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 def real_offsets(samples: Path, dets: dict) -> tuple[Offsets, Offsets]:
     """(against the 3D truth: KITTI and nuScenes, against MOT17's boxes) over the cached detections."""
-    from pedenv.io.real import kitti, mot17, nuscenes_cameras
+    from pedenv.datasets import kitti_files as kitti
+    from pedenv.datasets import mot17, nuscenes_cameras
 
     def add(acc, det, boxes, uv, counted, key_of):
         acc.add(key_of, det["keypoints"], det["confidences"], det["scores"], det["boxes"], boxes, uv, counted)

@@ -45,7 +45,7 @@ def bench_builtin(workers: int) -> dict:
     from pedenv.apps.distributed import evaluate_on
     from pedenv.apps.evaluate import run_evaluation
     from pedenv.apps.executors import RayExecutor
-    from pedenv.io.datasets.memory import MemoryDataset
+    from pedenv.datasets.memory import MemoryDataset
 
     data = MemoryDataset(builtin_scenes(0), name="synthetic", default_pose_backend="detector-model")
     frames = sum(len(list(data.frames(n))) for n in data.scene_names())

@@ -36,8 +36,9 @@ def sample_images(samples: Path) -> list[tuple[str, Path, object]]:
     image: ``mot17/<SEQ>/<frame>``, ``kitti/<seq>/<frame>``, ``kitti-object/<id>``,
     ``nuscenes/<CAM>``. The geometry is the one ``pedenv evaluate-detections`` uses (KITTI:
     level camera 1.65 m up; nuScenes: the camera's pose; MOT17: none, the whole image is tiled)."""
+    from pedenv.datasets import kitti_files as kitti
+    from pedenv.datasets import mot17, nuscenes_cameras
     from pedenv.evaluation.detections import KITTI_CAMERA_HEIGHT_M
-    from pedenv.io.real import kitti, mot17, nuscenes_cameras
     from pedenv.pose.tiling import CameraGeometry
 
     out = []

@@ -17,7 +17,7 @@ occluder); on the samples' 3-8 frames the main pass rarely misses a tracked pers
 - MOT17 (7 sequences, 4-8 consecutive frames): no calibration, so the whole image is tiled
   for detection, and the tracker works in the image alone (the preset's ground gate and
   memory, which need a real camera, are off); the frames carry a guessed level camera
-  (:func:`pedenv.io.footage_writer.write_mot17_recording`) the position method needs.
+  (:func:`pedenv.recordings.footage_writer.write_mot17_recording`) the position method needs.
   False positives count people of MOTChallenge's ignore classes (static persons etc.).
 """
 
@@ -40,7 +40,7 @@ METRICS = ["num_objects", "num_matches", "num_false_positives", "num_switches", 
 
 def kitti_sequences(samples: Path):
     """(name, frames, gt per frame as (ids, boxes), detect) of the KITTI tracking samples."""
-    from pedenv.io.datasets.kitti import KittiTrackingDataset
+    from pedenv.datasets.kitti import KittiTrackingDataset
 
     data = KittiTrackingDataset(samples / "kitti" / "tracking_mini")
     for name in data.scene_names():
@@ -50,9 +50,9 @@ def kitti_sequences(samples: Path):
 
 def mot17_sequences(samples: Path, workdir: Path):
     """The same for the MOT17 samples (guessed camera; detection without calibration)."""
-    from pedenv.io.footage import load_recording
-    from pedenv.io.footage_writer import write_mot17_recording
-    from pedenv.io.real.mot17 import read_sequence, sequence_folders
+    from pedenv.datasets.mot17 import read_sequence, sequence_folders
+    from pedenv.recordings.footage import load_recording
+    from pedenv.recordings.footage_writer import write_mot17_recording
 
     for folder in sequence_folders(samples / "mot17"):
         out = write_mot17_recording(folder, workdir / folder.name)

@@ -3,7 +3,7 @@ anyone appear twice?
 
     PYTHONPATH=src python benchmarks/run_real.py [--samples ../shared/samples/real] [--only kitti|mot17]
 
-Each sequence is written as a recording (:mod:`pedenv.io.footage_writer`: KITTI with its
+Each sequence is written as a recording (:mod:`pedenv.recordings.footage_writer`: KITTI with its
 calibration and ORB-SLAM3 poses; MOT17 with a GUESSED camera 1.5 m up, focal = image width,
 level except MOT17-04's, guessed 30 deg down (:data:`MOT17_PITCH_GUESS_DEG`), and a standing
 ego) into a temporary folder and run by :func:`pedenv.apps.run.run_recording` (what ``pedenv
@@ -36,8 +36,9 @@ MOT17_PITCH_GUESS_DEG = {"MOT17-04-FRCNN": 30.0}
 
 def sequences(samples: Path, only: str | None):
     """(name, writer(out) -> recording folder, ground truth per frame as (ids, boxes))."""
-    from pedenv.io.footage_writer import write_kitti_recording, write_mot17_recording
-    from pedenv.io.real import kitti, mot17
+    from pedenv.datasets import kitti_files as kitti
+    from pedenv.datasets import mot17
+    from pedenv.recordings.footage_writer import write_kitti_recording, write_mot17_recording
 
     training = samples / "kitti" / "tracking_mini" / "training"
     if only in (None, "kitti"):
@@ -76,7 +77,7 @@ def score_run(environment: Path, gt) -> tuple[object, dict]:
     import motmetrics as mm
 
     from pedenv.boxes import iou_matrix
-    from pedenv.io.jsonl import read_environment
+    from pedenv.outputs.jsonl import read_environment
 
     lines = read_environment(environment)
     if len(lines) != len(gt):

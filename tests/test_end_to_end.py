@@ -9,7 +9,7 @@ import pytest
 from pedenv.apps.demo import VIDEO_SCENE, builtin_scenes, run_demo
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.config import Config
-from pedenv.io.datasets.memory import MemoryDataset
+from pedenv.datasets.memory import MemoryDataset
 
 from golden import assert_golden
 

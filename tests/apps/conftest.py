@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pedenv.io.datasets.memory import MemoryDataset
+from pedenv.datasets.memory import MemoryDataset
 from pedenv.synthetic import SCENARIOS, generate_scenes
 
 #: Ray's object store for the tests: small, the test scenes are a few MB.

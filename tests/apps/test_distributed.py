@@ -6,10 +6,10 @@ import pytest
 
 from pedenv.apps.distributed import SCENES_FOLDER, evaluate_distributed, evaluate_on
 from pedenv.apps.evaluate import evaluate_dataset
+from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.apps.executors import RayExecutor, SerialExecutor
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.io.outputs import write_outputs
 from pedenv.synthetic.dataset import SyntheticDataset
 from pedenv.synthetic.storage import write_scenes
 

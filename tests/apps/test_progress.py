@@ -6,7 +6,7 @@ from rich.console import Console
 
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.apps.progress import progress_callback
-from pedenv.io.datasets.memory import MemoryDataset
+from pedenv.datasets.memory import MemoryDataset
 from pedenv.synthetic import generate_scenes
 
 

@@ -157,7 +157,7 @@ def test_environment_line_refuses_nan(tmp_path):
     """Every JSON writer uses allow_nan=False: a NaN would be a bug, never a NaN token in the file."""
     import json
 
-    from pedenv.io.jsonl import EnvironmentWriter
+    from pedenv.outputs.jsonl import EnvironmentWriter
 
     state = PedestrianEnvironmentModel().update(frame_with_people(0, 0.0, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 0.0)]))
     bad = replace(state, pedestrians=replace(state.pedestrians, distances=np.array([np.nan])))

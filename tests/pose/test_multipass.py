@@ -3,7 +3,7 @@
 import pytest
 
 from pedenv.evaluation.detections import match_detections, mot17_samples
-from pedenv.pose.postprocess import read_image_rgb
+from pedenv.images import read_image_rgb
 from pedenv.pose.tiling import DetectionConfig
 
 from shared_paths import REAL_SAMPLES

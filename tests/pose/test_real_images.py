@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from pedenv.pose.postprocess import read_image_rgb
+from pedenv.images import read_image_rgb
 from pedenv.skeleton import ANKLE_KEYPOINTS, HEAD_KEYPOINTS
 
 pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model]
@@ -69,7 +69,7 @@ def test_rect_model_is_found_by_input_size(use_pose_cache, photo):
 
 
 def test_annotate_images_writes_json_and_pictures(onnx_square, photo, tmp_path):
-    from pedenv.visualize.overlay import annotate_images
+    from pedenv.apps.detect import annotate_images
 
     photos = [photo(p) for p in PHOTOS]
     path = annotate_images(photos, tmp_path / "out", onnx_square)

@@ -141,7 +141,7 @@ def test_backends_without_a_network_are_left_alone():
 
 @pytest.mark.onnx_model
 def test_a_person_the_main_pass_missed_is_found_again_in_a_crop():
-    from pedenv.io.datasets.kitti import KittiTrackingDataset
+    from pedenv.datasets.kitti import KittiTrackingDataset
     from pedenv.pose import create_pose_backend
 
     from shared_paths import REAL_SAMPLES

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from pedenv.datasets import open_dataset
 from pedenv.errors import InputError
-from pedenv.io.datasets import open_dataset
 from pedenv.records import Scene
 from pedenv.synthetic import generate_scenes
 from pedenv.synthetic.dataset import SyntheticDataset

@@ -16,11 +16,11 @@ from dataclasses import replace
 import numpy as np
 
 from pedenv.config import Config
+from pedenv.datasets.kitti_files import read_tracking_sequence
+from pedenv.datasets.mot17 import read_sequence, sequence_folders
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
-from pedenv.io.real.kitti import read_tracking_sequence
-from pedenv.io.real.mot17 import read_sequence, sequence_folders
+from pedenv.images import read_image_rgb
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
 from pedenv.tracking.tracker import Tracker
 

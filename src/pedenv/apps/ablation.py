@@ -8,9 +8,9 @@ from pathlib import Path
 
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.config import Config
+from pedenv.datasets import Dataset
 from pedenv.evaluation.metrics import Metrics, strict_json
 from pedenv.evaluation.report import comparison_table
-from pedenv.io.datasets import Dataset
 from pedenv.localization import configure
 
 #: Variant name -> paper-method settings changed from the configuration given.

@@ -2,7 +2,7 @@
 
     summary = run_manifest("drives.csv", "out", executor="ray", workers=2)
 
-Each row of the manifest (:mod:`pedenv.io.manifest`) is one
+Each row of the manifest (:mod:`pedenv.recordings.manifest`) is one
 :func:`~pedenv.apps.run.run_recording` into ``<output>/<name>/``, as ``pedenv run`` writes
 it. The pose network is loaded once per worker process and kept for its later
 recordings. ``<output>/summary.json`` lists every recording in manifest order with its
@@ -27,9 +27,9 @@ from pedenv.apps.executors import TaskContext, create_executor
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.run import run_recording
 from pedenv.config import Config
-from pedenv.io.manifest import ManifestRow, read_manifest
-from pedenv.io.output_dir import prepare_output_dir
 from pedenv.localization import configure
+from pedenv.outputs.output_dir import prepare_output_dir
+from pedenv.recordings.manifest import ManifestRow, read_manifest
 
 SUMMARY = "summary.json"
 

@@ -21,15 +21,15 @@ from pathlib import Path
 from rich.table import Table
 
 from pedenv.apps.evaluate import run_evaluation
+from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.config import Config
+from pedenv.datasets import Dataset
 from pedenv.errors import InputError
 from pedenv.evaluation.metrics import ErrorSummary, strict_json
 from pedenv.evaluation.report import fmt
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.io.datasets import Dataset
-from pedenv.io.outputs import write_outputs
-from pedenv.io.sinks import ExtraOutputs
 from pedenv.localization import METHODS, configure
+from pedenv.outputs.sinks import ExtraOutputs
 from pedenv.pose import PoseBackend, create_pose_backend
 from pedenv.visualize.plots import plot_error_by_distance
 

@@ -7,13 +7,13 @@ from dataclasses import replace
 from pathlib import Path
 
 from pedenv.apps.evaluate import run_evaluation
+from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.config import Config
+from pedenv.datasets.memory import MemoryDataset
 from pedenv.errors import InputError
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.io.datasets.memory import MemoryDataset
-from pedenv.io.outputs import write_outputs
-from pedenv.io.sinks import ExtraOutputs
 from pedenv.localization import configure
+from pedenv.outputs.sinks import ExtraOutputs
 from pedenv.records import Scene
 from pedenv.visualize.plots import plot_error_by_distance
 

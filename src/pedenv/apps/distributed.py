@@ -29,10 +29,10 @@ from pedenv.apps.executors import RayExecutor, SerialExecutor, TaskContext
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.scene_result import SceneResult, evaluate_scene, merge_scene_results
 from pedenv.config import Config
+from pedenv.datasets import Dataset
 from pedenv.errors import InputError
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.io.datasets import Dataset
-from pedenv.io.jsonl import EnvironmentWriter
+from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.pose import PoseBackend, create_pose_backend
 
 #: Folder of the per-scene outputs and checkpoints inside the output folder.
@@ -169,9 +169,9 @@ def evaluate_distributed(dataset: Dataset, *, executor: str = "ray", address: st
     ``output_dir`` must be new, empty, a folder pedenv wrote with ``overwrite`` (emptied), or
     one it wrote with ``resume`` (continued).
     """
+    from pedenv.apps.evaluation_outputs import write_outputs
     from pedenv.apps.executors import create_executor
-    from pedenv.io.output_dir import prepare_output_dir
-    from pedenv.io.outputs import write_outputs
+    from pedenv.outputs.output_dir import prepare_output_dir
 
     config = config or Config()
     if output_dir is not None:
@@ -190,7 +190,7 @@ def evaluate_distributed(dataset: Dataset, *, executor: str = "ray", address: st
 
 def prepare_resume_dir(path: Path) -> Path:
     """``path`` for a resumed run: created if new; a non-empty folder must be pedenv's own."""
-    from pedenv.io.output_dir import MARKER, prepare_output_dir
+    from pedenv.outputs.output_dir import MARKER, prepare_output_dir
 
     if path.is_dir() and any(path.iterdir()):
         if not (path / MARKER).is_file():

@@ -7,17 +7,17 @@ from contextlib import nullcontext
 from functools import partial
 from pathlib import Path
 
+from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.apps.progress import progress_bar
 from pedenv.apps.scene_result import evaluate_scene, merge_scene_results
 from pedenv.config import Config
+from pedenv.datasets import Dataset
 from pedenv.errors import InputError
 from pedenv.evaluation.metrics import Metrics
 from pedenv.evaluation.result import EvaluationResult
-from pedenv.io.datasets import Dataset
-from pedenv.io.jsonl import EnvironmentWriter
-from pedenv.io.outputs import write_outputs
-from pedenv.io.sinks import ExtraOutputs
 from pedenv.model import PedestrianEnvironmentModel
+from pedenv.outputs.jsonl import EnvironmentWriter
+from pedenv.outputs.sinks import ExtraOutputs
 from pedenv.pose import PoseBackend, create_pose_backend
 
 
@@ -40,7 +40,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
 
     Writes ``environment.jsonl`` line by line while running (when ``output_dir`` is set),
     so a failure at a bad frame keeps what was computed; ``metrics.json`` etc. come from
-    :func:`pedenv.io.outputs.write_outputs`. ``extra_outputs``: Parquet, Rerun, MCAP, video
+    :func:`pedenv.apps.evaluation_outputs.write_outputs`. ``extra_outputs``: Parquet, Rerun, MCAP, video
     (refused before the run when their extra is missing; closed, and so valid, when a frame fails).
     Each scene is one :func:`~pedenv.apps.scene_result.evaluate_scene`, merged as the Ray
     executor merges them (:mod:`pedenv.apps.distributed`).
@@ -94,7 +94,7 @@ def _matches_writer(path, sinks):
     """The matched-pairs table writer, or None; closes ``sinks`` when it cannot be opened."""
     if not path:
         return None
-    from pedenv.io.parquet import MatchesTableWriter
+    from pedenv.outputs.parquet import MatchesTableWriter
 
     try:
         return MatchesTableWriter(path)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from pedenv.evaluation.detections import load_samples, match_detections, summarize
 from pedenv.evaluation.metrics import strict_json
-from pedenv.pose.postprocess import read_image_rgb
+from pedenv.images import read_image_rgb
 
 
 def evaluate_detections(data_root: str | Path, detection="far", output: str | Path | None = None, backend=None,

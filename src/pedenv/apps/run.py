@@ -12,16 +12,17 @@ import numpy as np
 
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.io.footage import Recording, load_recording
-from pedenv.io.jsonl import EnvironmentWriter
-from pedenv.io.output_dir import prepare_output_dir
-from pedenv.io.sinks import ExtraOutputs
+from pedenv.images import write_image
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
+from pedenv.outputs.jsonl import EnvironmentWriter
+from pedenv.outputs.output_dir import prepare_output_dir
+from pedenv.outputs.sinks import ExtraOutputs
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.pose.redetect import with_redetection
-from pedenv.visualize.overlay import draw_environment, write_image
+from pedenv.recordings.footage import Recording, load_recording
+from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
 
@@ -40,7 +41,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     is missing). A bad frame stops the run with an InputError; what was computed before it
     stays on disk. ``progress(done, total)`` is called per frame.
     ``output`` must be empty or new, unless ``overwrite`` (then an earlier pedenv run there is
-    deleted once the inputs are checked: :func:`pedenv.io.output_dir.prepare_output_dir`).
+    deleted once the inputs are checked: :func:`pedenv.outputs.output_dir.prepare_output_dir`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or

@@ -23,8 +23,8 @@ from pedenv.evaluation.metrics import ErrorSamples, Metrics
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
 from pedenv.geometry import inverse_2x2
-from pedenv.io.jsonl import environment_line
 from pedenv.model import PedestrianEnvironmentModel
+from pedenv.outputs.jsonl import environment_line
 from pedenv.pose import PoseBackend
 from pedenv.pose.redetect import with_redetection
 from pedenv.records import Frame

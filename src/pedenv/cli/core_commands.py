@@ -32,7 +32,7 @@ def _config(path: Path | None, method: str | None = None, **paper) -> Config:
 def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path | None, *,
                    matches: bool = False, video_scene: str | None = None):
     """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap`` flags (and the bird's-eye video)."""
-    from pedenv.io.sinks import ExtraOutputs
+    from pedenv.outputs.sinks import ExtraOutputs
 
     return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
                         matches_parquet=output / "matches.parquet" if parquet and matches else None,
@@ -79,7 +79,7 @@ def demo(
     """Run the paper's and the fused method on the built-in synthetic scenes; print them side by side, write plots."""
     from pedenv.apps.compare import comparison_by_scene_table, comparison_summary_table
     from pedenv.apps.demo import VIDEO_SCENE, run_demo
-    from pedenv.io.output_dir import prepare_output_dir
+    from pedenv.outputs.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
     extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
@@ -109,8 +109,8 @@ def simulate(
 ) -> None:
     """Write the built-in synthetic scenes to disk in one of the supported formats, each as it is made."""
     from pedenv.apps.demo import SceneCounter, iter_builtin_scenes
-    from pedenv.io.datasets import scene_writer
-    from pedenv.io.output_dir import prepare_output_dir
+    from pedenv.datasets import scene_writer
+    from pedenv.outputs.output_dir import prepare_output_dir
 
     write = scene_writer(fmt)
     rate = frame_rate if frame_rate is not None else (12.0 if fmt == "nuscenes" else 10.0)
@@ -153,8 +153,8 @@ def evaluate(
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.apps.evaluate import evaluate_dataset
+    from pedenv.datasets import open_dataset
     from pedenv.errors import InputError
-    from pedenv.io.datasets import open_dataset
 
     options = {"version": version} if dataset == "nuscenes" else {}
     data = open_dataset(dataset, data_root, **options)
@@ -186,7 +186,7 @@ def evaluate(
                                        "--rerun": rerun is not None, "--mcap": mcap is not None})
         return
     backend: str | PoseBackend | None = onnx() if onnx else pose_backend
-    from pedenv.io.output_dir import prepare_output_dir
+    from pedenv.outputs.output_dir import prepare_output_dir
 
     extra = _extra_outputs(output, parquet, rerun, mcap, matches=True)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")

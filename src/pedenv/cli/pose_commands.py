@@ -49,10 +49,10 @@ def detect(
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
-    from pedenv.io.output_dir import prepare_output_dir
+    from pedenv.apps.detect import annotate_images
+    from pedenv.outputs.output_dir import prepare_output_dir
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
-    from pedenv.visualize.overlay import annotate_images
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
     prepare_output_dir(output, overwrite=overwrite, command="pedenv detect")
@@ -124,7 +124,7 @@ def run(
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
-    from pedenv.io.sinks import ExtraOutputs
+    from pedenv.outputs.sinks import ExtraOutputs
 
     extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap)
 

@@ -20,9 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from pedenv.datasets import kitti_files as kitti
+from pedenv.datasets import mot17, nuscenes_cameras
 from pedenv.errors import InputError
 from pedenv.evaluation.matching import iou_matrix
-from pedenv.io.real import kitti, mot17, nuscenes_cameras
 from pedenv.pose.tiling import CameraGeometry
 
 #: Person height bins, pixels: (label, low, high).

@@ -9,13 +9,13 @@ threshold, suppresses overlapping boxes (NMS) and maps everything back to image 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
 
 from pedenv.boxes import nms
 from pedenv.errors import InputError
+from pedenv.images import read_image_rgb
 from pedenv.records import Detections, Frame
 from pedenv.skeleton import NUM_KEYPOINTS
 
@@ -86,15 +86,6 @@ class Letterbox:
         return np.clip(out, 0.0, [w, h])
 
 
-def read_image_rgb(path) -> np.ndarray:
-    """(H, W, 3) uint8 RGB of the image file at ``path``; an unreadable file raises InputError."""
-    data = np.fromfile(str(path), dtype=np.uint8) if Path(path).is_file() else None
-    if data is None:
-        raise InputError(f"{path}: image file not found")
-    bgr = cv2.imdecode(data, cv2.IMREAD_COLOR) if data.size else None
-    if bgr is None:
-        raise InputError(f"{path}: cannot read the image (corrupt or not an image)")
-    return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
 
 
 def frame_image(frame: Frame) -> np.ndarray:

@@ -29,7 +29,7 @@ def benchmark_image() -> np.ndarray:
     except (ImportError, ValueError):
         path = None
     if path is not None and path.is_file():
-        from pedenv.pose.postprocess import read_image_rgb
+        from pedenv.images import read_image_rgb
 
         return cv2.resize(read_image_rgb(path), (FRAME_SIZE[1], FRAME_SIZE[0]), interpolation=cv2.INTER_LINEAR)
     return np.random.default_rng(0).integers(0, 256, (*FRAME_SIZE, 3), dtype=np.uint8)

@@ -26,7 +26,7 @@ _EGO, _PED, _TRAIL, _TRUTH, _TEXT = (60, 160, 40), (40, 60, 220), (150, 160, 235
 
 
 class BirdsEyeVideo:
-    """A :class:`pedenv.io.sinks.FrameSink` drawing each frame into an mp4 (OpenCV ``mp4v``).
+    """A :class:`pedenv.outputs.sinks.FrameSink` drawing each frame into an mp4 (OpenCV ``mp4v``).
 
     size_px: the square picture's side. ahead_m: metres shown ahead of the ego (the scale).
     trail: positions kept per track. fps: the video's rate; None takes it from the first two

@@ -6,15 +6,9 @@ the image's own pixels (u right, v down).
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import cv2
 import numpy as np
 
-from pedenv.errors import InputError
-from pedenv.io.detections import detections_to_dict, unique_names, write_detections
-from pedenv.io.output_dir import writable_file
-from pedenv.pose.postprocess import read_image_rgb
 from pedenv.records import Detections
 from pedenv.skeleton import COCO_BONES
 
@@ -93,43 +87,3 @@ def draw_environment(image: np.ndarray, state) -> np.ndarray:
     labels = [f"id {int(i)}" + (f"  {d:.1f} m" if np.isfinite(d) else "")
               for i, d in zip(peds.track_ids, peds.distances)]
     return draw_persons(image, peds.keypoints, peds.confidences, peds.boxes, labels, keys=peds.track_ids)
-
-
-def write_image(path: Path, image_rgb: np.ndarray) -> Path:
-    """Write an RGB image (format from the suffix), creating the folder."""
-    path = writable_file(path, "image")
-    if not cv2.imwrite(str(path), cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR)):
-        raise InputError(f"{path}: cannot write the image")
-    return path
-
-
-def annotate_images(images, output: str | Path, backend) -> Path:
-    """Run a pose ``backend`` on image files; write ``output/detections.json`` and the drawn images.
-
-    images: image paths. Each drawn image is ``output/<stem>_pose.png`` (``<stem>-2_pose.png``
-    for a second image of the same name). The JSON (:mod:`pedenv.io.detections`) holds per
-    image: file, width, height, backend, drawn image and persons. An image that cannot be
-    read is listed under ``failed``; the others are still written, then an InputError names
-    the failed ones. Returns the JSON path.
-    """
-    output = Path(output)
-    paths = [Path(p) for p in images]
-    if not paths:
-        raise InputError("no images given")
-    records, failed = [], []
-    for path, name in zip(paths, unique_names(paths, "_pose.png")):
-        try:
-            image = read_image_rgb(path)
-        except InputError as exc:
-            failed.append({"file": str(path), "error": str(exc)})
-            continue
-        det = backend.detect(image)
-        drawn = write_image(output / name, draw_detections(image, det))
-        records.append({"file": str(path), "width": image.shape[1], "height": image.shape[0],
-                        "backend": backend.name, "drawn": str(drawn), "persons": detections_to_dict(det)})
-    target = write_detections(output / "detections.json", records, failed)
-    if failed:
-        names = ", ".join(f["error"] for f in failed)
-        raise InputError(f"{len(failed)} of {len(paths)} images could not be read ({names}); "
-                         f"the detections of the other {len(records)} are in {target}")
-    return target

@@ -10,7 +10,7 @@ import pytest
 
 from pedenv.apps.compare import compare_methods, comparison_by_scene_table, comparison_summary_table
 from pedenv.config import Config
-from pedenv.io.datasets.memory import MemoryDataset
+from pedenv.datasets.memory import MemoryDataset
 from pedenv.synthetic import generate_scenes
 
 from golden import assert_golden

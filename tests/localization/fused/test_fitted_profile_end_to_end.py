@@ -24,7 +24,7 @@ import pytest
 
 from pedenv.apps.compare import compare_methods
 from pedenv.config import Config
-from pedenv.io.datasets.memory import MemoryDataset
+from pedenv.datasets.memory import MemoryDataset
 from pedenv.synthetic import generate_scenes
 
 

@@ -1,0 +1,221 @@
+"""KITTI files: calibration, tracking (label_02) and object (label_2) labels, ORB-SLAM3 poses.
+
+Conventions kept as KITTI has them: 2D boxes in image_02 pixels ``[x1, y1, x2, y2]``
+clipped to the image; 3D locations are the bottom-face centres of the boxes in the
+rectified reference camera frame (x right, y down, z forward, metres).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pedenv.datasets.text_fields import frozen_arrays, numbers, read_lines
+from pedenv.errors import InputError
+
+#: Calibration keys -> (shape, accepted spellings: the object benchmark's and the tracking originals').
+CALIB_KEYS: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
+    "P0": ((3, 4), ("P0",)),
+    "P1": ((3, 4), ("P1",)),
+    "P2": ((3, 4), ("P2",)),
+    "P3": ((3, 4), ("P3",)),
+    "R0_rect": ((3, 3), ("R0_rect", "R_rect")),
+    "Tr_velo_to_cam": ((3, 4), ("Tr_velo_to_cam", "Tr_velo_cam")),
+    "Tr_imu_to_velo": ((3, 4), ("Tr_imu_to_velo", "Tr_imu_velo")),
+}
+#: Object types of the KITTI labels.
+TYPES = ("Car", "Van", "Truck", "Pedestrian", "Person_sitting", "Cyclist", "Tram", "Misc", "DontCare")
+
+
+@dataclass(frozen=True)
+class KittiCalib:
+    """One KITTI calibration file.
+
+    P0..P3: (3, 4) projection of rectified reference-camera points (metres) to each camera's pixels.
+    R0_rect: (3, 3) rectifying rotation; Tr_velo_to_cam, Tr_imu_to_velo: (3, 4) rigid transforms.
+    """
+
+    P0: np.ndarray
+    P1: np.ndarray
+    P2: np.ndarray
+    P3: np.ndarray
+    R0_rect: np.ndarray
+    Tr_velo_to_cam: np.ndarray
+    Tr_imu_to_velo: np.ndarray
+
+    @property
+    def K(self) -> np.ndarray:
+        """(3, 3) intrinsics of image_02 (the left colour camera), pixels."""
+        return self.P2[:, :3].copy()
+
+    @property
+    def cam2_position(self) -> np.ndarray:
+        """(3,) optical centre of cam2 in the rectified reference frame, metres (about 6 cm left: x = -0.06)."""
+        return -np.linalg.solve(self.P2[:, :3], self.P2[:, 3])
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """(N, 3) rectified reference-frame points, metres -> (N, 2) image_02 pixels."""
+        uvw = np.c_[np.asarray(points, float), np.ones(len(points))] @ self.P2.T
+        return uvw[:, :2] / uvw[:, 2:3]
+
+
+def read_calib(path: str | Path) -> KittiCalib:
+    """Read a KITTI calibration file in either spelling (``R0_rect:`` or ``R_rect``, ...)."""
+    path = Path(path)
+    found: dict[str, np.ndarray] = {}
+    for line, text in read_lines(path):
+        key, _, rest = text.partition(" ")
+        key = key.rstrip(":")
+        for name, (shape, spellings) in CALIB_KEYS.items():
+            if key in spellings:
+                values = numbers(path, line, rest.split(), key)
+                if values.size != shape[0] * shape[1]:
+                    raise InputError(f"{path}:{line}: {key} must have {shape[0] * shape[1]} numbers, got {values.size}")
+                found[name] = values.reshape(shape)
+    missing = [name for name in CALIB_KEYS if name not in found]
+    if missing:
+        raise InputError(f"{path}: calibration lacks {', '.join(missing)}")
+    return KittiCalib(**found)
+
+
+@dataclass(frozen=True)
+class KittiLabels:
+    """KITTI object labels, one row per object (N rows).
+
+    frame, track_id: (N,) int64; -1 where the file has no such column (object benchmark)
+        and track_id -1 for DontCare. types: (N,) str. truncated: (N,) float (0..2 tracking,
+        0..1 object). occluded: (N,) int64 (0 visible .. 3 unknown). alpha: (N,) radians.
+    boxes: (N, 4) float ``[x1, y1, x2, y2]`` image_02 pixels, clipped to the image.
+    dimensions: (N, 3) float ``[h, w, l]`` metres. locations: (N, 3) float, bottom-face
+        centre in the rectified reference camera frame, metres. rotation_y: (N,) radians.
+    """
+
+    frame: np.ndarray
+    track_id: np.ndarray
+    types: np.ndarray
+    truncated: np.ndarray
+    occluded: np.ndarray
+    alpha: np.ndarray
+    boxes: np.ndarray
+    dimensions: np.ndarray
+    locations: np.ndarray
+    rotation_y: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.types)
+        for name in ("frame", "track_id", "truncated", "occluded", "alpha", "boxes", "dimensions", "locations",
+                     "rotation_y"):
+            if len(getattr(self, name)) != n:
+                raise InputError(f"KittiLabels.{name} must have {n} rows, got {len(getattr(self, name))}")
+        frozen_arrays(self, **{name: getattr(self, name) for name in self.__dataclass_fields__})
+
+    def __len__(self) -> int:
+        return len(self.types)
+
+    def take(self, mask) -> KittiLabels:
+        """The rows selected by a boolean mask or index array."""
+        return KittiLabels(**{name: getattr(self, name)[mask] for name in self.__dataclass_fields__})
+
+    def in_frame(self, frame: int) -> KittiLabels:
+        """The rows of one tracking frame."""
+        return self.take(self.frame == frame)
+
+    def of_type(self, *types: str) -> KittiLabels:
+        """The rows whose type is one of ``types`` (e.g. ``"Pedestrian"``, ``"DontCare"``)."""
+        return self.take(np.isin(self.types, types))
+
+
+def read_labels(path: str | Path) -> KittiLabels:
+    """Read a tracking ``label_02/<seq>.txt`` (17 fields) or object ``label_2/<id>.txt`` (15 fields).
+
+    The layout is taken from the first line; every line must have the same number of fields.
+    """
+    path = Path(path)
+    rows, types, width = [], [], None
+    for line, text in read_lines(path):
+        fields = text.split()
+        if width is None:
+            if len(fields) not in (15, 17):
+                raise InputError(f"{path}:{line}: a KITTI label has 17 fields (tracking) or 15 (object), "
+                                 f"got {len(fields)}")
+            width = len(fields)
+        elif len(fields) != width:
+            raise InputError(f"{path}:{line}: expected {width} fields like the first line, got {len(fields)}")
+        head = fields[:2] if width == 17 else ["-1", "-1"]
+        kind = fields[width - 15]
+        if kind not in TYPES:
+            raise InputError(f"{path}:{line}: unknown object type {kind!r}; valid: {', '.join(TYPES)}")
+        values = numbers(path, line, head + fields[width - 14:], "label fields")
+        if width == 17 and (values[0] != int(values[0]) or values[0] < 0):
+            raise InputError(f"{path}:{line}: frame must be an integer >= 0, got {fields[0]!r}")
+        rows.append(values)
+        types.append(kind)
+    table = np.array(rows, dtype=np.float64).reshape(-1, 16)
+    return KittiLabels(
+        frame=table[:, 0].astype(np.int64), track_id=table[:, 1].astype(np.int64), types=np.array(types, dtype=str),
+        truncated=table[:, 2], occluded=table[:, 3].astype(np.int64), alpha=table[:, 4], boxes=table[:, 5:9],
+        dimensions=table[:, 9:12], locations=table[:, 12:15], rotation_y=table[:, 15])
+
+
+def read_camera_trajectory(path: str | Path) -> np.ndarray:
+    """ORB-SLAM3 ``CameraTrajectory.txt``: (F, 4, 4) ``T_world_from_cam`` per frame (line i = frame i).
+
+    The world frame is the camera frame at frame 0 (x right, y down, z forward, metres).
+    """
+    path = Path(path)
+    poses = []
+    for line, text in read_lines(path):
+        values = numbers(path, line, text.split(), "pose")
+        if values.size != 12:
+            raise InputError(f"{path}:{line}: a pose line has 12 numbers (row-major 3x4 [R | t]), got {values.size}")
+        pose = np.eye(4)
+        pose[:3] = values.reshape(3, 4)
+        if not np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3), atol=1e-3):
+            raise InputError(f"{path}:{line}: the 3x3 part is not a rotation")
+        poses.append(pose)
+    if not poses:
+        raise InputError(f"{path}: no poses")
+    return np.stack(poses)
+
+
+@dataclass(frozen=True)
+class TrackingSequence:
+    """One KITTI tracking sequence on disk: calibration, labels, optional poses, image frames present."""
+
+    name: str
+    calib: KittiCalib
+    labels: KittiLabels
+    poses: np.ndarray | None  # (F, 4, 4) T_world_from_cam, or None without ORB-SLAM3 poses
+    image_dir: Path
+    frames: tuple[int, ...]  # frame indices whose image exists, ascending
+
+    def image_path(self, frame: int) -> Path:
+        """Path of the image_02 PNG of ``frame``."""
+        return self.image_dir / f"{frame:06d}.png"
+
+
+def read_tracking_sequence(training: str | Path, name: str) -> TrackingSequence:
+    """Read sequence ``name`` (e.g. ``"0016"``) under a KITTI tracking ``training/`` folder."""
+    training = Path(training)
+    image_dir = training / "image_02" / name
+    if not image_dir.is_dir():
+        raise InputError(f"{image_dir}: no image folder for KITTI tracking sequence {name}")
+    frames = []
+    for p in sorted(image_dir.glob("*.png")):
+        if not p.stem.isdigit():
+            raise InputError(f"{p}: KITTI image names are the frame number (000012.png)")
+        frames.append(int(p.stem))
+    pose_file = training / "ego_poses_orbslam3" / name / "CameraTrajectory.txt"
+    poses = read_camera_trajectory(pose_file) if pose_file.is_file() else None
+    if poses is not None and frames and frames[-1] >= len(poses):
+        raise InputError(f"{pose_file}: {len(poses)} poses, but image frame {frames[-1]} exists")
+    return TrackingSequence(name, read_calib(training / "calib" / f"{name}.txt"),
+                            read_labels(training / "label_02" / f"{name}.txt"), poses, image_dir, tuple(frames))
+
+
+def tracking_sequence_names(training: str | Path) -> list[str]:
+    """Names of the sequences with an image folder under ``training/image_02``."""
+    root = Path(training) / "image_02"
+    return sorted(p.name for p in root.iterdir() if p.is_dir()) if root.is_dir() else []

@@ -1,1 +1,0 @@
-"""Writing results: the JSON Lines environment model."""

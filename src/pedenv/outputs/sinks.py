@@ -1,0 +1,117 @@
+"""Per-frame outputs besides JSON Lines: Parquet tables, Rerun, MCAP, the bird's-eye video.
+
+The apps call one :class:`Sinks` per run: ``write(state, frame)`` after every frame and
+``close()`` at the end (also when a frame fails), so each file holds every finished frame.
+A writer whose library is missing is refused before anything runs, with one line naming
+the install command (:func:`require_extra`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Protocol
+
+from pedenv.errors import require_extra
+from pedenv.records import Frame
+from pedenv.state import EnvironmentState
+
+
+class FrameSink(Protocol):
+    """Something that records the environment model frame by frame."""
+
+    path: Path
+
+    def write(self, state: EnvironmentState, frame: Frame) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class Sinks:
+    """A list of :class:`FrameSink`; a context manager that closes them all."""
+
+    def __init__(self, sinks: list[FrameSink] | None = None) -> None:
+        self.sinks = list(sinks or [])
+        self.files: list[Path] = []  # what the sinks wrote, known after close()
+
+    def write(self, state: EnvironmentState, frame: Frame) -> None:
+        for sink in self.sinks:
+            sink.write(state, frame)
+
+    def close(self) -> None:
+        """Close every sink, even when one of them fails (the first failure is raised)."""
+        first = None
+        for sink in self.sinks:
+            self.files.extend(getattr(sink, "files", None) or [sink.path])
+            try:
+                sink.close()
+            except Exception as exc:  # noqa: BLE001 - close the others first
+                first = first or exc
+        self.files = list(dict.fromkeys(self.files))
+        self.sinks = []
+        if first is not None:
+            raise first
+
+    def __enter__(self) -> Sinks:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __len__(self) -> int:
+        return len(self.sinks)
+
+
+@dataclass(frozen=True)
+class ExtraOutputs:
+    """Which per-frame outputs a run writes, and where (None: not written).
+
+    parquet: the environment table, one row per pedestrian and frame (pyarrow).
+    matches_parquet: evaluation only, the matched prediction/ground-truth pairs (pyarrow).
+    rerun: a Rerun ``.rrd`` recording (rerun-sdk); several scenes give ``<stem>-<scene>.rrd``.
+    mcap: a Foxglove MCAP file (foxglove-sdk).
+    birds_eye_video: an mp4 of every frame from above (OpenCV, always installed).
+    birds_eye_scene: the one scene the video shows (None: every scene, one after the other).
+    """
+
+    parquet: Path | None = None
+    matches_parquet: Path | None = None
+    rerun: Path | None = None
+    mcap: Path | None = None
+    birds_eye_video: Path | None = None
+    birds_eye_scene: str | None = None
+
+    def check(self) -> None:
+        """Refuse missing extras before the run starts (one line each, see :func:`require_extra`)."""
+        if self.parquet or self.matches_parquet:
+            require_extra("pyarrow.parquet", "viz", "--parquet")
+        if self.rerun:
+            require_extra("rerun", "viz", "--rerun")
+        if self.mcap:
+            require_extra("foxglove", "viz", "--mcap")
+
+    def open(self) -> Sinks:
+        """The sinks for the frame-by-frame outputs (all but ``matches_parquet``)."""
+        self.check()
+        sinks: list[FrameSink] = []
+        try:
+            if self.parquet:
+                from pedenv.outputs.parquet import EnvironmentTableWriter
+
+                sinks.append(EnvironmentTableWriter(self.parquet))
+            if self.rerun:
+                from pedenv.outputs.rerun_log import RerunWriter
+
+                sinks.append(RerunWriter(self.rerun))
+            if self.mcap:
+                from pedenv.outputs.mcap_log import McapWriter
+
+                sinks.append(McapWriter(self.mcap))
+            if self.birds_eye_video:
+                from pedenv.visualize.birds_eye_video import BirdsEyeVideo
+
+                sinks.append(BirdsEyeVideo(self.birds_eye_video, scene=self.birds_eye_scene))
+        except BaseException:
+            Sinks(sinks).close()
+            raise
+        return Sinks(sinks)

@@ -1,0 +1,145 @@
+"""Manifests: many recordings in one file, one row per recording (``pedenv run --manifest``).
+
+CSV with a header row, or YAML (a list of mappings, or a mapping with the list under
+``recordings``). Fields of a row (paths relative to the manifest's folder)::
+
+    name,images,video,calibration,ego_poses,fps,start_time
+    drive-1,drive-1/images,,calib.yaml,drive-1/poses.csv,,
+    drive-2,,drive-2.mp4,calib.yaml,drive-2/poses.csv,30,
+
+* ``calibration``, ``ego_poses``: required files (formats of :mod:`pedenv.recordings.footage`);
+* exactly one of ``images`` (a folder) and ``video`` (a file);
+* ``name`` (optional): the recording's output folder, by default the image folder's name or
+  the video's stem; names must be distinct;
+* ``fps``, ``start_time`` (optional, seconds): as ``pedenv run --fps/--start-time``.
+
+Every problem is one :class:`~pedenv.errors.InputError` naming the manifest, the row
+(1 = the first recording) and the field.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from pedenv.errors import InputError, read_text
+
+FIELDS = ("name", "images", "video", "calibration", "ego_poses", "fps", "start_time")
+
+
+@dataclass(frozen=True)
+class ManifestRow:
+    """One recording of a manifest: absolute paths, optional frame timing; ``row`` counts from 1."""
+
+    name: str
+    calibration: Path
+    ego_poses: Path
+    images: Path | None = None
+    video: Path | None = None
+    fps: float | None = None
+    start_time: float | None = None
+    row: int = 0
+
+
+def read_manifest(path: str | Path) -> list[ManifestRow]:
+    """The recordings of a CSV (``.csv``) or YAML (``.yaml``/``.yml``) manifest, checked (see the module doc)."""
+    path = Path(path)
+    text = read_text(path, "the manifest")
+    if path.suffix.lower() == ".csv":
+        raw = _csv_rows(path, text)
+    elif path.suffix.lower() in (".yaml", ".yml"):
+        raw = _yaml_rows(path, text)
+    else:
+        raise InputError(f"{path}: a manifest must be a .csv or .yaml file")
+    if not raw:
+        raise InputError(f"{path}: the manifest lists no recording")
+    rows = [_row(path, n, fields) for n, fields in enumerate(raw, start=1)]
+    seen: dict[str, int] = {}
+    for r in rows:
+        if r.name in seen:
+            raise InputError(f"{path}: row {r.row}: name {r.name!r} is also row {seen[r.name]}'s; every recording "
+                             f"needs its own name (its output folder)")
+        seen[r.name] = r.row
+    return rows
+
+
+def _csv_rows(path: Path, text: str) -> list[dict]:
+    try:
+        reader = csv.DictReader(io.StringIO(text))
+        header = [h.strip() for h in reader.fieldnames or []]
+        rows = [row for row in reader if any((v or "").strip() for v in row.values() if isinstance(v, str))]
+    except csv.Error as exc:
+        raise InputError(f"{path}: not a valid CSV file: {exc}") from None
+    _check_fields(path, "header", header)
+    for n, row in enumerate(rows, start=1):
+        if None in row:
+            raise InputError(f"{path}: row {n} has more cells than the header's {len(header)} fields")
+    return [{k.strip(): (v or "").strip() for k, v in row.items()} for row in rows]
+
+
+def _yaml_rows(path: Path, text: str) -> list[dict]:
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise InputError(f"{path}: not valid YAML: {exc}") from None
+    if isinstance(data, dict) and "recordings" in data:
+        data = data["recordings"]
+    if not isinstance(data, list) or not all(isinstance(r, dict) for r in data):
+        raise InputError(f"{path}: a YAML manifest must be a list of recordings (mappings), or hold one under "
+                         f"'recordings'")
+    for n, row in enumerate(data, start=1):
+        _check_fields(path, f"row {n}", [str(k) for k in row])
+    return [{str(k): "" if v is None else v for k, v in row.items()} for row in data]
+
+
+def _check_fields(path: Path, where: str, names: list[str]) -> None:
+    unknown = [n for n in names if n not in FIELDS]
+    if unknown:
+        raise InputError(f"{path}: {where}: unknown field(s) {', '.join(map(repr, unknown))}; fields: "
+                         f"{', '.join(FIELDS)}")
+
+
+def _row(manifest: Path, n: int, fields: dict) -> ManifestRow:
+    where = f"{manifest}: row {n}"
+
+    def file(key: str, kind: str, required: bool) -> Path | None:
+        value = fields.get(key, "")
+        if value in ("", None):
+            if required:
+                raise InputError(f"{where}: field {key!r} is missing")
+            return None
+        p = Path(str(value)).expanduser()
+        p = p if p.is_absolute() else manifest.parent / p
+        exists = p.is_dir() if kind == "folder" else p.is_file()
+        if not exists:
+            raise InputError(f"{where}: field {key!r}: {kind} {p} not found")
+        return p
+
+    def number(key: str, positive: bool) -> float | None:
+        value = fields.get(key, "")
+        if value in ("", None):
+            return None
+        try:
+            x = float(value)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: field {key!r} must be a number, got {value!r}") from None
+        if not math.isfinite(x) or (positive and x <= 0):
+            bound = " > 0" if positive else ""
+            raise InputError(f"{where}: field {key!r} must be a finite number{bound}, got {value!r}")
+        return x
+
+    images, video = file("images", "folder", False), file("video", "file", False)
+    if (images is None) == (video is None):
+        raise InputError(f"{where}: give exactly one of the fields 'images' (a folder) and 'video' (a file)")
+    calibration, ego_poses = file("calibration", "file", True), file("ego_poses", "file", True)
+    assert calibration is not None and ego_poses is not None  # required above
+    name = str(fields.get("name") or "").strip() or (images.resolve().name if images else video.stem)  # type: ignore[union-attr]
+    if "/" in name or "\\" in name or name in (".", ".."):
+        raise InputError(f"{where}: field 'name' must be usable as a folder name, got {name!r}")
+    return ManifestRow(name, calibration, ego_poses, images, video, number("fps", True), number("start_time", False),
+                       row=n)
