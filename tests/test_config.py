@@ -21,7 +21,7 @@ def test_paper_defaults_are_the_papers():
 
 @pytest.mark.parametrize("kind, field, value, message", [
     (TrackingConfig, "giou_threshold", 1.0, r"tracking.giou_threshold must be in \[-1.0, 1.0\)"),
-    (TrackingConfig, "max_misses", 0, "tracking.max_misses must be an integer >= 1"),
+    (TrackingConfig, "max_misses", 0, r"tracking.max_misses must be an integer in \[1, 300\]"),
     (PaperConfig, "low_confidence_fraction", 1.0, "paper.low_confidence_fraction"),
     (PaperConfig, "person_height_m", 3.0, "paper.person_height_m"),
     (PaperConfig, "refinement_steps", -1, "paper.refinement_steps"),

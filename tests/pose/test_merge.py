@@ -73,7 +73,7 @@ def test_cut_flags_only_at_inner_edges():
 
 @pytest.mark.parametrize("field", ["iou", "containment", "oks", "keypoint_min_confidence"])
 def test_merge_config_is_checked(field):
-    with pytest.raises(ValueError, match=f"MergeConfig.{field} must be in"):
+    with pytest.raises(ValueError, match=rf"merge.{field} must be in \[0.0, 1.0\]"):
         MergeConfig(**{field: 1.5})
 
 

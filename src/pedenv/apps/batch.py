@@ -27,9 +27,11 @@ from pedenv.apps.executors import TaskContext, create_executor
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.run import run_recording
 from pedenv.config import Config
+from pedenv.errors import InputError
 from pedenv.localization import configure
 from pedenv.outputs.output_dir import prepare_output_dir
 from pedenv.recordings.manifest import ManifestRow, read_manifest
+from pedenv.structured_text import load_json
 
 SUMMARY = "summary.json"
 
@@ -103,8 +105,8 @@ def _make_backend(o: dict):
 def _complete(folder: Path, partial: bool = False) -> dict:
     """The ``run.json`` of a recording's folder when it counts every frame (or, ``partial``, whatever it holds)."""
     try:
-        summary = json.loads((folder / "run.json").read_text())
-    except (OSError, ValueError):
+        summary = load_json(folder / "run.json", "run.json")
+    except InputError:
         return {}
     if partial or summary.get("frames_done") == summary.get("frames_total") or "ended_early" in summary:
         return summary

@@ -7,7 +7,6 @@ their projected 2D boxes). See ``shared/samples/real/README.md`` for the fields.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import numpy as np
 
 from pedenv.datasets.text_fields import frozen_arrays
 from pedenv.errors import InputError
+from pedenv.structured_text import load_json
 
 
 @dataclass(frozen=True)
@@ -136,12 +136,9 @@ def _pedestrians(path: Path, entries) -> NuscenesPedestrians:
 def read_camera(path: str | Path) -> NuscenesCamera:
     """Read one ``<CAM>.json``; its image must lie beside it."""
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(f"{path}: not readable JSON: {exc}") from None
+    if not path.is_file():
+        raise InputError(f"{path}: file not found")
+    data = load_json(path, "the camera file")
     if not isinstance(data, dict):
         raise InputError(f"{path}: the top level must be an object")
     for key in ("camera", "image", "width", "height", "timestamp_us", "pedestrians"):

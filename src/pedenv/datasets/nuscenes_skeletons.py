@@ -24,6 +24,7 @@ import numpy as np
 
 from pedenv.errors import InputError, check_array
 from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.structured_text import load_json
 
 SIDE_FILE_NAME = "pedenv_skeletons.json"
 FORMAT = "pedenv-skeletons"
@@ -60,10 +61,7 @@ def write_side_file(path: Path, entries: dict[str, list[dict]]) -> None:
 
 def read_side_file(path: Path) -> dict[str, list[Skeleton]]:
     """``{sample_data token: [Skeleton, ...]}`` from a side file; bad content names the file and field."""
-    try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path}: cannot read the skeleton side file ({exc})") from None
+    data = load_json(path, "the skeleton side file")
     if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("sample_data"), dict):
         raise InputError(
             f"{path}: not a pedenv skeleton side file (needs format={FORMAT!r} and a 'sample_data' object)"

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.records import Detections
+from pedenv.validation import check_number
 
 #: COCO keypoint sigmas (nose, eyes, ears, shoulders, elbows, wrists, hips, knees, ankles).
 COCO_SIGMAS = np.array([0.026, 0.025, 0.025, 0.035, 0.035, 0.079, 0.079, 0.072, 0.072, 0.062, 0.062,
@@ -24,7 +25,8 @@ COCO_SIGMAS = np.array([0.026, 0.025, 0.025, 0.035, 0.035, 0.079, 0.079, 0.072, 
 
 @dataclass(frozen=True)
 class MergeConfig:
-    """Thresholds of the skeleton-aware NMS.
+    """Thresholds of the skeleton-aware NMS, section ``merge`` of :class:`pedenv.config.Config`
+    (validated by :mod:`pedenv.validation`; a bad value raises InputError naming ``merge.field``).
 
     iou: two boxes with IoU above this are one person (0..1; default 0.5).
     containment: a box whose area lies this fraction inside another's (0..1; 0.7) is the
@@ -40,9 +42,7 @@ class MergeConfig:
 
     def __post_init__(self) -> None:
         for name in ("iou", "containment", "oks", "keypoint_min_confidence"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
-                raise ValueError(f"MergeConfig.{name} must be in [0, 1], got {value!r}")
+            check_number(f"merge.{name}", getattr(self, name), 0.0, 1.0)
 
 
 def _iou_and_containment(box: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -16,14 +16,27 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.validation import check_below, check_choice, check_count, check_number, shown
 
 MODES = ("fast", "far")
 STRIDE = 32
+#: Most levels of the pyramid (``level_scales``): each costs at least one network pass per frame.
+MAX_LEVELS = 8
+#: Integer fields of :class:`DetectionConfig` -> their range (the upper bounds cap a frame's passes).
+_COUNTS = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "band_margin_px": (0, 200),
+           "fit_min_people": (2, 100), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
+#: Number fields of :class:`DetectionConfig` -> their range.
+_NUMBERS = {"tile_overlap": (0.0, 0.5), "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
+            "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
+            "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "fit_min_score": (0.0, 1.0),
+            "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0),
+            "max_pitch_down_deg": (1.0, 89.0), "max_pitch_up_deg": (1.0, 89.0)}
 
 
 @dataclass(frozen=True)
 class DetectionConfig:
-    """Tunables of the detection passes (validated; a bad value raises ValueError naming the field).
+    """Tunables of the detection passes, section ``detection`` of :class:`pedenv.config.Config`
+    (validated by :mod:`pedenv.validation`; a bad value raises InputError naming ``detection.field``).
 
     ``far`` runs a pyramid of *levels*: the whole-frame pass, then one level per scale of
     ``level_scales``, each over the image rows where the people it is for can stand. A level
@@ -40,7 +53,8 @@ class DetectionConfig:
         level's rows wider than this are cut into overlapping tiles.
     tile_overlap: overlap of neighbouring tiles, a fraction of the tile (0..0.5); it must exceed
         the width of the widest person the tiles are meant for, so each is whole in one tile.
-    level_scales: scales of the far levels, ascending, each in [0.25, 4] (1 = native pixels);
+    level_scales: scales of the far levels, ascending, each in [0.25, 4] (1 = native pixels), at
+        most :data:`MAX_LEVELS` (8);
         a scale at or below the whole-frame pass's is skipped. Adding a finer scale finds
         smaller people and costs its square times the width of its rows.
     min_person_px: height in a level's network input, px, of the smallest person that level
@@ -95,50 +109,33 @@ class DetectionConfig:
     edge_margin_px: int = 16
 
     def __post_init__(self) -> None:
-        if self.mode not in MODES:
-            raise ValueError(f"DetectionConfig.mode must be one of {', '.join(MODES)}, got {self.mode!r}")
-        ranges = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "tile_overlap": (0.0, 0.5),
-                  "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
-                  "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
-                  "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "band_margin_px": (0, 200),
-                  "fit_min_people": (2, 100), "fit_min_score": (0.0, 1.0), "fit_margin": (0.0, 2.0),
-                  "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
-                  "max_pitch_up_deg": (1.0, 89.0), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
-        for name, (low, high) in ranges.items():
-            _check_range(name, getattr(self, name), low, high)
+        check_choice("detection.mode", self.mode, MODES)
+        for name, (low, high) in _COUNTS.items():
+            check_count(f"detection.{name}", getattr(self, name), low, high)
+        for name, (lo, hi) in _NUMBERS.items():
+            check_number(f"detection.{name}", getattr(self, name), lo, hi)
         scales = self.level_scales
-        if not isinstance(scales, tuple) or not scales:
-            raise ValueError(f"DetectionConfig.level_scales must be a non-empty tuple of numbers, got {scales!r}")
+        if not isinstance(scales, tuple) or not 1 <= len(scales) <= MAX_LEVELS:
+            raise InputError(f"detection.level_scales must be a non-empty tuple of at most {MAX_LEVELS} numbers, "
+                             f"got {shown(scales)}")
         for value in scales:
-            _check_range("level_scales", value, 0.25, 4.0)
+            check_number("detection.level_scales", value, 0.25, 4.0)
         if list(scales) != sorted(set(scales)):
-            raise ValueError(f"DetectionConfig.level_scales must be ascending without repeats, got {scales!r}")
+            raise InputError(f"detection.level_scales must be ascending without repeats, got {shown(scales)}")
         for name in ("base_long_side", "tile_width"):
             if getattr(self, name) % STRIDE:
-                raise ValueError(f"DetectionConfig.{name} must be a multiple of {STRIDE}, got {getattr(self, name)}")
-        if self.near_m >= self.far_m:
-            raise ValueError(f"DetectionConfig.near_m ({self.near_m}) must be below far_m ({self.far_m})")
-        if self.short_person_m >= self.top_m:
-            raise ValueError(f"DetectionConfig.short_person_m ({self.short_person_m}) must be below top_m "
-                             f"({self.top_m})")
+                raise InputError(f"detection.{name} must be a multiple of {STRIDE}, got {getattr(self, name)}")
+        check_below("detection.near_m", self.near_m, "detection.far_m", self.far_m)
+        check_below("detection.short_person_m", self.short_person_m, "detection.top_m", self.top_m)
 
     @classmethod
     def named(cls, mode: str, **changes) -> DetectionConfig:
         """The config of a mode (``fast`` or ``far``) with some fields changed."""
-        if mode not in MODES:
-            raise ValueError(f"detection mode must be one of {', '.join(MODES)}, got {mode!r}")
+        check_choice("detection mode", mode, MODES)
         return replace(cls(mode=mode), **changes)
 
     def to_dict(self) -> dict:
         return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
-
-
-def _check_range(name: str, value, low, high) -> None:
-    integer = isinstance(low, int)
-    ok = not isinstance(value, bool) and isinstance(value, int if integer else (int, float))
-    if not ok or not low <= value <= high:
-        kind = "an integer" if integer else "a number"
-        raise ValueError(f"DetectionConfig.{name} must be {kind} in [{low}, {high}], got {value!r}")
 
 
 def _round32(value: float) -> int:

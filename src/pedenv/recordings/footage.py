@@ -24,13 +24,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import yaml
 from scipy.spatial.transform import Rotation, Slerp
 
-from pedenv.errors import InputError, check_array, read_text
+from pedenv.errors import InputError, check_array
 from pedenv.geometry import quaternion_to_rotation
 from pedenv.images import read_image_rgb
 from pedenv.records import Camera, EgoPose, Frame
+from pedenv.structured_text import load_yaml
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
 POSE_HEADERS = (("timestamp", "x", "y", "z", "qw", "qx", "qy", "qz"), ("timestamp", "x", "y", "yaw"))
@@ -58,11 +58,7 @@ def _numbers(value, key: str, path: Path, shape: tuple) -> np.ndarray:
 def load_calibration(path: str | Path) -> Camera:
     """The :class:`Camera` described by a calibration YAML file (format in the module doc)."""
     path = Path(path)
-    text = read_text(path, "the calibration")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from None
+    data = load_yaml(path, "the calibration")  # size, nesting and alias limits
     if not isinstance(data, dict):
         raise InputError(f"{path}: calibration must be a YAML mapping of fields")
     if "intrinsics" in data:

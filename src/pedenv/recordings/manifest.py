@@ -25,9 +25,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
-from pedenv.errors import InputError, read_text
+from pedenv.errors import InputError
+from pedenv.structured_text import parse_yaml, read_limited_text
 
 FIELDS = ("name", "images", "video", "calibration", "ego_poses", "fps", "start_time")
 
@@ -49,7 +48,7 @@ class ManifestRow:
 def read_manifest(path: str | Path) -> list[ManifestRow]:
     """The recordings of a CSV (``.csv``) or YAML (``.yaml``/``.yml``) manifest, checked (see the module doc)."""
     path = Path(path)
-    text = read_text(path, "the manifest")
+    text = read_limited_text(path, "the manifest")
     if path.suffix.lower() == ".csv":
         raw = _csv_rows(path, text)
     elif path.suffix.lower() in (".yaml", ".yml"):
@@ -83,10 +82,7 @@ def _csv_rows(path: Path, text: str) -> list[dict]:
 
 
 def _yaml_rows(path: Path, text: str) -> list[dict]:
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise InputError(f"{path}: not valid YAML: {exc}") from None
+    data = parse_yaml(text, path, "the manifest")  # nesting and alias limits
     if isinstance(data, dict) and "recordings" in data:
         data = data["recordings"]
     if not isinstance(data, list) or not all(isinstance(r, dict) for r in data):

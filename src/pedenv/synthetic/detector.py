@@ -30,12 +30,12 @@ import zlib
 
 import numpy as np
 
-from pedenv.config import _check_range
 from pedenv.errors import InputError
 from pedenv.records import Detections, Frame, boxes_from_keypoints
 from pedenv.skeleton import CocoKeypoint as K
 from pedenv.synthetic.detector_profiles import DEFAULT_PROFILE, PROFILES, profile_parameters
 from pedenv.synthetic.walker import body_keypoints
+from pedenv.validation import check_number
 
 __all__ = ["DEFAULT_PROFILE", "PROFILES", "DetectorModel"]
 
@@ -44,7 +44,7 @@ _FACE = np.array([K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR])
 
 
 def _check(name: str, value: float, low: float, high: float) -> float:
-    _check_range(f"DetectorModel {name}", value, low, high)
+    check_number(f"DetectorModel {name}", value, low, high)
     return float(value)
 
 

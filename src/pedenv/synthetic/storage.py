@@ -40,6 +40,7 @@ import numpy as np
 from pedenv.errors import InputError
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth, Scene
 from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.structured_text import load_json
 
 FORMAT, VERSION = "pedenv-synthetic", 1
 _OPTIONAL = {
@@ -115,9 +116,9 @@ def read_metadata(folder: str | Path) -> dict:
     if not path.is_file():
         raise InputError(f"{path}: no scene.json; not a synthetic scene folder")
     try:
-        meta = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path}: cannot read JSON: {exc}") from None
+        meta = load_json(path, "scene.json")
+    except InputError as exc:
+        raise InputError(f"{path}: cannot read JSON: {str(exc).removeprefix(f'{path}: ')}") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT or meta.get("version") != VERSION:
         raise InputError(f"{path}: expected format {FORMAT!r} version {VERSION}")
     for key in ("name", "num_frames", "image_paths", "frame_scenes"):

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.records import Camera
+from pedenv.validation import check_below, check_number
 
 _GRID = (np.arange(8) + 0.5) / 8.0  # sample points across a box, per axis
 
@@ -32,6 +32,8 @@ class VisibilityRules:
     max_occluded_fraction: a pedestrian whose box is covered by more than this share
         by nearer pedestrians' boxes is hidden. Lowering it drops more people in crowds.
     min_depth_m: every keypoint must be at least this far in front of the camera.
+
+    Checked by :mod:`pedenv.validation`: distances up to 1000 m, heights up to 10000 px.
     """
 
     min_distance_m: float = 5.0
@@ -42,17 +44,13 @@ class VisibilityRules:
     min_depth_m: float = 0.5
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.min_distance_m < self.max_distance_m:
-            raise InputError(
-                f"need 0 <= min_distance_m < max_distance_m, got {self.min_distance_m}, {self.max_distance_m}"
-            )
-        if self.min_height_px < 0:
-            raise InputError(f"min_height_px must be >= 0, got {self.min_height_px}")
-        for name in ("min_inside_fraction", "max_occluded_fraction"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise InputError(f"{name} must be in [0, 1], got {getattr(self, name)}")
-        if self.min_depth_m <= 0:
-            raise InputError(f"min_depth_m must be > 0, got {self.min_depth_m}")
+        check_number("visibility.min_distance_m", self.min_distance_m, 0.0, 1000.0)
+        check_number("visibility.max_distance_m", self.max_distance_m, 0.0, 1000.0)
+        check_below("visibility.min_distance_m", self.min_distance_m, "visibility.max_distance_m", self.max_distance_m)
+        check_number("visibility.min_height_px", self.min_height_px, 0.0, 10000.0)
+        check_number("visibility.min_inside_fraction", self.min_inside_fraction, 0.0, 1.0)
+        check_number("visibility.max_occluded_fraction", self.max_occluded_fraction, 0.0, 1.0)
+        check_number("visibility.min_depth_m", self.min_depth_m, 0.0, 100.0, low_open=True)
 
 
 @dataclass(frozen=True)

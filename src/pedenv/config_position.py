@@ -1,0 +1,201 @@
+"""The position methods' settings (sections ``paper`` and ``fused`` of :class:`pedenv.config.Config`).
+
+Every field is checked on construction by :mod:`pedenv.validation` (type, finiteness, a
+documented range whose upper bound keeps each frame's memory and time bounded).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pedenv.validation import check_bool, check_choice, check_count, check_number, check_sequence
+
+#: Most refinement iterations per frame (``paper.refinement_steps``).
+MAX_REFINEMENT_STEPS = 200
+#: Most past observations per track (``fused.history_length``).
+MAX_HISTORY_LENGTH = 100
+
+INITIAL_ESTIMATES = ("all-keypoints", "midpoint")
+
+
+@dataclass(frozen=True)
+class PaperConfig:
+    """The paper's position method (Sec. III-C, Algorithm 1): two-frame ray intersection
+    and height refinement (``pedenv.localization.paper``).
+
+    low_confidence_fraction: share of keypoints with the lowest confidence left out of
+        the initial estimate (the paper: 0.3). Raising it trusts fewer, surer keypoints.
+    initial_estimate: ``all-keypoints`` (the paper) or ``midpoint`` (ablation of
+        Sec. IV-D: only the skeleton's midpoint, the centre of its box).
+    refine: run the distance and direction refinement (ablation: off).
+    person_height_m: the assumed body height re-projected in the refinement (1.7 m).
+        Raising it moves every refined pedestrian farther away.
+    refinement_steps: number of refinement iterations (the paper: 15; at most
+        :data:`MAX_REFINEMENT_STEPS`, 200). Each frame runs them over a (steps, N) array, so
+        the cap bounds a frame's refinement at about 13 times the paper's cost; from step 95
+        on (``lambda >= 100``) a step closes under 1 % of the remaining height mismatch.
+    refinement_lambda_offset: ``c`` in ``lambda = r + c`` for step ``r`` = 1..steps (the
+        paper: 5). Each step scales the distance by ``1 + (h_est / h_orig - 1) / lambda``;
+        raising ``c`` makes the refinement move less from the initial estimate.
+    min_parallax_rad: rays closer to parallel than this angle do not intersect; the
+        position then falls back to the height-based distance.
+    max_distance_m: triangulated keypoints farther than this from the camera are
+        discarded as degenerate, and no position is reported farther than this
+        (horizontally) from the camera: the model clamps it as ``fused.max_range_m``.
+    measurement_std_m: standard deviation of one position measurement per axis (the
+        Kalman filter's R), as a fraction of the distance plus this floor; the paper
+        gives none (tuned on the built-in scenes).
+    measurement_std_rel: relative part of the measurement noise (per metre of distance).
+    """
+
+    low_confidence_fraction: float = 0.3
+    initial_estimate: str = "all-keypoints"
+    refine: bool = True
+    person_height_m: float = 1.7
+    refinement_steps: int = 15
+    refinement_lambda_offset: float = 5.0
+    min_parallax_rad: float = 1e-6
+    max_distance_m: float = 500.0
+    measurement_std_m: float = 0.5
+    measurement_std_rel: float = 0.1
+
+    def __post_init__(self) -> None:
+        check_number("paper.low_confidence_fraction", self.low_confidence_fraction, 0.0, 1.0, high_open=True)
+        check_choice("paper.initial_estimate", self.initial_estimate, INITIAL_ESTIMATES)
+        check_bool("paper.refine", self.refine)
+        check_number("paper.person_height_m", self.person_height_m, 0.3, 2.5)
+        check_count("paper.refinement_steps", self.refinement_steps, 0, MAX_REFINEMENT_STEPS)
+        check_number("paper.refinement_lambda_offset", self.refinement_lambda_offset, 0.0, 1000.0, low_open=True)
+        check_number("paper.min_parallax_rad", self.min_parallax_rad, 0.0, 0.1)
+        check_number("paper.max_distance_m", self.max_distance_m, 1.0, 10000.0)
+        check_number("paper.measurement_std_m", self.measurement_std_m, 0.0, 100.0, low_open=True)
+        check_number("paper.measurement_std_rel", self.measurement_std_rel, 0.0, 10.0)
+
+
+FUSED_CUES = ("ground", "triangulation", "height")
+
+@dataclass(frozen=True)
+class FusedConfig:
+    """The ``fused`` position method (``pedenv.localization.fused``): three cues fused with their variances.
+
+    Not in the paper; defaults are anthropometric tables, the synthetic scenes' ranges
+    and values tuned on the built-in scenes. Every variance below is a 1-sigma spread.
+
+    cues: which cues run, any of ``ground``, ``triangulation``, ``height``. Leaving one
+        out is an ablation; the others carry the estimate.
+    person_height_mean_m, person_height_std_m: prior of adult body height (1.72 m, 0.09 m,
+        about 5 %). Raising the mean moves every height-based estimate farther away;
+        raising the spread makes the height cue count less against the others.
+    keypoint_pixel_std: pixel noise of one keypoint (u and v): the prior of each
+        skeleton's own noise, which is measured from its left/right keypoint pairs
+        (weight 0.1 pair) and used by every cue. Raising it widens the cues' variances
+        where a skeleton shows little evidence of its own noise.
+    min_keypoint_confidence: keypoints below this confidence are not used by any cue
+        (pose networks still guess unseen keypoints, with low confidence). Raising it
+        uses fewer, surer keypoints.
+    ankle_height_std_m: how far an ankle may sit above its resting height (feet lifting
+        in the swing phase). Raising it widens the ground cue.
+    road_height_std_m: the road under a pedestrian may lie this far off the vehicle's
+        plane even nearby (kerbs, camber, suspension). Raising it widens the ground cue.
+    road_curvature_std_per_m: spread of the road's curvature (1/m); the road under a
+        pedestrian ``r`` metres away lies about ``0.5 * curvature * r^2`` off the
+        vehicle's plane. Raising it makes the ground cue fade sooner with distance.
+    ground_max_distance_m: the ground cue declines beyond this horizontal distance.
+    history_length: past observations of a track kept for triangulation. Raising it
+        gives more baseline when driving slowly, at more cost per pedestrian; older rays
+        add little (a walker's drift grows with their age): on the built-in terrain
+        scenes 6 gave the exact-skeleton error of 10 and a lower detector-model one
+        (7.3 vs 7.7 %), at 6/10 of the triangulation's cost. At most
+        :data:`MAX_HISTORY_LENGTH` (100, over 3 s at 30 Hz): each track holds this many
+        rows, so the cap bounds the memory per track.
+    min_baseline_m: a past camera centre closer than this to the current one gives no
+        ray for triangulation (the ego stands still).
+    min_parallax_rad: rays closer to parallel than this are left out of triangulation;
+        if none is left the cue declines.
+    pedestrian_speed_std_mps: how fast a pedestrian may have moved since a past
+        observation; widens old rays so a walker does not bias triangulation.
+    outlier_sigma: a ray whose normalized miss distance exceeds this is dropped from
+        triangulation. Raising it keeps more rays.
+    gate_probability: a cue whose disagreement with the other cues exceeds this
+        chi-square quantile (2 dof) is dropped before fusion. Raising it keeps more cues.
+    lateral_std_m: spread of the ground point across the ray beyond pixel noise (body
+        lean, where the feet stand against the body's centre, the keypoints' placement).
+        Raising it widens the covariance across the ray. 0.05 m: the sideways errors of the
+        fused method on the real KITTI and nuScenes persons (RMS 0.051 m at 9-16 m, where the
+        measured keypoint jitter, under 1 px, adds about 0.01 m); the fused covariance
+        across the ray is floored at the sharpest cue's, since all cues share this error.
+        It repeats over a gait cycle and for the person, so it is the per-person part of
+        each cue's covariance: the Kalman filter does not average it away.
+    stance_std_m: spread of a standing foot's ground point about the body's (per axis, metres):
+        a walker's stance foot lies up to half a step (about 0.2 H) ahead of or behind the
+        body, so 0.2 m along the unknown walking direction, about 0.14 m each way; the midpoint
+        of two standing feet counts half of it. It changes with every step (frame-to-frame).
+        Raising it makes the ground cue count less across the ray, where it was the cue
+        whose sideways errors were 2.8x (0-10 m) its variance on the terrain scenes without it.
+    keypoint_span_scale: the pose source's eyes-to-ankles span as a share of the span in the
+        anatomical table of the height cue (eyes 0.933, ankles 0.046 of body height, upright).
+        1.0 takes the table as it is; the real YOLO11n-pose spans 0.823 of the true height on
+        KITTI (0.93 of the table), so the height cue puts its people about 7 % too far unless
+        this is lowered. Lowering it moves height-cue estimates nearer.
+    keypoint_span_std: per-person spread of that span against body height (posture: a
+        walker's bent knees and tilted head; where the network puts the keypoints), relative;
+        repeats for the same person, so it adds to the height cue's per-person covariance
+        with the height spread. Measured on the real network: 0.017 (KITTI, 10 persons).
+    max_range_m: the farthest horizontal range from the camera the method reports, metres
+        (200 m: a 1.7 m person is then about 11 px tall in a 1600 px wide 64.5 deg image,
+        below what a pose network finds). A skeleton placed farther (a tiny false
+        positive went to 243 km) is clamped to this range along its bearing and its
+        covariance along the ray widened by ``max_range_m**2`` (its range is unknown);
+        its ``sources`` ends with ``;clamped``. Raising it lets farther estimates through.
+
+    Each cue splits its covariance into the part new every frame (pixel noise, gait) and
+    the part that repeats for the same person (height prior, road under them, a walker's
+    drift); the model filters the first and adds the second to what it reports.
+    """
+
+    cues: tuple[str, ...] = FUSED_CUES
+    person_height_mean_m: float = 1.72
+    person_height_std_m: float = 0.09
+    keypoint_pixel_std: float = 3.0
+    min_keypoint_confidence: float = 0.3
+    ankle_height_std_m: float = 0.04
+    road_height_std_m: float = 0.08
+    road_curvature_std_per_m: float = 0.008
+    ground_max_distance_m: float = 20.0
+    history_length: int = 6
+    min_baseline_m: float = 0.3
+    min_parallax_rad: float = 0.01
+    pedestrian_speed_std_mps: float = 0.8
+    outlier_sigma: float = 3.0
+    gate_probability: float = 0.999
+    lateral_std_m: float = 0.05
+    stance_std_m: float = 0.14
+    keypoint_span_scale: float = 1.0
+    keypoint_span_std: float = 0.017
+    max_range_m: float = 200.0
+
+    def __post_init__(self) -> None:
+        cues = [c for c in self.cues.split(",") if c] if isinstance(self.cues, str) else self.cues
+        cues = check_sequence("fused.cues", cues, len(FUSED_CUES))
+        for cue in cues:
+            check_choice("fused.cues entry", cue, FUSED_CUES)
+        object.__setattr__(self, "cues", cues)
+        check_number("fused.person_height_mean_m", self.person_height_mean_m, 0.5, 2.5)
+        check_number("fused.person_height_std_m", self.person_height_std_m, 0.0, 0.5, low_open=True)
+        check_number("fused.keypoint_pixel_std", self.keypoint_pixel_std, 0.0, 100.0, low_open=True)
+        check_number("fused.min_keypoint_confidence", self.min_keypoint_confidence, 0.0, 1.0, high_open=True)
+        check_number("fused.ankle_height_std_m", self.ankle_height_std_m, 0.0, 1.0)
+        check_number("fused.road_height_std_m", self.road_height_std_m, 0.0, 2.0)
+        check_number("fused.road_curvature_std_per_m", self.road_curvature_std_per_m, 0.0, 0.1)
+        check_number("fused.ground_max_distance_m", self.ground_max_distance_m, 1.0, 1000.0)
+        check_count("fused.history_length", self.history_length, 1, MAX_HISTORY_LENGTH)
+        check_number("fused.min_baseline_m", self.min_baseline_m, 0.0, 100.0)
+        check_number("fused.min_parallax_rad", self.min_parallax_rad, 0.0, 0.5)
+        check_number("fused.pedestrian_speed_std_mps", self.pedestrian_speed_std_mps, 0.0, 10.0)
+        check_number("fused.outlier_sigma", self.outlier_sigma, 0.0, 100.0, low_open=True)
+        check_number("fused.gate_probability", self.gate_probability, 0.0, 1.0, low_open=True, high_open=True)
+        check_number("fused.lateral_std_m", self.lateral_std_m, 0.0, 5.0)
+        check_number("fused.stance_std_m", self.stance_std_m, 0.0, 2.0)
+        check_number("fused.keypoint_span_scale", self.keypoint_span_scale, 0.5, 1.5)
+        check_number("fused.keypoint_span_std", self.keypoint_span_std, 0.0, 0.5)
+        check_number("fused.max_range_m", self.max_range_m, 5.0, 10000.0)

@@ -1,0 +1,98 @@
+"""The one way settings are checked: type, finiteness, range, count, choice and order.
+
+Every settings class (the sections of :class:`pedenv.config.Config`, the detection and merge
+settings, the synthetic scenes' rules) calls these in its ``__post_init__`` with the name
+``section.field`` as the user writes it in ``config.json``. Each check raises one
+:class:`pedenv.errors.InputError` naming that field and the value given, shortened by
+:func:`shown` (a config value can be a list of a million numbers; the message stays one
+short line). A boolean is never a number and a number never a boolean; NaN and infinity are
+refused; every range has an upper bound, so no value can make a run's memory or time unbounded.
+"""
+
+from __future__ import annotations
+
+import math
+import reprlib
+from collections.abc import Sequence
+
+from pedenv.errors import InputError
+
+#: At most this many characters of a bad value go into an error message.
+MAX_SHOWN_CHARS = 60
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 2, 4, 4, 4
+_REPR.maxstring, _REPR.maxother = MAX_SHOWN_CHARS, MAX_SHOWN_CHARS
+
+
+def shown(value) -> str:
+    """``repr(value)`` cut to about :data:`MAX_SHOWN_CHARS` characters, never built in full
+    (a huge list or integer costs no more than a short one)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 128:
+        return f"an integer of {value.bit_length()} bits"
+    text = _REPR.repr(value)
+    return text if len(text) <= MAX_SHOWN_CHARS else text[: MAX_SHOWN_CHARS - 3] + "..."
+
+
+def _interval(low, high, low_open: bool, high_open: bool) -> str:
+    return f"{'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
+
+
+def check_bool(name: str, value) -> bool:
+    """``value`` if it is a boolean (``true``/``false`` in JSON); 1, 0 and ``"false"`` are refused."""
+    if not isinstance(value, bool):
+        raise InputError(f"{name} must be true or false, got {shown(value)}")
+    return value
+
+
+def check_number(name: str, value, low: float, high: float, *, low_open: bool = False, high_open: bool = False,
+                 off: float | None = None) -> float:
+    """``value`` if it is a finite number (int or float, not bool) in ``[low, high]``.
+
+    ``low_open``/``high_open`` exclude that bound; ``off``: a value outside the range that is
+    also accepted and means "switched off" (e.g. 0). ``high`` is required: every number a
+    setting takes has a documented upper bound.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"{name} must be a number, got {shown(value)}")
+    if not math.isfinite(value):
+        raise InputError(f"{name} must be a finite number, got {shown(value)}")
+    if off is not None and value == off:
+        return value
+    too_low = value <= low if low_open else value < low
+    too_high = value >= high if high_open else value > high
+    if too_low or too_high:
+        prefix = "" if off is None else f"{off} (off) or "
+        raise InputError(f"{name} must be {prefix}in {_interval(low, high, low_open, high_open)}, "
+                         f"got {shown(value)}")
+    return value
+
+
+def check_count(name: str, value, low: int, high: int) -> int:
+    """``value`` if it is an integer (not bool, not 3.0) in ``[low, high]``; ``high`` caps the
+    memory or time the count costs."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise InputError(f"{name} must be an integer in [{low}, {high}], got {shown(value)}")
+    return value
+
+
+def check_choice(name: str, value, choices: Sequence[str]) -> str:
+    """``value`` if it is one of ``choices``."""
+    if not isinstance(value, str) or value not in choices:
+        raise InputError(f"{name} must be one of {', '.join(choices)}, got {shown(value)}")
+    return value
+
+
+def check_sequence(name: str, value, max_items: int) -> tuple:
+    """``value`` as a tuple if it is a list or tuple of 1 to ``max_items`` entries (their own
+    checks are the caller's)."""
+    if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= max_items:
+        raise InputError(f"{name} must be a list of 1 to {max_items} entries, got {shown(value)}")
+    return tuple(value)
+
+
+def check_below(low_name: str, low, high_name: str, high, *, equal_ok: bool = False) -> None:
+    """Two fields that bound one range: ``low`` must lie below ``high`` (or equal it, ``equal_ok``)."""
+    if low > high or (low == high and not equal_ok):
+        relation = "must not exceed" if equal_ok else "must be below"
+        raise InputError(f"{low_name} ({shown(low)}) {relation} {high_name} ({shown(high)})")
