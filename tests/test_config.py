@@ -1,10 +1,25 @@
+import dataclasses
 import json
 
 import pytest
 
-from pedenv.config import DEFAULT_METHOD, Config, KalmanConfig, PaperConfig, TrackingConfig
+from pedenv.apps.run import detection_mode
+from pedenv.config import (
+    DEFAULT_METHOD,
+    SECTIONS,
+    Config,
+    DetectionConfig,
+    KalmanConfig,
+    MergeConfig,
+    PaperConfig,
+    TrackingConfig,
+)
+from pedenv.errors import InputError
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
+from pedenv.pose.models import backend_options
+
+from cli_in_process import pedenv
 
 
 def test_paper_defaults_are_the_papers():
@@ -84,3 +99,114 @@ def test_a_partial_section_starts_from_its_methods_defaults():
     assert paper.tracking == TrackingConfig(max_misses=5)
     fused = Config.from_dict({"tracking": {"max_misses": 5}})
     assert fused.tracking.max_misses == 5 and fused.tracking.predict_motion and fused.tracking.memory_s == 2.0
+
+
+# Issue 19 (items 4 and 5): each bad value in a config is one clear error naming section.field.
+@pytest.mark.parametrize("data, message", [
+    ({"paper": {"refinement_steps": 1000000000}},
+     r"paper.refinement_steps must be an integer in [0, 200], got 1000000000"),
+    ({"fused": {"history_length": 10 ** 12}}, "fused.history_length must be an integer in [1, 100], got 1000000000000"),
+    ({"tracking": {"max_misses": 1e9}}, "tracking.max_misses must be an integer in [1, 300], got 1000000000.0"),
+    ({"method": "paper", "paper": {"person_height_m": float("nan")}},
+     "paper.person_height_m must be a finite number, got nan"),
+    ({"fused": {"max_range_m": float("nan")}}, "fused.max_range_m must be a finite number, got nan"),
+    ({"fused": {"max_range_m": float("inf")}}, "fused.max_range_m must be a finite number, got inf"),
+    ({"paper": {"refine": "false"}}, "paper.refine must be true or false, got 'false'"),
+    ({"kalman": {"enabled": 0}}, "kalman.enabled must be true or false, got 0"),
+    ({"tracking": {"yaw_compensation": "yes"}}, "tracking.yaw_compensation must be true or false, got 'yes'"),
+    ({"tracking": {"giou_threshold": True}}, "tracking.giou_threshold must be a number, got True"),
+    ({"tracking": {"low_score_threshold": 0.3}},
+     "tracking.low_score_threshold must be 0.0 (off) or in (0.0, 0.25], got 0.3"),
+    ({"kalman": {"restart_gate": 1e300}}, "kalman.restart_gate must be in [0.0, 10000.0], got 1e+300"),
+    ({"fused": {"cues": ["ground", "x" * 10 ** 6]}},
+     f"fused.cues entry must be one of ground, triangulation, height, got '{'x' * 27}...{'x' * 28}'"),
+    ({"fused": {"cues": list(range(10 ** 6))}}, "fused.cues must be a list of 1 to 3 entries, got (0, 1, 2, 3, ...)"),
+    ({"detection": {"mode": "slow"}}, "detection.mode must be one of fast, far, got 'slow'"),
+    ({"detection": {"level_scales": [1.0, 2.0] * 10}},
+     "detection.level_scales must be a non-empty tuple of at most 8 numbers, got (1.0, 2.0, 1.0, 2.0, ...)"),
+    ({"detection": {"max_tiles": 1e9}}, "detection.max_tiles must be an integer in [1, 64], got 1000000000.0"),
+    ({"merge": {"oks": float("nan")}}, "merge.oks must be a finite number, got nan"),
+    ({"redetect": {"max_crops": 10 ** 9}}, "redetect.max_crops must be an integer in [0, 64], got 1000000000"),
+    ({"method": ["fused"] * 10 ** 6}, "method must be the name of a position method, got ['fused', 'fused', 'fused', "
+                                      "'fused', ...]"),
+    ({"paper": [1, 2]}, "config.paper must be an object of fields, got list"),
+    ({f"s{i}": {} for i in range(1000)}, "unknown config section(s): s0, s1, s10, s100, s101 and 995 more; "
+                                         f"valid: method, {', '.join(SECTIONS)}"),
+])
+def test_bad_config_values_give_one_clear_error(data, message):
+    with pytest.raises(InputError) as info:
+        Config.from_dict(data)
+    assert str(info.value) == message
+
+
+def _bad_values(value):
+    """Values of the wrong type, not finite or beyond any documented bound, for a field holding ``value``."""
+    if isinstance(value, bool):
+        return ["false", 1, None]
+    if isinstance(value, (int, float)):
+        return [float("nan"), float("inf"), 1e300, "1", True, None]
+    return [1e300, None]
+
+
+@pytest.mark.parametrize("section", list(SECTIONS))
+def test_every_field_checks_type_finiteness_and_an_upper_bound(section):
+    """Every value of every section: the wrong type, NaN, inf and 1e300 are refused, naming section.field."""
+    defaults = getattr(Config(), section)
+    for field in dataclasses.fields(defaults):
+        for bad in _bad_values(getattr(defaults, field.name)):
+            with pytest.raises(InputError, match=rf"^{section}\.{field.name}"):
+                Config.from_dict({section: {field.name: bad}})
+
+
+def test_every_setting_of_a_run_round_trips_through_config_json(tmp_path):
+    changed = {"tracking": {"max_misses": 7, "yaw_compensation": False}, "paper": {"refine": False},
+               "kalman": {"restart_gate": 9.0}, "fused": {"cues": ["ground", "height"], "history_length": 10},
+               "redetect": {"max_crops": 2}, "detection": {"mode": "fast", "level_scales": [1.0, 1.5, 3.0],
+                                                           "max_tiles": 6, "near_m": 3.0},
+               "merge": {"iou": 0.4, "oks": 0.35}}
+    cfg = Config().replace(**changed)
+    cfg.save(tmp_path / "config.json")
+    saved = json.loads((tmp_path / "config.json").read_text())
+    assert set(saved) == {"method", *SECTIONS} >= {"detection", "merge"}
+    assert saved["detection"]["level_scales"] == [1.0, 1.5, 3.0] and saved["merge"]["iou"] == 0.4
+    loaded = Config.load(tmp_path / "config.json")
+    assert loaded == cfg
+    assert loaded.detection == DetectionConfig(mode="fast", level_scales=(1.0, 1.5, 3.0), max_tiles=6, near_m=3.0)
+    assert loaded.merge == MergeConfig(iou=0.4, oks=0.35) and loaded.fused.cues == ("ground", "height")
+    for section, values in changed.items():  # every field changed above comes back as set
+        for name, value in values.items():
+            assert getattr(getattr(loaded, section), name) == (tuple(value) if isinstance(value, list) else value)
+
+
+def test_a_config_saved_before_detection_and_merge_loads_their_defaults(tmp_path):
+    data = Config().to_dict()
+    del data["detection"], data["merge"]
+    (tmp_path / "old.json").write_text(json.dumps(data))
+    old = Config.load(tmp_path / "old.json")
+    assert old == Config() and old.detection == DetectionConfig() and old.merge == MergeConfig()
+
+
+def test_the_commands_detection_mode_is_recorded_in_the_config():
+    cfg = Config().replace(detection={"max_tiles": 6})
+    assert detection_mode(cfg, "onnx", "fast").detection == DetectionConfig(mode="fast", max_tiles=6)
+    assert detection_mode(cfg, "onnx", None) == cfg
+    assert detection_mode(cfg, "ground-truth", "fast") == cfg
+    options = backend_options("onnx", None, None, cfg.detection, None, cfg.merge)
+    assert options["detection"] is cfg.detection and options["merge"] is cfg.merge
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ('{"method": "paper", "paper": {"person_height_m": NaN}}',
+     "paper.person_height_m must be a finite number, got nan"),
+    ('{"fused": {"max_range_m": Infinity}}', "fused.max_range_m must be a finite number, got inf"),
+    ('{"paper": {"refine": "false"}}', "paper.refine must be true or false, got 'false'"),
+    ('{"paper": {"refinement_steps": 1000000000}}', "paper.refinement_steps must be an integer in [0, 200]"),
+    ("[" * 50000, "the config is nested deeper than 64 levels"),
+])
+def test_a_bad_config_file_is_one_error_line_exit_2(monkeypatch, capsys, tmp_path, text, fragment):
+    path = tmp_path / "bad.json"
+    path.write_text(text)
+    code, _, err = pedenv(monkeypatch, capsys, "demo", "--config", path, "--output", tmp_path / "o")
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith(f"error: {path}: {fragment}"), err
+    assert not (tmp_path / "o").exists()

@@ -208,7 +208,7 @@ class Config:
 
 def _names(names) -> str:
     """Unknown names of a config, sorted and shortened (a hostile file may hold thousands)."""
-    listed = sorted(shown(str(n)) for n in names)
+    listed = sorted(str(n)[:40] for n in names)
     return ", ".join(listed[:5]) + (f" and {len(listed) - 5} more" if len(listed) > 5 else "")
 
 

@@ -24,7 +24,6 @@ from pathlib import Path
 import yaml
 
 from pedenv.errors import InputError, read_text
-from pedenv.validation import shown
 
 #: Largest YAML or JSON file read, bytes (10 MB; a manifest of 10,000 recordings is about 1 MB).
 MAX_BYTES = 10_000_000
@@ -79,7 +78,7 @@ def check_yaml_events(text: str, source, what: str) -> None:
             anchor = names.pop()
         elif isinstance(event, yaml.AliasEvent):
             if event.anchor in names:
-                raise InputError(f"{source}: {what} holds a recursive YAML alias (*{shown(event.anchor)})")
+                raise InputError(f"{source}: {what} holds a recursive YAML alias (*{event.anchor[:40]})")
             size, anchor = anchors.get(event.anchor, 1), None
         elif isinstance(event, yaml.ScalarEvent):
             size, anchor = 1 + len(event.value) // SCALAR_CHARS, event.anchor

@@ -25,7 +25,7 @@ from rich.console import Console
 
 from pedenv.apps.executors import TaskContext, create_executor
 from pedenv.apps.progress import FrameCounter, progress_bar
-from pedenv.apps.run import run_recording
+from pedenv.apps.run import detection_mode, run_recording
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.localization import configure
@@ -97,9 +97,10 @@ def _make_backend(o: dict):
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
 
+    cfg = detection_mode(o["config"], o["pose_backend"], o["detection"])
     return create_pose_backend(o["pose_backend"], **backend_options(
-        o["pose_backend"], o["pose_model"], o["pose_input_size"], o["detection"],
-        o["config"].tracking.pose_score_threshold))
+        o["pose_backend"], o["pose_model"], o["pose_input_size"], cfg.detection if o["detection"] else None,
+        cfg.tracking.pose_score_threshold, cfg.merge))
 
 
 def _complete(folder: Path, partial: bool = False) -> dict:

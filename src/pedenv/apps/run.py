@@ -55,6 +55,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
     cfg = configure(cfg, method) if method else cfg
+    cfg = detection_mode(cfg, pose_backend, detection)
     extra = extra_outputs or ExtraOutputs()
     extra.check()
     rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
@@ -63,7 +64,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
     if backend is None:
         backend = create_pose_backend(pose_backend, **backend_options(
-            pose_backend, pose_model, pose_input_size, detection, cfg.tracking.pose_score_threshold))
+            pose_backend, pose_model, pose_input_size, cfg.detection if detection else None,
+            cfg.tracking.pose_score_threshold, cfg.merge))
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     model = PedestrianEnvironmentModel(cfg)
@@ -105,6 +107,12 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
         summary["files"] = [str(p) for p in sinks.files]
         (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
+
+
+def detection_mode(cfg: Config, pose_backend: str, detection: str | None) -> Config:
+    """``cfg`` with ``detection.mode`` set to a command's ``--detection`` (onnx backend), so the
+    ``config.json`` of the run records the passes that ran."""
+    return cfg.replace(detection={"mode": detection}) if pose_backend == "onnx" and detection else cfg
 
 
 def _open_video(path: Path, rec: Recording, shape):

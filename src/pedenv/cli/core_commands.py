@@ -174,7 +174,8 @@ def evaluate(
             raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
         threshold = {} if cfg.tracking.pose_score_threshold is None else {
             "score_threshold": cfg.tracking.pose_score_threshold}
-        onnx = partial(create_pose_backend, "onnx", detection=detection or "far", **threshold)
+        cfg = cfg.replace(detection={"mode": detection or "far"})  # saved in config.json with the merge
+        onnx = partial(create_pose_backend, "onnx", detection=cfg.detection, merge=cfg.merge, **threshold)
     if executor == "serial" and (address is not None or workers is not None):
         from pedenv.errors import InputError
 

@@ -227,7 +227,8 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     return (384, 640) if width / height >= 1.6 else (640, 640)
 
 
-def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None) -> dict:
+def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None,
+                    merge=None) -> dict:
     """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size
     and detection mode (``fast`` or ``far``, onnx only).
 
@@ -235,11 +236,13 @@ def backend_options(backend: str, model=None, input_size=None, detection=None, s
     dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
     score_threshold: the network's person score threshold (onnx, ultralytics); None keeps
     the backend's own (0.25). The tracker's low-score band needs it lowered
-    (``TrackingConfig.pose_score_threshold``).
+    (``TrackingConfig.pose_score_threshold``). ``detection`` may be a ``DetectionConfig`` and
+    ``merge`` a ``MergeConfig`` (onnx; a run's ``Config.detection`` and ``Config.merge``).
     """
     scores = {} if score_threshold is None else {"score_threshold": score_threshold}
     if backend == "onnx":
-        return {"model_path": model, "input_size": input_size, "detection": detection, **scores}
+        return {"model_path": model, "input_size": input_size, "detection": detection, **scores,
+                **({} if merge is None else {"merge": merge})}
     if backend == "ultralytics":
         return {"weights": model, "input_size": input_size or 640, **scores}
     return {}

@@ -15,6 +15,7 @@ import numpy as np
 from pedenv.errors import InputError, require_extra
 from pedenv.pose import models
 from pedenv.pose.levels import plan_passes
+from pedenv.pose.merge import MergeConfig
 from pedenv.pose.multipass import detect_levels
 from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
@@ -37,6 +38,7 @@ class OnnxPose:
         size (the behaviour before detection modes). With ``detection``: the whole-frame pass's input.
     detection: ``"fast"``, ``"far"`` or a :class:`DetectionConfig`; None means ``"far"``
         unless ``input_size`` is given. A model with a fixed input runs every pass at that size.
+    merge: how the passes' detections are merged (:class:`MergeConfig`; None: its defaults).
     score_threshold: persons scoring at or below this are dropped (0.25). Raising it
         keeps fewer, surer persons.
     iou_threshold: a box overlapping a higher-scoring one by more than this IoU is
@@ -53,7 +55,8 @@ class OnnxPose:
 
     def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
                  iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2,
-                 detection: str | DetectionConfig | None = None, spin_wait: bool = False) -> None:
+                 detection: str | DetectionConfig | None = None, spin_wait: bool = False,
+                 merge: MergeConfig | None = None) -> None:
         require_extra("onnxruntime", "pose", "the onnx pose backend")
         import onnxruntime as ort
 
@@ -73,6 +76,7 @@ class OnnxPose:
         elif detection is not None and not isinstance(detection, DetectionConfig):
             raise ValueError(f"detection must be 'fast', 'far' or a DetectionConfig, got {detection!r}")
         self.detection: DetectionConfig | None = detection
+        self.merge = MergeConfig() if merge is None else merge
         if model_path is None:
             model_path = models.find_onnx_model(wanted)
         self.model_path = Path(model_path).expanduser()
@@ -138,7 +142,7 @@ class OnnxPose:
         dets, self.last_passes, self.last_note = detect_levels(
             self._infer, image_rgb, self.detection, geometry, fixed_input=None if self.dynamic else self.input_size,
             score_threshold=self.score_threshold, iou_threshold=self.iou_threshold,
-            max_detections=self.max_detections, base_input=self._base_input)
+            max_detections=self.max_detections, base_input=self._base_input, merge=self.merge)
         return dets
 
     def describe(self) -> dict:
