@@ -40,8 +40,8 @@ from pedenv.validation import (
      "s.n must be an integer in [0, 300], got an integer of 16610 bits"),
     (lambda: check_choice("s.mode", "slow", ("fast", "far")), "s.mode must be one of fast, far, got 'slow'"),
     (lambda: check_choice("s.mode", ["far"], ("fast", "far")), "s.mode must be one of fast, far, got ['far']"),
-    (lambda: check_sequence("s.cues", [], 3), "s.cues must be a list of 1 to 3 entries, got []"),
-    (lambda: check_sequence("s.cues", "abc", 3), "s.cues must be a list of 1 to 3 entries, got 'abc'"),
+    (lambda: check_sequence("s.cues", [], 3), "s.cues must list at least one and at most 3 entries, got []"),
+    (lambda: check_sequence("s.cues", "abc", 3), "s.cues must list at least one and at most 3 entries, got 'abc'"),
     (lambda: check_below("s.near", 5, "s.far", 5), "s.near (5) must be below s.far (5)"),
     (lambda: check_below("s.min", 6, "s.max", 5, equal_ok=True), "s.min (6) must not exceed s.max (5)"),
 ])

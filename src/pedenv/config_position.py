@@ -46,6 +46,11 @@ class PaperConfig:
         Kalman filter's R), as a fraction of the distance plus this floor; the paper
         gives none (tuned on the built-in scenes).
     measurement_std_rel: relative part of the measurement noise (per metre of distance).
+
+    Accepted values (:mod:`pedenv.validation`): low_confidence_fraction [0, 1);
+    person_height_m [0.3, 2.5]; refinement_steps 0..200; refinement_lambda_offset (0, 1000];
+    min_parallax_rad [0, 0.1]; max_distance_m [1, 10000]; measurement_std_m (0, 100];
+    measurement_std_rel [0, 10]; refine true or false.
     """
 
     low_confidence_fraction: float = 0.3
@@ -151,6 +156,15 @@ class FusedConfig:
     Each cue splits its covariance into the part new every frame (pixel noise, gait) and
     the part that repeats for the same person (height prior, road under them, a walker's
     drift); the model filters the first and adds the second to what it reports.
+
+    Accepted values (:mod:`pedenv.validation`; metres, pixels and ratios far beyond any real
+    camera or person): 1 to 3 cues; person_height_mean_m [0.5, 2.5]; person_height_std_m
+    (0, 0.5]; keypoint_pixel_std (0, 100]; min_keypoint_confidence [0, 1); ankle_height_std_m
+    [0, 1]; road_height_std_m [0, 2]; road_curvature_std_per_m [0, 0.1];
+    ground_max_distance_m [1, 1000]; history_length 1..100; min_baseline_m [0, 100];
+    min_parallax_rad [0, 0.5]; pedestrian_speed_std_mps [0, 10]; outlier_sigma (0, 100];
+    gate_probability (0, 1); lateral_std_m [0, 5]; stance_std_m [0, 2]; keypoint_span_scale
+    [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].
     """
 
     cues: tuple[str, ...] = FUSED_CUES

@@ -82,6 +82,12 @@ class TrackingConfig:
         with the image in 2 of 4 matches kept the gate, and a low-score sliver took a
         person's id. The seeded synthetic figures and the real KITTI and MOT17 runs are the
         same at 0.34 and 0.5.
+
+    Accepted values (:mod:`pedenv.validation`; the upper bounds lie far beyond any use and
+    keep a frame's work bounded): giou_threshold [-1, 1); max_misses 1..300; max_height_ratio
+    0 or (1, 100]; start_score_threshold [0, 1]; low_score_threshold 0 or (0,
+    start_score_threshold]; low_score_cost [0, 2]; ground_gate and memory_gate up to 1000;
+    ground_cost_weight [0, 10]; memory_s [0, 60]; camera_check [0, 1]; the switches true or false.
     """
 
     giou_threshold: float = -0.3
@@ -139,6 +145,9 @@ class KalmanConfig:
         Mahalanobis distance from the track's prediction exceeds this restarts the
         track's filter at the measurement (the track has switched to another person).
         Lowering it restarts more readily; the ``fused`` preset uses 25.
+
+    Accepted values: acceleration_std_mps2 and initial_velocity_std_mps (0, 100];
+    restart_gate [0, 10000] (0 = off); enabled true or false.
     """
 
     enabled: bool = True

@@ -87,7 +87,7 @@ def check_sequence(name: str, value, max_items: int) -> tuple:
     """``value`` as a tuple if it is a list or tuple of 1 to ``max_items`` entries (their own
     checks are the caller's)."""
     if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= max_items:
-        raise InputError(f"{name} must be a list of 1 to {max_items} entries, got {shown(value)}")
+        raise InputError(f"{name} must list at least one and at most {max_items} entries, got {shown(value)}")
     return tuple(value)
 
 
