@@ -37,7 +37,7 @@ test-fast: $(FULL)
 	$(BIN)/python -m pytest -q -m "not slow and not ultralytics and not onnx_model"
 
 lint: $(FULL)
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks tools
 	$(BIN)/mypy
 
 bench: $(FULL)
