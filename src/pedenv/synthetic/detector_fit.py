@@ -11,6 +11,8 @@ import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import median_abs_deviation
 
+from pedenv.boxes import greedy_match, iou_matrix
+
 #: Person height bins (pixels, ground-truth box height): [low, high).
 BINS: tuple[tuple[float, float], ...] = ((0.0, 50.0), (50.0, 100.0), (100.0, 200.0), (200.0, float("inf")))
 
@@ -19,36 +21,6 @@ def bin_index(heights_px: np.ndarray) -> np.ndarray:
     """(N,) int: the :data:`BINS` entry of each height (N,) pixels."""
     edges = np.array([b[1] for b in BINS[:-1]])
     return np.searchsorted(edges, np.asarray(heights_px, float), side="right")
-
-
-def iou_matrix(a: np.ndarray, b: np.ndarray, over_first: bool = False) -> np.ndarray:
-    """(N, M) IoU of boxes a (N, 4) and b (M, 4) ``[u_min, v_min, u_max, v_max]`` pixels.
-
-    over_first: intersection over the area of ``a`` instead (how much of ``a`` lies in ``b``).
-    """
-    a, b = np.asarray(a, float).reshape(-1, 4), np.asarray(b, float).reshape(-1, 4)
-    w = np.clip(np.minimum(a[:, None, 2], b[None, :, 2]) - np.maximum(a[:, None, 0], b[None, :, 0]), 0, None)
-    h = np.clip(np.minimum(a[:, None, 3], b[None, :, 3]) - np.maximum(a[:, None, 1], b[None, :, 1]), 0, None)
-    inter = w * h
-    area_a = (a[:, 2] - a[:, 0]) * (a[:, 3] - a[:, 1])
-    area_b = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
-    denom = area_a[:, None] if over_first else area_a[:, None] + area_b[None, :] - inter
-    return inter / np.maximum(denom, 1e-9)
-
-
-def greedy_match(iou: np.ndarray, scores: np.ndarray, threshold: float = 0.5) -> list[tuple[int, int]]:
-    """(detection, ground truth) pairs: detections by falling score take their best free box
-    with IoU >= ``threshold``. iou: (N, M); scores: (N,)."""
-    pairs, taken = [], np.zeros(iou.shape[1], bool)
-    for d in np.argsort(-np.asarray(scores), kind="stable"):
-        if iou.shape[1] == 0:
-            break
-        cand = np.where(taken, -1.0, iou[d])
-        g = int(np.argmax(cand))
-        if cand[g] >= threshold:
-            taken[g] = True
-            pairs.append((int(d), g))
-    return pairs
 
 
 def logistic(heights_px: np.ndarray, half_px: float, slope_px: float) -> np.ndarray:
