@@ -12,7 +12,7 @@ import numpy as np
 _MIN_AREA = 1e-12
 
 
-def _overlaps(a: np.ndarray, b: np.ndarray):
+def _overlaps(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
     """Signed overlap widths and heights (N, M) and the sizes of a (N, 1) and b (M,).
 
     The overlap is negative along an axis where the boxes are apart.

@@ -51,7 +51,7 @@ ATTRIBUTES = ("pedestrian.moving", "pedestrian.standing", "pedestrian.sitting_ly
 VISIBILITY = {"1": ("v0-40", 0.0), "2": ("v40-60", 0.4), "3": ("v60-80", 0.6), "4": ("v80-100", 0.8)}
 
 
-def token(*parts) -> str:
+def token(*parts: object) -> str:
     """A deterministic 32-hex-digit token for the record named by ``parts``."""
     return hashlib.md5("/".join(map(str, parts)).encode()).hexdigest()
 
