@@ -94,7 +94,8 @@ class Metrics:
     info: dict
 
     @classmethod
-    def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking, timing_ms, info) -> Metrics:
+    def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking: dict | None, timing_ms: dict,
+                     info: dict) -> Metrics:
         arrays = {name: s.arrays() for name, s in per_scene.items()}
         every = {k: np.concatenate([a[k] for a in arrays.values()]) if arrays else np.zeros(0)
                  for k in ("abs_err", "rel_err", "distance", "mahalanobis")}

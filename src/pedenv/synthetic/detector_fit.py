@@ -7,6 +7,8 @@ and the tests that check a fitted profile reproduces those measurements.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import median_abs_deviation
@@ -33,7 +35,7 @@ def fit_detection_curve(heights_px: np.ndarray, detected: np.ndarray) -> tuple[f
     curve from persons' heights (N,) pixels and whether each was detected (N,) bool."""
     h, y = np.asarray(heights_px, float), np.asarray(detected, bool)
 
-    def nll(p):
+    def nll(p: np.ndarray) -> float:
         q = np.clip(logistic(h, p[0], np.exp(p[1])), 1e-9, 1 - 1e-9)
         return -(np.log(q[y]).sum() + np.log(1 - q[~y]).sum())
 
@@ -71,7 +73,7 @@ def recall_by_bin(heights_px: np.ndarray, detected: np.ndarray) -> list[float | 
     return [float(detected[idx == b].mean()) if (idx == b).any() else None for b in range(len(BINS))]
 
 
-def synthetic_recall(frames, model, span_over_box: float) -> tuple[np.ndarray, np.ndarray]:
+def synthetic_recall(frames: Any, model: Any, span_over_box: float) -> tuple[np.ndarray, np.ndarray]:
     """Run the detector ``model`` on ``frames`` (with ground-truth skeletons) and match like the
     real benchmark (IoU >= 0.5, greedy by score). Returns ``(heights (N,) px, detected (N,) bool)``.
 
@@ -112,7 +114,8 @@ class Offsets:
     def __init__(self) -> None:
         self.rows: dict[tuple, list[tuple[float, float, float]]] = {}
 
-    def add(self, key_of, keypoints, confidences, scores, boxes, truth_boxes, ground_uv, counted) -> None:
+    def add(self, key_of: Any, keypoints: np.ndarray, confidences: np.ndarray, scores: np.ndarray,
+            boxes: np.ndarray, truth_boxes: np.ndarray, ground_uv: np.ndarray, counted: np.ndarray) -> None:
         """One image: detections (N, 17, 2) px, (N, 17), (N,), boxes (N, 4) px; truth boxes
         (M, 4) px, true ground points (M, 2) px, counted (M,) bool; ``key_of(g)`` names truth
         person g."""
@@ -139,7 +142,7 @@ class Offsets:
                 "foot_within_person": robust_std(w[:, 0]), "column_within_person": robust_std(w[:, 1])}
 
 
-def synthetic_offsets(model, scenes) -> tuple[Offsets, float]:
+def synthetic_offsets(model: Any, scenes: Any) -> tuple[Offsets, float]:
     """Offsets of ``model``'s detections against the projected true positions on ``scenes``,
     and the median ratio of box height to keypoint extent of the persons measured."""
     from pedenv.geometry import invert_transform, project
@@ -162,7 +165,7 @@ def fit_person_offset(real: dict, synthetic: dict, box_over_extent: float) -> di
     """The detector model's per-person offsets (in keypoint extents) that bring the synthetic
     spread across persons up to the real one: ``sqrt(real**2 - synthetic**2)``, 0 where the
     synthetic spread is already as large."""
-    def extra(key):
+    def extra(key: str) -> float:
         return float(np.sqrt(max(real[key] ** 2 - synthetic[key] ** 2, 0.0)) * box_over_extent)
 
     return {"person_offset_u": extra("column_across_persons"), "person_offset_v": extra("foot_across_persons")}
