@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from pedenv.config_position import FUSED_CUES, INITIAL_ESTIMATES, FusedConfig, PaperConfig
 from pedenv.config_tracking import KalmanConfig, TrackingConfig
@@ -177,7 +179,7 @@ class Config:
             built[name] = kind(**{**preset.get(name, {}), **values})
         return cls(method=method, **built)
 
-    def replace(self, method: str | None = None, **sections) -> Config:
+    def replace(self, method: str | None = None, **sections: dict[str, Any]) -> Config:
         """A copy with the method or some sections' fields changed:
         ``cfg.replace(paper={"refine": False})``. A new ``method`` here keeps every section
         as it is; :func:`pedenv.localization.configure` switches to a method with its defaults."""
@@ -206,7 +208,7 @@ class Config:
             raise InputError(f"{path}: {exc}") from None
 
 
-def _names(names) -> str:
+def _names(names: Iterable[object]) -> str:
     """Unknown names of a config, sorted and shortened (a hostile file may hold thousands)."""
     listed = sorted(str(n)[:40] for n in names)
     return ", ".join(listed[:5]) + (f" and {len(listed) - 5} more" if len(listed) > 5 else "")

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -59,7 +60,7 @@ def _mark(exc: yaml.YAMLError) -> str:
     return f"line {mark.line + 1}, column {mark.column + 1}: {problem}" if mark is not None else str(problem)
 
 
-def check_yaml_events(text: str, source, what: str) -> None:
+def check_yaml_events(text: str, source: object, what: str) -> None:
     """Refuse a YAML text nested deeper than :data:`MAX_DEPTH` or expanding to more than
     :data:`MAX_VALUES` values, from its parser events alone (iterative, nothing built)."""
     sizes: list[int] = []  # per open collection: the expanded values inside it so far
@@ -94,7 +95,7 @@ def check_yaml_events(text: str, source, what: str) -> None:
             raise InputError(f"{source}: {what} expands to more than {MAX_VALUES:,} values (YAML aliases?)")
 
 
-def parse_yaml(text: str, source, what: str = "the file"):
+def parse_yaml(text: str, source: object, what: str = "the file") -> Any:
     """The YAML document in ``text`` (PyYAML's safe loader: data only, never code), read from
     ``source`` (a path, named in every error), within the limits of the module doc."""
     try:
@@ -106,7 +107,7 @@ def parse_yaml(text: str, source, what: str = "the file"):
         raise InputError(f"{source}: {what} is nested too deeply to read") from None
 
 
-def _json_depth_ok(data) -> bool:
+def _json_depth_ok(data: Any) -> bool:
     stack = [(data, 1)]
     while stack:
         node, depth = stack.pop()
@@ -119,7 +120,7 @@ def _json_depth_ok(data) -> bool:
     return True
 
 
-def parse_json(text: str, source, what: str = "the file"):
+def parse_json(text: str, source: object, what: str = "the file") -> Any:
     """The JSON document in ``text`` read from ``source`` (named in every error), nested at
     most :data:`MAX_DEPTH` deep. ``NaN`` and ``Infinity`` parse as floats; the field that
     gets one refuses it (:func:`pedenv.validation.check_number`)."""
@@ -138,11 +139,11 @@ def parse_json(text: str, source, what: str = "the file"):
     return data
 
 
-def load_yaml(path: str | Path, what: str = "the file"):
+def load_yaml(path: str | Path, what: str = "the file") -> Any:
     """The YAML document in the file ``path`` (see :func:`parse_yaml`), at most :data:`MAX_BYTES`."""
     return parse_yaml(read_limited_text(path, what), path, what)
 
 
-def load_json(path: str | Path, what: str = "the file"):
+def load_json(path: str | Path, what: str = "the file") -> Any:
     """The JSON document in the file ``path`` (see :func:`parse_json`), at most :data:`MAX_BYTES`."""
     return parse_json(read_limited_text(path, what), path, what)

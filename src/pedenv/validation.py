@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import reprlib
 from collections.abc import Sequence
+from typing import Any
 
 from pedenv.errors import InputError
 
@@ -25,7 +26,7 @@ _REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 2, 4, 4, 4
 _REPR.maxstring, _REPR.maxother = MAX_SHOWN_CHARS, MAX_SHOWN_CHARS
 
 
-def shown(value) -> str:
+def shown(value: Any) -> str:
     """``repr(value)`` cut to about :data:`MAX_SHOWN_CHARS` characters, never built in full
     (a huge list or integer costs no more than a short one)."""
     if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 128:
@@ -34,18 +35,18 @@ def shown(value) -> str:
     return text if len(text) <= MAX_SHOWN_CHARS else text[: MAX_SHOWN_CHARS - 3] + "..."
 
 
-def _interval(low, high, low_open: bool, high_open: bool) -> str:
+def _interval(low: float, high: float, low_open: bool, high_open: bool) -> str:
     return f"{'(' if low_open else '['}{low}, {high}{')' if high_open else ']'}"
 
 
-def check_bool(name: str, value) -> bool:
+def check_bool(name: str, value: Any) -> bool:
     """``value`` if it is a boolean (``true``/``false`` in JSON); 1, 0 and ``"false"`` are refused."""
     if not isinstance(value, bool):
         raise InputError(f"{name} must be true or false, got {shown(value)}")
     return value
 
 
-def check_number(name: str, value, low: float, high: float, *, low_open: bool = False, high_open: bool = False,
+def check_number(name: str, value: Any, low: float, high: float, *, low_open: bool = False, high_open: bool = False,
                  off: float | None = None) -> float:
     """``value`` if it is a finite number (int or float, not bool) in ``[low, high]``.
 
@@ -68,7 +69,7 @@ def check_number(name: str, value, low: float, high: float, *, low_open: bool = 
     return value
 
 
-def check_count(name: str, value, low: int, high: int) -> int:
+def check_count(name: str, value: Any, low: int, high: int) -> int:
     """``value`` if it is an integer (not bool, not 3.0) in ``[low, high]``; ``high`` caps the
     memory or time the count costs."""
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
@@ -76,14 +77,14 @@ def check_count(name: str, value, low: int, high: int) -> int:
     return value
 
 
-def check_choice(name: str, value, choices: Sequence[str]) -> str:
+def check_choice(name: str, value: Any, choices: Sequence[str]) -> str:
     """``value`` if it is one of ``choices``."""
     if not isinstance(value, str) or value not in choices:
         raise InputError(f"{name} must be one of {', '.join(choices)}, got {shown(value)}")
     return value
 
 
-def check_sequence(name: str, value, max_items: int) -> tuple:
+def check_sequence(name: str, value: Any, max_items: int) -> tuple:
     """``value`` as a tuple if it is a list or tuple of 1 to ``max_items`` entries (their own
     checks are the caller's)."""
     if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= max_items:
@@ -91,7 +92,7 @@ def check_sequence(name: str, value, max_items: int) -> tuple:
     return tuple(value)
 
 
-def check_below(low_name: str, low, high_name: str, high, *, equal_ok: bool = False) -> None:
+def check_below(low_name: str, low: float, high_name: str, high: float, *, equal_ok: bool = False) -> None:
     """Two fields that bound one range: ``low`` must lie below ``high`` (or equal it, ``equal_ok``)."""
     if low > high or (low == high and not equal_ok):
         relation = "must not exceed" if equal_ok else "must be below"
