@@ -19,12 +19,14 @@ document's values.
 from __future__ import annotations
 
 import json
+import os
+import stat
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from pedenv.errors import InputError, read_text
+from pedenv.errors import InputError
 
 #: Largest YAML or JSON file read, bytes (10 MB; a manifest of 10,000 recordings is about 1 MB).
 MAX_BYTES = 10_000_000
@@ -41,17 +43,35 @@ _OPEN = (yaml.SequenceStartEvent, yaml.MappingStartEvent)
 _CLOSE = (yaml.SequenceEndEvent, yaml.MappingEndEvent)
 
 
+def _read_bytes(path: str | Path, what: str) -> bytes:
+    """The bytes of ``path`` if at most :data:`MAX_BYTES`, never allocating more (a regular file
+    is measured before it is read; a pipe is read in chunks until it ends or passes the limit)."""
+    with open(path, "rb") as f:
+        info = os.fstat(f.fileno())
+        chunks: list[bytes] = []
+        if stat.S_ISREG(info.st_mode) and info.st_size <= MAX_BYTES:
+            chunks.append(f.read(info.st_size + 1))  # +1: a file grown since shows it
+        elif not stat.S_ISREG(info.st_mode):
+            while sum(map(len, chunks)) <= MAX_BYTES and (chunk := f.read(1 << 16)):
+                chunks.append(chunk)
+        if not stat.S_ISREG(info.st_mode) or info.st_size <= MAX_BYTES:
+            data = b"".join(chunks)
+            if len(data) <= MAX_BYTES:
+                return data
+    raise InputError(f"{path}: {what} is larger than {MAX_BYTES:,} bytes")
+
+
 def read_limited_text(path: str | Path, what: str) -> str:
     """The text of ``path`` (UTF-8, a byte-order mark accepted) if it holds at most
     :data:`MAX_BYTES`; ``what`` it holds (e.g. "the config") names it in the error."""
     try:
-        with open(path, "rb") as f:
-            head = f.read(MAX_BYTES + 1)
-    except OSError:
-        head = b""  # read_text below gives the one error line naming the cause
-    if len(head) > MAX_BYTES:
-        raise InputError(f"{path}: {what} is larger than {MAX_BYTES:,} bytes")
-    return read_text(path, what)
+        data = _read_bytes(path, what)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: {what} is not UTF-8 text (a binary file?)") from None
 
 
 def _mark(exc: yaml.YAMLError) -> str:
