@@ -1,0 +1,172 @@
+"""Open a ROS bag without a ROS installation: rosbag2 (sqlite3 or MCAP), a single ``.mcap``, ROS 1 ``.bag``.
+
+The pure-Python ``rosbags`` library (the ``ros`` extra) reads the containers and the
+message definitions stored in them; :class:`BagSource` turns each of its failures into one
+:class:`~pedenv.errors.InputError` line naming the bag, the topic and the message index.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Iterator
+from contextlib import ExitStack
+from dataclasses import dataclass
+from pathlib import Path
+
+from pedenv.errors import InputError, require_extra
+
+#: A message larger than this (bytes) is refused as corrupt before it is decoded: an 8K
+#: RGB image is 100 MB, so 512 MiB only stops a size field that lies or a runaway
+#: message that would exhaust memory. Raising it admits larger messages.
+MAX_MESSAGE_BYTES = 512 * 2**20
+
+
+@dataclass(frozen=True)
+class TopicSummary:
+    """One topic of a bag: message type (``pkg/msg/Name``), message count and the span of
+    its receive times (nanoseconds; first == last for one message)."""
+
+    name: str
+    msgtype: str
+    count: int
+    first_ns: int
+    last_ns: int
+
+    @property
+    def rate_hz(self) -> float | None:
+        """Mean message rate over the topic's span, or None for fewer than 2 messages."""
+        span = (self.last_ns - self.first_ns) / 1e9
+        return (self.count - 1) / span if self.count > 1 and span > 0 else None
+
+
+@dataclass(frozen=True)
+class BagMessage:
+    """One decoded message: topic, index within the topic (0-based), receive time (ns), message."""
+
+    topic: str
+    index: int
+    log_ns: int
+    msg: object
+
+
+def _bag_kind(path: Path) -> str:
+    if path.is_dir():
+        if not (path / "metadata.yaml").is_file():
+            raise InputError(f"{path}: not a rosbag2 folder (no metadata.yaml in it)")
+        return "rosbag2"
+    if not path.is_file():
+        raise InputError(f"{path}: bag not found")
+    if path.suffix == ".bag":
+        return "ros1"
+    if path.suffix == ".mcap":
+        return "mcap"
+    raise InputError(f"{path}: not a bag (a rosbag2 folder with metadata.yaml, a .mcap file or a ROS 1 .bag)")
+
+
+class BagSource:
+    """A bag opened for reading (a context manager); ``topics`` lists what it holds."""
+
+    def __init__(self, path: str | Path, *, max_message_bytes: int = MAX_MESSAGE_BYTES) -> None:
+        require_extra("rosbags", "ros", "--bag")
+        if not 1024 <= max_message_bytes <= 2**40:
+            raise InputError(f"bag.max_message_bytes must be in [1024, 2**40], got {max_message_bytes!r}")
+        self.path = Path(path)
+        self.kind = _bag_kind(self.path)
+        self.max_message_bytes = max_message_bytes
+        self._stack = ExitStack()
+        self._reader = None
+        self.is_ros1 = self.kind == "ros1"
+
+    def __enter__(self) -> BagSource:
+        from rosbags.rosbag1 import Reader as Reader1
+        from rosbags.rosbag2 import Reader as Reader2
+        from rosbags.rosbag2.storage_mcap import McapReader
+
+        opener = {"ros1": Reader1, "rosbag2": Reader2, "mcap": McapReader}[self.kind]
+        try:
+            reader = opener(self.path)
+            reader.open()
+            self._stack.callback(reader.close)
+            self._reader = reader
+            self.typestore = _typestore(reader.connections, self.is_ros1)
+        except InputError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - any library failure is a damaged bag
+            self._stack.close()
+            raise InputError(f"{self.path}: cannot open the bag (truncated or damaged?): {_why(exc)}") from None
+        self.connections = list(reader.connections)
+        self.topics = self._summaries()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stack.close()
+
+    def _summaries(self) -> dict[str, TopicSummary]:
+        topics: dict[str, TopicSummary] = {}
+        for c in self.connections:
+            old = topics.get(c.topic)
+            count = int(c.msgcount) + (old.count if old else 0)
+            topics[c.topic] = TopicSummary(c.topic, c.msgtype, count, 0, 0)
+        return dict(sorted(topics.items()))
+
+    def topics_of(self, *msgtypes: str) -> list[str]:
+        """The topics whose type is one of ``msgtypes`` (``pkg/msg/Name``), sorted."""
+        return [t.name for t in self.topics.values() if t.msgtype in msgtypes]
+
+    def messages(self, topics: Collection[str]) -> Iterator[BagMessage]:
+        """The messages of ``topics`` in receive-time order, decoded. A message that cannot be
+        read or decoded raises InputError naming the bag, topic and message index."""
+        conns = [c for c in self.connections if c.topic in topics]
+        counts = dict.fromkeys(topics, 0)
+        if not conns:
+            return
+        last = {"topic": "?", "index": -1}
+        stream = self._reader.messages(conns) if self.kind == "mcap" else self._reader.messages(connections=conns)
+        try:
+            for conn, log_ns, raw in stream:
+                index = counts[conn.topic]
+                counts[conn.topic] += 1
+                last.update(topic=conn.topic, index=index)
+                yield BagMessage(conn.topic, index, int(log_ns), self._decode(conn, index, raw))
+        except InputError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - the container itself is damaged past this point
+            raise InputError(f"{self.path}: damaged or truncated after topic {last['topic']} message "
+                             f"{last['index']}: {_why(exc)}") from None
+
+    def _decode(self, conn, index: int, raw) -> object:
+        where = f"{self.path}: topic {conn.topic} message {index}"
+        if len(raw) > self.max_message_bytes:
+            raise InputError(f"{where}: {len(raw)} bytes, more than bag.max_message_bytes "
+                             f"({self.max_message_bytes}); a corrupt size field or a runaway message")
+        try:
+            if self.is_ros1:
+                return self.typestore.deserialize_ros1(raw, conn.msgtype)
+            return self.typestore.deserialize_cdr(raw, conn.msgtype)
+        except Exception as exc:  # noqa: BLE001 - a size field that lies shows up as any decode error
+            raise InputError(f"{where} ({conn.msgtype}) cannot be decoded (a size field beyond the "
+                             f"message's {len(raw)} bytes?): {_why(exc)}") from None
+
+
+def _why(exc: Exception) -> str:
+    text = " ".join(str(a) for a in exc.args) or type(exc).__name__
+    return text.splitlines()[0] if text.strip() else type(exc).__name__
+
+
+def _typestore(connections, is_ros1: bool):
+    """A typestore with the bag's own message definitions, the ROS distribution's types for the rest."""
+    from rosbags.interfaces import MessageDefinitionFormat
+    from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC if is_ros1 else Stores.ROS2_HUMBLE)
+    types: dict = {}
+    for c in connections:
+        if c.msgdef.format == MessageDefinitionFormat.MSG and c.msgdef.data:
+            types.update(get_types_from_msg(c.msgdef.data, c.msgtype))
+        elif c.msgdef.format == MessageDefinitionFormat.IDL and c.msgdef.data:
+            sep = "=" * 80 + "\n"
+            parts = c.msgdef.data.split(sep)[1:] if c.msgdef.data.startswith(sep) else [c.msgdef.data]
+            for part in parts:
+                types.update(get_types_from_idl(part.split("\n", 1)[1] if part.startswith("IDL: ") else part))
+    known = {k: v for k, v in types.items() if k not in store.fielddefs}
+    store.register(known)  # the bag's definitions of standard types match the store's (checked by its hash)
+    return store
