@@ -100,6 +100,17 @@ def run(
     address: str | None = typer.Option(None, "--address", help="Ray cluster HOST:PORT; default: a local Ray."),
     workers: int | None = typer.Option(None, "--workers", help="Ray: local CPUs, or most tasks at once on a cluster."),
     resume: bool = typer.Option(False, "--resume", help="With --manifest: keep the recordings already complete."),
+    bag: Path | None = typer.Option(
+        None, "--bag", help="A ROS bag instead of images + calibration + ego poses: rosbag2 folder, .mcap or .bag."),
+    image_topic: str | None = typer.Option(None, "--image-topic", help="--bag: the Image/CompressedImage topic."),
+    camera_info_topic: str | None = typer.Option(None, "--camera-info-topic", help="--bag: the CameraInfo topic."),
+    odometry_topic: str | None = typer.Option(
+        None, "--odometry-topic", help="--bag: nav_msgs/Odometry for the ego poses instead of /tf."),
+    world_frame: str | None = typer.Option(None, "--world-frame", help="--bag: the tf world frame (map, odom)."),
+    vehicle_frame: str | None = typer.Option(None, "--vehicle-frame", help="--bag: the tf vehicle frame."),
+    ros_out: Path | None = typer.Option(
+        None, "--ros-out", help="Write ROS 2 messages (vision_msgs, RViz markers, /tf, Autoware) as a rosbag2 "
+                                "FILE.mcap."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
     or on every recording of a --manifest."""
@@ -113,28 +124,51 @@ def run(
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
         if parquet or rerun or mcap:
             raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+        if ros_out or bag:
+            raise InputError("--ros-out and --bag are for single-recording runs, not --manifest runs")
         _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
                       overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
                       pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
                       method=method)
         return
-    if calibration is None or ego_poses is None:
-        raise InputError("give --calibration and --ego-poses (or a --manifest of recordings)")
+    bag_options = _bag_options(bag, images, video, calibration, ego_poses, image_topic=image_topic,
+                               camera_info_topic=camera_info_topic, odometry_topic=odometry_topic,
+                               world_frame=world_frame, vehicle_frame=vehicle_frame)
+    if bag is None and (calibration is None or ego_poses is None):
+        raise InputError("give --calibration and --ego-poses (or a --bag, or a --manifest of recordings)")
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
     from pedenv.outputs.sinks import ExtraOutputs
 
-    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap)
+    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap,
+                         ros=ros_out)
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            extra_outputs=extra, progress=progress, method=method)
+            extra_outputs=extra, progress=progress, method=method, bag=bag, bag_options=bag_options)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")
+
+
+def _bag_options(bag: Path | None, *recording, **choices):
+    """The BagOptions of ``--bag`` and its topic and frame flags (None without a bag)."""
+    from pedenv.errors import InputError
+
+    if bag is None:
+        given = [f"--{k.replace('_', '-')}" for k, v in choices.items() if v is not None]
+        if given:
+            raise InputError(f"{', '.join(given)} apply to --bag")
+        return None
+    if any(v is not None for v in recording):
+        raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration "
+                         "and --ego-poses")
+    from pedenv.recordings.bag_topics import BagOptions
+
+    return BagOptions(**choices)
 
 
 def _run_manifest(manifest: Path, output: Path, **options) -> None:
