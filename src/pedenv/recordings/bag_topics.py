@@ -57,7 +57,7 @@ def _pick(bag, given: str | None, types: tuple[str, ...], what: str, flag: str, 
     found = bag.topics_of(*types)
     if given is not None:
         if given not in bag.topics or bag.topics[given].msgtype not in types:
-            raise InputError(f"{bag.path}: {flag} {given} is not a {what} topic of the bag; it holds: {_holds(bag)}")
+            raise InputError(f"{bag.path}: {flag} {given} is not one of the bag's {what} topics; it holds: {_holds(bag)}")
         return given
     if len(found) > 1 and prefer in found:
         return prefer
