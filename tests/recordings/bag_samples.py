@@ -32,6 +32,7 @@ class BagForm:
     distortion: tuple[str, tuple[float, ...]] | None = None
     camera_frame: str = "camera_optical"
     drop_camera_link: bool = False
+    encoding_at: tuple[int, str] | None = None  # (image index, encoding it claims): a bad message on purpose
 
 
 def quaternion_calibration(recording: Path) -> np.ndarray:
@@ -152,8 +153,11 @@ def write_bag(recording: Path, out: Path, form: BagForm = BagForm(), distort=Non
                        if form.ego == "tf" else ("/odom", "nav_msgs/msg/Odometry", ns, m.odometry(ns, xyz, wxyz)))
     kind = "sensor_msgs/msg/CompressedImage" if form.images == "compressed" else "sensor_msgs/msg/Image"
     topic = "/camera/image_raw/compressed" if form.images == "compressed" else "/camera/image_raw"
-    for path, ns in images:
-        records.append((topic, kind, ns, m.image(ns, form.camera_frame, path, form.images, distort)))
+    for i, (path, ns) in enumerate(images):
+        msg = m.image(ns, form.camera_frame, path, form.images, distort)
+        if form.encoding_at is not None and form.encoding_at[0] == i:
+            msg.encoding = form.encoding_at[1]
+        records.append((topic, kind, ns, msg))
     records.sort(key=lambda r: r[2])
     return _write(records, out, form.storage, store)
 
