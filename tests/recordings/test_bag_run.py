@@ -97,7 +97,8 @@ def test_an_unknown_encoding_stops_the_run_after_the_frames_before_it(kitti, tmp
     bag = write_bag(kitti, tmp_path / "images.bag", BagForm("ros1", "rgb8", encoding_at=(2, "rgb9")))
     code, _, stderr = _run(monkeypatch, capsys, tmp_path / "out", "--bag", bag, detection="fast")
     assert code == 2
-    assert [line for line in stderr.splitlines() if "error" in line] == [f"error: {bag}: topic /camera/image_raw message 2: unknown image encoding 'rgb9' "
+    errors = [line for line in stderr.splitlines() if "error" in line]
+    assert errors == [f"error: {bag}: topic /camera/image_raw message 2: unknown image encoding 'rgb9' "
                                    "(known: rgb8, bgr8, rgba8, bgra8, mono8, 8UC1, 8UC3, mono16, 16UC1, bayer_rggb8, "
                                    "bayer_bggr8, bayer_gbrg8, bayer_grbg8, yuv422, uyvy, yuv422_yuy2, yuyv)"]
     assert len(read_environment(tmp_path / "out" / "environment.jsonl")) == 2

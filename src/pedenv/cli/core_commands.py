@@ -31,7 +31,8 @@ def _config(path: Path | None, method: str | None = None, **paper) -> Config:
 
 def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path | None, *,
                    matches: bool = False, video_scene: str | None = None, ros: Path | None = None):
-    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap``, ``--ros-out`` flags (and the bird's-eye video)."""
+    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap``, ``--ros-out`` flags (and the bird's-eye
+    video)."""
     from pedenv.outputs.sinks import ExtraOutputs
 
     return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,7 +50,7 @@ class RosBagWriter:
         self._folder = self.path.with_name(self.path.name + ".partial")
         shutil.rmtree(self._folder, ignore_errors=True)
         self._store = ros2_typestore()
-        self._writer = Writer(self._folder, version=9, storage_plugin=StoragePlugin.MCAP)
+        self._writer: Any = Writer(self._folder, version=9, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
         self._connections = {topic: self._writer.add_connection(topic, kind, typestore=self._store)
                              for topic, kind in TOPICS.items()}

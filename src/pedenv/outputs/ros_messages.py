@@ -77,8 +77,9 @@ def transforms(store, state: EnvironmentState, cam_to_vehicle: np.ndarray, ns: i
     """``tf2_msgs/TFMessage``: world -> base_link (the ego pose) and base_link -> camera_optical."""
     def tf(parent, child, translation, rotation):
         x, y, z, w = Rotation.from_matrix(rotation).as_quat()
-        t = make(store, "geometry_msgs/msg/Transform", translation=_point(store, translation, "geometry_msgs/msg/Vector3"),
-                 rotation=make(store, "geometry_msgs/msg/Quaternion", x=x, y=y, z=z, w=w))
+        q = make(store, "geometry_msgs/msg/Quaternion", x=x, y=y, z=z, w=w)
+        t = make(store, "geometry_msgs/msg/Transform",
+                 translation=_point(store, translation, "geometry_msgs/msg/Vector3"), rotation=q)
         return make(store, "geometry_msgs/msg/TransformStamped", header=header(store, ns, parent), child_frame_id=child,
                     transform=t)
 

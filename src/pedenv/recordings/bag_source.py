@@ -11,6 +11,7 @@ from collections.abc import Collection, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from pedenv.errors import InputError, require_extra
 
@@ -73,7 +74,7 @@ class BagSource:
         self.kind = _bag_kind(self.path)
         self.max_message_bytes = max_message_bytes
         self._stack = ExitStack()
-        self._reader = None
+        self._reader: Any = None
         self.is_ros1 = self.kind == "ros1"
 
     def __enter__(self) -> BagSource:
@@ -81,7 +82,7 @@ class BagSource:
         from rosbags.rosbag2 import Reader as Reader2
         from rosbags.rosbag2.storage_mcap import McapReader
 
-        opener = {"ros1": Reader1, "rosbag2": Reader2, "mcap": McapReader}[self.kind]
+        opener: Any = {"ros1": Reader1, "rosbag2": Reader2, "mcap": McapReader}[self.kind]
         try:
             reader = opener(self.path)
             reader.open()
@@ -132,6 +133,19 @@ class BagSource:
         except Exception as exc:  # noqa: BLE001 - the container itself is damaged past this point
             raise InputError(f"{self.path}: damaged or truncated after topic {last['topic']} message "
                              f"{last['index']}: {_why(exc)}") from None
+
+    def log_spans(self) -> dict[str, TopicSummary]:
+        """``topics`` with each topic's first and last receive time (reads every message, decodes none)."""
+        spans: dict[str, list[int]] = {}
+        try:
+            stream = self._reader.messages(self.connections) if self.kind == "mcap" else self._reader.messages()
+            for conn, log_ns, _ in stream:
+                span = spans.setdefault(conn.topic, [int(log_ns), int(log_ns)])
+                span[0], span[1] = min(span[0], int(log_ns)), max(span[1], int(log_ns))
+        except Exception as exc:  # noqa: BLE001 - a damaged container
+            raise InputError(f"{self.path}: damaged or truncated: {_why(exc)}") from None
+        return {name: TopicSummary(t.name, t.msgtype, t.count, *spans.get(name, (0, 0)))
+                for name, t in self.topics.items()}
 
     def _decode(self, conn, index: int, raw) -> object:
         where = f"{self.path}: topic {conn.topic} message {index}"

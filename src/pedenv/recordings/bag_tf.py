@@ -150,7 +150,8 @@ class TransformTree:
         for t in stamps:
             m = np.eye(4)
             for f in frames:
-                link = self.static[f][1] if f in self.static else links[f].at(t).matrix
+                pose = None if f in self.static else links[f].at(t)
+                link = self.static[f][1] if pose is None else pose.matrix
                 m = link @ m
             poses.append(m)
         return _matrix_trajectory(np.array(stamps), np.array(poses), f"{self.bag} /tf {world}->{vehicle}")

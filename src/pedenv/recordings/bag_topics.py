@@ -57,9 +57,10 @@ def _pick(bag, given: str | None, types: tuple[str, ...], what: str, flag: str, 
     found = bag.topics_of(*types)
     if given is not None:
         if given not in bag.topics or bag.topics[given].msgtype not in types:
-            raise InputError(f"{bag.path}: {flag} {given} is not one of the bag's {what} topics; it holds: {_holds(bag)}")
+            raise InputError(f"{bag.path}: {flag} {given} is not one of the bag's {what} topics; it holds: "
+                             f"{_holds(bag)}")
         return given
-    if len(found) > 1 and prefer in found:
+    if len(found) > 1 and prefer is not None and prefer in found:
         return prefer
     if len(found) > 1 and what == "image":  # the same camera raw and compressed: the raw images
         raw = [t for t in found if t + "/compressed" in found]
