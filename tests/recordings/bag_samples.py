@@ -171,7 +171,7 @@ def _write(records, out: Path, storage: str, store) -> Path:
         from rosbags.rosbag2 import StoragePlugin, Writer
 
         plugin = StoragePlugin.SQLITE3 if storage == "sqlite3" else StoragePlugin.MCAP
-        folder = out.with_suffix("") if storage == "mcap-file" else out
+        folder = out.with_name(out.stem + "-rosbag2") if storage == "mcap-file" else out
         writer, serialize = Writer(folder, version=9, storage_plugin=plugin), store.serialize_cdr
     conns: dict[str, object] = {}
     with writer:

@@ -7,6 +7,7 @@ message definitions stored in them; :class:`BagSource` turns each of its failure
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Collection, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass
@@ -166,21 +167,32 @@ def _why(exc: Exception) -> str:
     return text.splitlines()[0] if text.strip() else type(exc).__name__
 
 
+@functools.lru_cache(maxsize=64)
+def _definitions(kind: str, text: str, msgtype: str) -> dict:
+    """The types one stored message definition declares (parsed once per process: a bag is opened
+    twice per run, and parsing is most of the cost of opening it)."""
+    from rosbags.typesys import get_types_from_idl, get_types_from_msg
+
+    if kind == "msg":
+        return dict(get_types_from_msg(text, msgtype))
+    types: dict = {}
+    sep = "=" * 80 + "\n"
+    for part in text.split(sep)[1:] if text.startswith(sep) else [text]:
+        types.update(get_types_from_idl(part.split("\n", 1)[1] if part.startswith("IDL: ") else part))
+    return types
+
+
 def _typestore(connections, is_ros1: bool):
     """A typestore with the bag's own message definitions, the ROS distribution's types for the rest."""
     from rosbags.interfaces import MessageDefinitionFormat
-    from rosbags.typesys import Stores, get_types_from_idl, get_types_from_msg, get_typestore
+    from rosbags.typesys import Stores, get_typestore
 
     store = get_typestore(Stores.ROS1_NOETIC if is_ros1 else Stores.ROS2_HUMBLE)
     types: dict = {}
     for c in connections:
-        if c.msgdef.format == MessageDefinitionFormat.MSG and c.msgdef.data:
-            types.update(get_types_from_msg(c.msgdef.data, c.msgtype))
-        elif c.msgdef.format == MessageDefinitionFormat.IDL and c.msgdef.data:
-            sep = "=" * 80 + "\n"
-            parts = c.msgdef.data.split(sep)[1:] if c.msgdef.data.startswith(sep) else [c.msgdef.data]
-            for part in parts:
-                types.update(get_types_from_idl(part.split("\n", 1)[1] if part.startswith("IDL: ") else part))
+        if c.msgdef.format in (MessageDefinitionFormat.MSG, MessageDefinitionFormat.IDL) and c.msgdef.data:
+            kind = "msg" if c.msgdef.format == MessageDefinitionFormat.MSG else "idl"
+            types.update(_definitions(kind, c.msgdef.data, c.msgtype))
     known = {k: v for k, v in types.items() if k not in store.fielddefs}
     store.register(known)  # the bag's definitions of standard types match the store's (checked by its hash)
     return store

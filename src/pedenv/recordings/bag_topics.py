@@ -101,6 +101,11 @@ def choose_frames(tree, topics: BagChoice, camera_frame: str, opts: BagOptions, 
     if len(chain) == 1:
         raise InputError(f"{tree.bag}: the camera frame {camera_frame!r} ({topics.camera_info_topic}) has no "
                          f"transform in /tf_static or /tf; the bag holds: {tree.describe()}")
+    for flag, given, odom, field in (("--world-frame", opts.world_frame, odom_world, "header.frame_id"),
+                                     ("--vehicle-frame", opts.vehicle_frame, odom_vehicle, "child_frame_id")):
+        if given is not None and odom is not None and given != odom:
+            raise InputError(f"{tree.bag}: {flag} {given}, but the poses of {topics.odometry_topic} are of "
+                             f"{odom!r} ({field}); leave out {flag} or give another --odometry-topic")
     vehicle = opts.vehicle_frame or odom_vehicle
     if vehicle is None:
         moving = [f for f in chain if f in tree.dynamic]
