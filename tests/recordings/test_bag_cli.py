@@ -36,14 +36,14 @@ def test_inspect_bag_prints_topics_rates_tf_and_what_run_uses(bag, monkeypatch, 
     summary = json.loads(out)
     assert code == 0 and summary["topics"][0] == {"name": "/camera/camera_info", "type": "sensor_msgs/CameraInfo",
                                                   "count": 1, "rate_hz": None}
-    assert summary["run_error"] == (f"{bag}: --world-frame map, but the poses of /odom are of 'odom' (header.frame_id); "
-                                    "leave out --world-frame or give another --odometry-topic")
+    assert summary["run_error"] == (f"{bag}: --world-frame map, but the poses of /odom are of 'odom' "
+                                    "(header.frame_id); leave out --world-frame or give another --odometry-topic")
 
 
 @pytest.mark.parametrize("args, error", [
     (["--images", "x"], "error: --bag holds the images, camera and ego poses: leave out --images, --video, "
                         "--calibration and --ego-poses"),
-    (["--manifest", "m.csv"], "error: --ros-out and --bag are for single-recording runs, not --manifest runs"),
+    (["--manifest", "m.csv"], "error: --ros-out, --live and --bag are for single-recording runs, not --manifest runs"),
 ])
 def test_run_refuses_flags_that_do_not_go_with_a_bag(bag, tmp_path, monkeypatch, capsys, args, error):
     code, _, err = pedenv(monkeypatch, capsys, "run", "--bag", bag, "--output", tmp_path / "out", *args)

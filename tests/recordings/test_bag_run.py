@@ -87,7 +87,9 @@ def test_kitti_bags_give_the_environment_of_the_image_folder(kitti, tmp_path, mo
 def test_a_mot17_bag_of_jpeg_files_gives_the_same_environment(mot17, tmp_path, monkeypatch, capsys):
     assert _run(monkeypatch, capsys, tmp_path / "ref", *_folder(mot17), detection="fast")[0] == 0
     bag = write_bag(mot17, tmp_path / "images.mcap", BagForm("mcap-file", "compressed", ego="odometry"))
-    assert _run(monkeypatch, capsys, tmp_path / "bag", "--bag", bag, detection="fast")[0] == 0
+    # served live too (no viewer connects; the run goes on the same)
+    assert _run(monkeypatch, capsys, tmp_path / "bag", "--bag", bag, "--live", "--live-port", "0",
+                detection="fast")[0] == 0
     reference = (tmp_path / "ref" / "environment.jsonl").read_text()
     assert len(reference.splitlines()) == 3
     assert (tmp_path / "bag" / "environment.jsonl").read_text() == reference

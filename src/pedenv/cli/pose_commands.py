@@ -111,6 +111,9 @@ def run(
     ros_out: Path | None = typer.Option(
         None, "--ros-out", help="Write ROS 2 messages (vision_msgs, RViz markers, /tf, Autoware) as a rosbag2 "
                                 "FILE.mcap."),
+    live: bool = typer.Option(
+        False, "--live", help="Serve the model as it runs to Foxglove over WebSocket on 127.0.0.1 (--live-port)."),
+    live_port: int = typer.Option(8765, "--live-port", help="--live: the TCP port (0: any free one)."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
     or on every recording of a --manifest."""
@@ -124,8 +127,8 @@ def run(
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
         if parquet or rerun or mcap:
             raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
-        if ros_out or bag:
-            raise InputError("--ros-out and --bag are for single-recording runs, not --manifest runs")
+        if ros_out or bag or live:
+            raise InputError("--ros-out, --live and --bag are for single-recording runs, not --manifest runs")
         _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
                       overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
                       pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
@@ -143,7 +146,7 @@ def run(
     from pedenv.outputs.sinks import ExtraOutputs
 
     extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap,
-                         ros=ros_out)
+                         ros=ros_out, live=live_port if live else None)
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(
