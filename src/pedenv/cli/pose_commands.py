@@ -127,18 +127,13 @@ def run(
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
         if parquet or rerun or mcap:
             raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
-        if ros_out or bag or live:
-            raise InputError("--ros-out, --live and --bag are for single-recording runs, not --manifest runs")
-        _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
-                      overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
-                      pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
-                      method=method)
+        _run_manifest(manifest, output, single=(ros_out, bag, live), executor=executor, address=address,
+                      workers=workers, resume=resume, overwrite=overwrite, pose_backend=pose_backend,
+                      pose_model=pose_model, pose_input_size=pose_input_size, config=config, detection=detection,
+                      video_out=video_out, method=method)
         return
-    bag_options = _bag_options(bag, images, video, calibration, ego_poses, image_topic=image_topic,
-                               camera_info_topic=camera_info_topic, odometry_topic=odometry_topic,
-                               world_frame=world_frame, vehicle_frame=vehicle_frame)
-    if bag is None and (calibration is None or ego_poses is None):
-        raise InputError("give --calibration and --ego-poses (or a --bag, or a --manifest of recordings)")
+    bag_options = _bag_options(bag, (images, video, calibration, ego_poses),
+                               (image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame))
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
     from pedenv.apps.progress import progress_callback
@@ -157,14 +152,21 @@ def run(
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")
 
 
-def _bag_options(bag: Path | None, *recording, **choices):
-    """The BagOptions of ``--bag`` and its topic and frame flags (None without a bag)."""
+def _bag_options(bag: Path | None, recording: tuple, flags: tuple):
+    """The BagOptions of ``--bag`` and its topic and frame flags (None without a bag). ``recording``:
+    --images, --video, --calibration, --ego-poses; ``flags``: --image-topic, --camera-info-topic,
+    --odometry-topic, --world-frame, --vehicle-frame."""
     from pedenv.errors import InputError
+
+    names = ("image_topic", "camera_info_topic", "odometry_topic", "world_frame", "vehicle_frame")
+    choices = dict(zip(names, flags))
 
     if bag is None:
         given = [f"--{k.replace('_', '-')}" for k, v in choices.items() if v is not None]
         if given:
             raise InputError(f"{', '.join(given)} apply to --bag")
+        if recording[2] is None or recording[3] is None:
+            raise InputError("give --calibration and --ego-poses (or a --bag, or a --manifest of recordings)")
         return None
     if any(v is not None for v in recording):
         raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration "
@@ -174,9 +176,14 @@ def _bag_options(bag: Path | None, *recording, **choices):
     return BagOptions(**choices)
 
 
-def _run_manifest(manifest: Path, output: Path, **options) -> None:
-    """``pedenv run --manifest``: every recording; failed ones listed, exit code 1."""
+def _run_manifest(manifest: Path, output: Path, single: tuple = (), **options) -> None:
+    """``pedenv run --manifest``: every recording; failed ones listed, exit code 1. ``single``: the
+    values of --ros-out, --bag and --live, which a manifest run refuses."""
     from pedenv.apps.batch import run_manifest
+    from pedenv.errors import InputError
+
+    if any(single):
+        raise InputError("--ros-out, --live and --bag are for single-recording runs, not --manifest runs")
 
     summary = run_manifest(manifest, output, progress=True, **options)
     for rec in summary["recordings"]:
