@@ -37,16 +37,29 @@ def _frames(path, options=None) -> int:
 
 
 @pytest.mark.parametrize("storage, name, why", [
-    ("mcap-file", "a.mcap", "File end magic is invalid"),
     ("ros1", "a.bag", "Bag index looks damaged"),
     ("sqlite3", "a", "database disk image is malformed"),
 ])
-def test_a_truncated_bag(kitti, tmp_path, storage, name, why):
+def test_a_truncated_bag_that_cannot_be_read(kitti, tmp_path, storage, name, why):
     bag = write_bag(kitti, tmp_path / name, BagForm(storage))
     file = bag if bag.is_file() else next(bag.glob("*.db3"))
     file.write_bytes(file.read_bytes()[:int(file.stat().st_size * 0.6)])
     with pytest.raises(InputError, match=rf"^{bag}: cannot open the bag \(truncated or damaged\?\): .*{why}"):
         _frames(bag)
+
+
+@pytest.mark.parametrize("storage, name", [("mcap-file", "a.mcap"), ("mcap", "a")])
+@pytest.mark.parametrize("kept, done", [(0.6, 1), (0.8, 2)])
+def test_a_cut_mcap_bag_gives_the_frames_before_the_cut(kitti, tmp_path, storage, name, kept, done):
+    """A recorder that crashed: no summary, no footer, the last record cut in half."""
+    bag = write_bag(kitti, tmp_path / name, BagForm(storage))
+    file = bag if bag.is_file() else next(bag.glob("*.mcap"))
+    file.write_bytes(file.read_bytes()[:int(file.stat().st_size * kept)])
+    with pytest.raises(InputError) as err:
+        _frames(bag)
+    assert str(err.value) == (f"{bag}: the file is cut off after topic /camera/image_raw message {done - 1} "
+                              "(truncated: EndOfFile); the messages before it were read")
+    assert err.value.done == done
 
 
 def test_a_size_field_that_lies_names_the_message_after_the_frames_before_it(kitti, tmp_path):

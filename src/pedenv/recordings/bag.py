@@ -93,7 +93,7 @@ def load_bag_recording(path: str | Path, options: BagOptions | None = None, name
         info_msg, odometry = None, []
         wanted = [*topics.tf_topics, topics.camera_info_topic, *([topics.odometry_topic] if topics.odometry_topic
                                                                   else [])]
-        for m in bag.messages(wanted):
+        for m in bag.messages(wanted, to_the_cut=True):
             if m.topic == topics.camera_info_topic:
                 info_msg = info_msg or (m.index, m.msg)
             elif m.topic == topics.odometry_topic:

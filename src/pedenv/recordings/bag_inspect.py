@@ -19,7 +19,7 @@ def inspect_bag(path: str | Path, options: BagOptions | None = None) -> dict:
     with BagSource(path, max_message_bytes=opts.max_message_bytes) as bag:
         topics = bag.log_spans()
         tree = TransformTree(str(path))
-        for m in bag.messages(bag.topics_of(TF_TYPE)):
+        for m in bag.messages(bag.topics_of(TF_TYPE), to_the_cut=True):
             tree.add(m.msg, static=m.topic.endswith("tf_static"), topic=m.topic, index=m.index)
         kind = bag.kind
     summary: dict = {

@@ -85,8 +85,13 @@ class BagSource:
 
         opener: Any = {"ros1": Reader1, "rosbag2": Reader2, "mcap": McapReader}[self.kind]
         try:
-            reader = opener(self.path)
-            reader.open()
+            try:
+                reader = opener(self.path)
+                reader.open()
+            except Exception:
+                reader = _cut_mcap(self.path)  # a recording cut short: the messages before the cut
+                if reader is None:
+                    raise
             self._stack.callback(reader.close)
             self._reader = reader
             self.typestore = _typestore(reader.connections, self.is_ros1)
@@ -114,15 +119,16 @@ class BagSource:
         """The topics whose type is one of ``msgtypes`` (``pkg/msg/Name``), sorted."""
         return [t.name for t in self.topics.values() if t.msgtype in msgtypes]
 
-    def messages(self, topics: Collection[str]) -> Iterator[BagMessage]:
+    def messages(self, topics: Collection[str], *, to_the_cut: bool = False) -> Iterator[BagMessage]:
         """The messages of ``topics`` in receive-time order, decoded. A message that cannot be
-        read or decoded raises InputError naming the bag, topic and message index."""
+        read or decoded raises InputError naming the bag, topic and message index, and so does
+        the end of a file cut short, unless ``to_the_cut`` (then its messages end there)."""
         conns = [c for c in self.connections if c.topic in topics]
         counts = dict.fromkeys(topics, 0)
         if not conns:
             return
         last = {"topic": "?", "index": -1}
-        stream = self._reader.messages(conns) if self.kind == "mcap" else self._reader.messages(connections=conns)
+        stream = self._reader.messages(connections=conns)
         try:
             for conn, log_ns, raw in stream:
                 index = counts[conn.topic]
@@ -134,12 +140,16 @@ class BagSource:
         except Exception as exc:  # noqa: BLE001 - the container itself is damaged past this point
             raise InputError(f"{self.path}: damaged or truncated after topic {last['topic']} message "
                              f"{last['index']}: {_why(exc)}") from None
+        cut = getattr(self._reader, "cut", None)
+        if cut and not to_the_cut:
+            raise InputError(f"{self.path}: the file is cut off after topic {last['topic']} message {last['index']} "
+                             f"(truncated: {cut}); the messages before it were read")
 
     def log_spans(self) -> dict[str, TopicSummary]:
         """``topics`` with each topic's first and last receive time (reads every message, decodes none)."""
         spans: dict[str, list[int]] = {}
         try:
-            stream = self._reader.messages(self.connections) if self.kind == "mcap" else self._reader.messages()
+            stream = self._reader.messages(connections=self.connections)
             for conn, log_ns, _ in stream:
                 span = spans.setdefault(conn.topic, [int(log_ns), int(log_ns)])
                 span[0], span[1] = min(span[0], int(log_ns)), max(span[1], int(log_ns))
@@ -160,6 +170,22 @@ class BagSource:
         except Exception as exc:  # noqa: BLE001 - a size field that lies shows up as any decode error
             raise InputError(f"{where} ({conn.msgtype}) cannot be decoded (a size field beyond the "
                              f"message's {len(raw)} bytes?): {_why(exc)}") from None
+
+
+def _cut_mcap(path: Path):
+    """A :class:`~pedenv.recordings.bag_stream.StreamingMcap` of the MCAP file at ``path`` (or the one
+    MCAP file of a rosbag2 folder) that holds channels, or None."""
+    from pedenv.recordings.bag_stream import StreamingMcap
+
+    files = sorted(path.glob("*.mcap")) if path.is_dir() else [path]
+    if len(files) != 1:
+        return None
+    with files[0].open("rb") as f:
+        if f.read(8) != b"\x89MCAP0\r\n":
+            return None
+    reader = StreamingMcap(files[0])
+    reader.open()
+    return reader if reader.connections else None
 
 
 def _why(exc: Exception) -> str:
