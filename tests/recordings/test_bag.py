@@ -143,3 +143,17 @@ def test_the_user_names_the_frames_when_the_tree_holds_more(kitti, tmp_path):
         load_bag_recording(bag, BagOptions(image_topic="/nope"))
     with pytest.raises(InputError, match="no transform chain from 'base_link' up to 'map'.*base_link -> odom"):
         load_bag_recording(bag, BagOptions(world_frame="map"))
+
+
+def test_a_sqlite3_bag_without_message_definitions_is_read_with_humble_types(kitti, tmp_path):
+    """rosbag2 before Iron stored no message definitions in its sqlite3 file."""
+    import sqlite3
+
+    bag = _bag(kitti, tmp_path, storage="sqlite3")
+    with sqlite3.connect(next(bag.glob("*.db3"))) as db:
+        assert db.execute("DELETE FROM message_definitions").rowcount == 3  # TFMessage, CameraInfo, Image
+    from pedenv.recordings.bag_source import BagSource
+
+    with BagSource(bag) as source:
+        assert all(not c.msgdef.data for c in source.connections)
+    _same_frames(_recording(kitti), load_bag_recording(bag))

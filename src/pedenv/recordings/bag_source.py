@@ -209,16 +209,24 @@ def _definitions(kind: str, text: str, msgtype: str) -> dict:
 
 
 def _typestore(connections, is_ros1: bool):
-    """A typestore with the bag's own message definitions, the ROS distribution's types for the rest."""
+    """A typestore of the bag's own message definitions (a type changed between ROS releases is
+    read as the bag wrote it); a bag without them (rosbag2 sqlite3 before Iron) gets the types of
+    ROS 2 Humble (ROS 1: Noetic) for what it lacks."""
     from rosbags.interfaces import MessageDefinitionFormat
     from rosbags.typesys import Stores, get_typestore
 
-    store = get_typestore(Stores.ROS1_NOETIC if is_ros1 else Stores.ROS2_HUMBLE)
     types: dict = {}
+    lacking = False
     for c in connections:
         if c.msgdef.format in (MessageDefinitionFormat.MSG, MessageDefinitionFormat.IDL) and c.msgdef.data:
             kind = "msg" if c.msgdef.format == MessageDefinitionFormat.MSG else "idl"
             types.update(_definitions(kind, c.msgdef.data, c.msgtype))
-    known = {k: v for k, v in types.items() if k not in store.fielddefs}
-    store.register(known)  # the bag's definitions of standard types match the store's (checked by its hash)
+        else:
+            lacking = True
+    if lacking:
+        store = get_typestore(Stores.ROS1_NOETIC if is_ros1 else Stores.ROS2_HUMBLE)
+        store.register({k: v for k, v in types.items() if k not in store.fielddefs})
+        return store
+    store = get_typestore(Stores.EMPTY)
+    store.register(types)
     return store
