@@ -13,8 +13,9 @@ truth, with the detector model's ``yolo11n-pose-far`` profile and with exact ske
 Per case: mean relative error (% of the camera-to-truth distance, the paper's matching:
 each estimate with the nearest truth whose box overlaps its box at all, so a fragment of a
 person found on its own counts against the position), the same over the one-to-one matches
-(box IoU >= 0.5: the position of whole persons found), the share of errors inside the 1- and 2-sigma ellipses (ideal 39.3 / 86.5 %; one-to-one
-matches), and the share of estimates whose ground cue declined ``beyond-range``.
+(box IoU >= 0.5: the position of whole persons found), the share of errors inside the 1-
+and 2-sigma ellipses (ideal 39.3 / 86.5 %; one-to-one matches), and the share of estimates
+whose ground cue declined ``beyond-range``.
 """
 
 from __future__ import annotations

@@ -29,7 +29,8 @@ def static_frame(mount: str, ranges=RANGES) -> Frame:
     return dataclasses.replace(frame, detections=Detections(px, (depth > 0).astype(float)))
 
 
-def run(frame: Frame, config: FusedConfig = FusedConfig(), noise_px: float = 1.0):
+def run(frame: Frame, config: FusedConfig | None = None, noise_px: float = 1.0):
+    config = config or FusedConfig()
     return ground_cue(frame, skeletons_of(frame, config, noise_px), config)
 
 

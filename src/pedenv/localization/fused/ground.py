@@ -41,7 +41,7 @@ MIN_GRAZING_SINE = 1e-4
 MIN_NORMAL_DOT = 1e-12
 
 
-def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray, plane_offset: np.ndarray):
+def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray, plane_offset: np.ndarray | float):
     """Where rays from ``origin`` meet the plane ``normal . x = plane_offset``.
 
     rays: (..., 3) unit, world. origin: (3,) world, metres. normal: (3,) unit, world.
