@@ -92,8 +92,7 @@ def fuse_cues(cues: list[CueEstimate], gate_probability: float, origin: np.ndarr
 
     origin: (2,) camera centre, world x-y, metres; given, the fused covariance across each
     pedestrian's viewing ray is floored at the sharpest used cue's (see the module notes).
-    trust_order: which cue stays when only two disagree (:data:`TRUST_ORDER`, or
-    :data:`STATIC_TRUST_ORDER` for a static camera).
+    trust_order: which cue stays when two disagree (:data:`STATIC_TRUST_ORDER`: static cameras).
     """
     n, c = len(cues[0]), len(cues)
     means = np.stack([q.positions for q in cues], axis=1)  # (N, C, 2)
