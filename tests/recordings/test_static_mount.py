@@ -82,6 +82,19 @@ def test_run_without_ego_poses_or_static_is_one_error_line(monkeypatch, capsys, 
     assert "Traceback" not in err and not (tmp_path / "run").exists()
 
 
+def test_mot17_with_ucmctracks_camera_as_a_static_recording(tmp_path):
+    from pedenv.recordings.footage_writer import write_mot17_static_recording
+
+    out = write_mot17_static_recording(MOT17_ROOT / "MOT17-04-FRCNN",
+                                       MOT17_ROOT / "ucmctrack_cam_para" / "MOT17-04-FRCNN.txt", tmp_path / "rec")
+    assert yaml.safe_load((out / "calibration.yaml").read_text())["mount"] == "static"
+    assert not (out / "ego_poses.csv").exists()
+    rec = load_recording(calibration=out / "calibration.yaml", ego_poses=None, images=out / "images")
+    assert len(rec) == 8 and rec.camera.static
+    assert rec.camera.cam_to_vehicle[2, 3] == pytest.approx(7.29, abs=0.005)
+    assert [t for _, t in rec.images][:2] == pytest.approx([0.0, 1 / 30])
+
+
 @pytest.mark.slow
 def test_run_static_on_a_real_street_camera(monkeypatch, capsys, tmp_path):
     """``pedenv run --static`` on MOT17-09 (4 frames, the real network) with UCMCTrack's camera, no ego poses."""
