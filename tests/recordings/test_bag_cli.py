@@ -42,7 +42,7 @@ def test_inspect_bag_prints_topics_rates_tf_and_what_run_uses(bag, monkeypatch, 
 
 @pytest.mark.parametrize("args, error", [
     (["--images", "x"], "error: --bag holds the images, camera and ego poses: leave out --images, --video, "
-                        "--calibration and --ego-poses"),
+                        "--calibration, --ego-poses and --static"),
     (["--manifest", "m.csv"], "error: --ros-out, --live and --bag are for single-recording runs, not --manifest runs"),
 ])
 def test_run_refuses_flags_that_do_not_go_with_a_bag(bag, tmp_path, monkeypatch, capsys, args, error):

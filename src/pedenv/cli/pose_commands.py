@@ -67,7 +67,10 @@ def run(
     calibration: Path | None = typer.Option(
         None, "--calibration", help="Calibration YAML (required without --manifest)."
     ),
-    ego_poses: Path | None = typer.Option(None, "--ego-poses", help="Ego poses CSV (required without --manifest)."),
+    ego_poses: Path | None = typer.Option(
+        None, "--ego-poses", help="Ego poses CSV (required without --manifest, unless the camera is static)."),
+    static: bool = typer.Option(
+        False, "--static", help="A camera fixed to the ground (mount: static); runs without --ego-poses."),
     output: Path = typer.Option(..., "--output", help="Output folder."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
@@ -121,7 +124,8 @@ def run(
 
     if manifest is not None:
         per_recording = (("--images", images), ("--video", video), ("--calibration", calibration),
-                         ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time))
+                         ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time),
+                         ("--static", static or None))
         given = [flag for flag, value in per_recording if value is not None]
         if given:
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
@@ -132,7 +136,7 @@ def run(
                       pose_model=pose_model, pose_input_size=pose_input_size, config=config, detection=detection,
                       video_out=video_out, method=method)
         return
-    bag_options = _bag_options(bag, (images, video, calibration, ego_poses),
+    bag_options = _bag_options(bag, (images, video, calibration, ego_poses, static),
                                (image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame))
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
@@ -145,7 +149,7 @@ def run(
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(
-            images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
+            images=images, video=video, calibration=calibration, ego_poses=ego_poses, static=static, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
             extra_outputs=extra, progress=progress, method=method, bag=bag, bag_options=bag_options)
@@ -154,7 +158,7 @@ def run(
 
 def _bag_options(bag: Path | None, recording: tuple, flags: tuple):
     """The BagOptions of ``--bag`` and its topic and frame flags (None without a bag). ``recording``:
-    --images, --video, --calibration, --ego-poses; ``flags``: --image-topic, --camera-info-topic,
+    --images, --video, --calibration, --ego-poses, --static; ``flags``: --image-topic, --camera-info-topic,
     --odometry-topic, --world-frame, --vehicle-frame."""
     from pedenv.errors import InputError
 
@@ -165,12 +169,13 @@ def _bag_options(bag: Path | None, recording: tuple, flags: tuple):
         given = [f"--{k.replace('_', '-')}" for k, v in choices.items() if v is not None]
         if given:
             raise InputError(f"{', '.join(given)} apply to --bag")
-        if recording[2] is None or recording[3] is None:
-            raise InputError("give --calibration and --ego-poses (or a --bag, or a --manifest of recordings)")
+        if recording[2] is None or (recording[3] is None and not recording[4]):
+            raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
+                             "(or a --bag, or a --manifest of recordings)")
         return None
-    if any(v is not None for v in recording):
-        raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration "
-                         "and --ego-poses")
+    if any(v is not None for v in recording[:4]) or recording[4]:
+        raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, "
+                         "--ego-poses and --static")
     from pedenv.recordings.bag_topics import BagOptions
 
     return BagOptions(**choices)
