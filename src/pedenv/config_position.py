@@ -105,7 +105,18 @@ class FusedConfig:
     road_curvature_std_per_m: spread of the road's curvature (1/m); the road under a
         pedestrian ``r`` metres away lies about ``0.5 * curvature * r^2`` off the
         vehicle's plane. Raising it makes the ground cue fade sooner with distance.
-    ground_max_distance_m: the ground cue declines beyond this horizontal distance.
+    ground_max_distance_m: the ground cue declines beyond this horizontal distance (a
+        vehicle-mounted camera: its pitch and height over the road change as it drives).
+        A ``static`` camera (``Camera.mount``) has no such limit, see below.
+    static_ground_max_relative_std: a ``static`` camera's ground cue declines where the
+        foot point's own spread along the ray (its pixel noise and the ankle's lift, carried
+        through the ray's cut with the ground) exceeds this share of the range: there the
+        ray grazes the ground, the linearized cut no longer holds and the height prior is
+        sharper. Raising it uses the ground cue farther out.
+    static_ground_height_std_m: the ground's unevenness under a pedestrian against a static
+        camera's calibrated plane (paving, gutters), metres, per person; a static camera has
+        no pitch or height noise, so this replaces ``road_height_std_m`` and
+        ``road_curvature_std_per_m``. Raising it widens its ground cue along the ray.
     history_length: past observations of a track kept for triangulation. Raising it
         gives more baseline when driving slowly, at more cost per pedestrian; older rays
         add little (a walker's drift grows with their age): on the built-in terrain
@@ -161,7 +172,8 @@ class FusedConfig:
     camera or person): 1 to 3 cues; person_height_mean_m [0.5, 2.5]; person_height_std_m
     (0, 0.5]; keypoint_pixel_std (0, 100]; min_keypoint_confidence [0, 1); ankle_height_std_m
     [0, 1]; road_height_std_m [0, 2]; road_curvature_std_per_m [0, 0.1];
-    ground_max_distance_m [1, 1000]; history_length 1..100; min_baseline_m [0, 100];
+    ground_max_distance_m [1, 1000]; static_ground_max_relative_std (0, 1];
+    static_ground_height_std_m [0, 1]; history_length 1..100; min_baseline_m [0, 100];
     min_parallax_rad [0, 0.5]; pedestrian_speed_std_mps [0, 10]; outlier_sigma (0, 100];
     gate_probability (0, 1); lateral_std_m [0, 5]; stance_std_m [0, 2]; keypoint_span_scale
     [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].
@@ -176,6 +188,8 @@ class FusedConfig:
     road_height_std_m: float = 0.08
     road_curvature_std_per_m: float = 0.008
     ground_max_distance_m: float = 20.0
+    static_ground_max_relative_std: float = 0.2
+    static_ground_height_std_m: float = 0.02
     history_length: int = 6
     min_baseline_m: float = 0.3
     min_parallax_rad: float = 0.01
@@ -202,6 +216,9 @@ class FusedConfig:
         check_number("fused.road_height_std_m", self.road_height_std_m, 0.0, 2.0)
         check_number("fused.road_curvature_std_per_m", self.road_curvature_std_per_m, 0.0, 0.1)
         check_number("fused.ground_max_distance_m", self.ground_max_distance_m, 1.0, 1000.0)
+        check_number("fused.static_ground_max_relative_std", self.static_ground_max_relative_std, 0.0, 1.0,
+                     low_open=True)
+        check_number("fused.static_ground_height_std_m", self.static_ground_height_std_m, 0.0, 1.0)
         check_count("fused.history_length", self.history_length, 1, MAX_HISTORY_LENGTH)
         check_number("fused.min_baseline_m", self.min_baseline_m, 0.0, 100.0)
         check_number("fused.min_parallax_rad", self.min_parallax_rad, 0.0, 0.5)
