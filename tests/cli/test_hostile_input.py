@@ -67,7 +67,8 @@ def test_simulate_refuses_an_earlier_run_until_overwrite(monkeypatch, capsys, tm
     (["simulate", "--frame-rate", "0"], ["frame_rate_hz must be in [0.5, 100], got 0.0"]),
     (["simulate", "--scenes", "0"], ["number of scenes must be an integer in [1, 1000], got 0"]),
     (["simulate", "--scenes", "10000"], ["number of scenes must be an integer in [1, 1000], got 10000"]),
-    (["bench", "--frames", "0", "--no-pose"], ["number of frames to time must be an integer >= 1, got 0"]),
+    (["bench", "--frames", "0", "--no-pose"], ["number of frames to time must be an integer in [1, 10000], got 0"]),
+    (["bench", "--frames", "100000000", "--no-pose"], ["must be an integer in [1, 10000], got 100000000"]),
 ])
 def test_bad_options_are_refused(monkeypatch, capsys, tmp_path, args, fragments):
     code, _, err = pedenv(monkeypatch, capsys, *args, *(["--output", tmp_path / "o"] if args[0] == "simulate" else []))

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Protocol
 
 from pedenv.errors import require_extra
+from pedenv.outputs.output_dir import check_output_file
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 
@@ -72,6 +73,8 @@ class ExtraOutputs:
     mcap: a Foxglove MCAP file (foxglove-sdk).
     birds_eye_video: an mp4 of every frame from above (OpenCV, always installed).
     birds_eye_scene: the one scene the video shows (None: every scene, one after the other).
+    overwrite: replace an existing ``rerun`` or ``mcap`` file (else it is refused, see
+    :func:`~pedenv.outputs.output_dir.check_output_file`).
     """
 
     parquet: Path | None = None
@@ -80,9 +83,15 @@ class ExtraOutputs:
     mcap: Path | None = None
     birds_eye_video: Path | None = None
     birds_eye_scene: str | None = None
+    overwrite: bool = False
 
     def check(self) -> None:
-        """Refuse missing extras before the run starts (one line each, see :func:`require_extra`)."""
+        """Refuse missing extras and unusable ``rerun``/``mcap`` paths before the run starts (one line
+        each, see :func:`require_extra` and :func:`~pedenv.outputs.output_dir.check_output_file`)."""
+        if self.rerun:
+            check_output_file(self.rerun, "--rerun", ".rrd", overwrite=self.overwrite)
+        if self.mcap:
+            check_output_file(self.mcap, "--mcap", ".mcap", overwrite=self.overwrite)
         if self.parquet or self.matches_parquet:
             require_extra("pyarrow.parquet", "viz", "--parquet")
         if self.rerun:
