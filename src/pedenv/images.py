@@ -11,6 +11,7 @@ that is not UTF-8: :mod:`pedenv.paths`).
 from __future__ import annotations
 
 import io
+import re
 import warnings
 from pathlib import Path
 
@@ -82,18 +83,20 @@ def _read_bytes(path) -> bytes:
 
 
 def _checked_size(path, data) -> tuple[int, int]:
-    """(width, height) from the header (Pillow reads it lazily); refused above MAX_IMAGE_PIXELS."""
+    """(width, height) from the header of ``data`` (a file object; Pillow reads the header only);
+    InputError above MAX_IMAGE_PIXELS."""
     try:
         with warnings.catch_warnings():  # Pillow warns above its own limit; ours is lower and an error
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
             with Image.open(data) as image:
                 width, height = image.size
-    except Image.DecompressionBombError:
-        width, height = 0, MAX_IMAGE_PIXELS + 1  # Pillow's own limit is above ours
+    except Image.DecompressionBombError as exc:  # above twice Pillow's limit, which is above ours
+        pixels = re.search(r"\((\d+) pixels\)", str(exc))
+        raise InputError(f"{path}: the image has {pixels.group(1) if pixels else 'more'} pixels, above the limit "
+                         f"of {MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)") from None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError):
         raise InputError(f"{path}: cannot read the image (corrupt or not an image)") from None
     if width * height > MAX_IMAGE_PIXELS:
-        size = f"{width}x{height} pixels" if width else "more pixels than Pillow's limit"
-        raise InputError(f"{path}: the image is {size}, above the limit of {MAX_IMAGE_PIXELS / 1e6:g} megapixels "
-                         f"(pedenv.images.MAX_IMAGE_PIXELS)")
+        raise InputError(f"{path}: the image is {width}x{height} pixels, above the limit of "
+                         f"{MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)")
     return width, height

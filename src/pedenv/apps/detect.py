@@ -33,8 +33,9 @@ def annotate_images(images, output: str | Path, backend, *, overwrite: bool = Fa
         except InputError as exc:
             failed[i] = str(exc)
     if len(failed) == len(paths):
-        raise InputError(f"none of the {len(paths)} images can be read ({'; '.join(failed.values())}); "
-                         f"{output} was left as it was")
+        errors = failed[0] if len(paths) == 1 else \
+            f"none of the {len(paths)} images can be read ({'; '.join(failed.values())})"
+        raise InputError(f"{errors}; {output} was left as it was")
     output = prepare_output_dir(output, overwrite=overwrite, command="pedenv detect") if prepare else Path(output)
     records = []
     for i, (path, name) in enumerate(zip(paths, unique_names(paths, "_pose.png"))):

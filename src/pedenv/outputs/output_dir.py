@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 from pedenv.errors import InputError
-from pedenv.paths import check_path
+from pedenv.paths import check_path, is_utf8
 
 #: The file pedenv leaves in every output folder it prepares; ``overwrite`` needs it.
 MARKER = ".pedenv-output"
@@ -84,11 +84,15 @@ def check_output_file(path: str | Path, flag: str, suffix: str, *, overwrite: bo
 
     Refused with one InputError naming ``flag`` and the path: a name without ``suffix`` (so
     that no input, such as the poses CSV, and no file the run writes itself, such as
-    ``environment.jsonl``, is ever written over), a folder, a path under a file, a folder
+    ``environment.jsonl``, is ever written over), a name that is not UTF-8 (the Rerun and
+    MCAP libraries cannot take it), a folder, a path under a file, a folder
     that cannot be written, and an existing file (or, for several scenes, an existing
     ``<stem>-<scene><suffix>``) unless ``overwrite``. The missing folders are created.
     """
     path = check_path(path, flag)
+    if not is_utf8(path):
+        raise InputError(f"{flag} {path}: the name is not UTF-8 text, which the {flag[2:]} writer needs; "
+                         f"choose another name")
     if path.suffix.lower() != suffix:
         raise InputError(f"{flag} {path}: the file name must end in {suffix} (pedenv writes no file of another kind "
                          f"there, so that no input or other output is written over)")

@@ -103,9 +103,10 @@ class RerunWriter:
             self.path.replace(first)
             self.files[0] = first
         path = self.path if len(self._scenes) == 1 else self._scene_path(scene)
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=f"{APPLICATION_ID}-{scene or 'scene'}")
+        label = (scene or "scene").encode("utf-8", "backslashreplace").decode()  # a non-UTF-8 video name
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=f"{APPLICATION_ID}-{label}")
         rec.save(path)
-        rec.send_recording_name(scene or "scene")
+        rec.send_recording_name(label)
         rec.log("/", annotation_context(), static=True)
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         cam = frame.camera

@@ -17,6 +17,7 @@ Unknown keys are refused and values are bounded to sane ranges
 from __future__ import annotations
 
 import csv
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -233,9 +234,16 @@ def load_recording(*, calibration: str | Path, ego_poses: str | Path, images: st
         video = check_path(video, "video")
         if not video.is_file():
             raise InputError(f"{video}: video file not found")
-        return Recording(name or video.stem, camera, trajectory, video=video, fps=fps, start_time=start)
+        return Recording(name or _text(video.stem), camera, trajectory, video=video, fps=fps, start_time=start)
     assert images is not None  # exactly one of images and video (checked above)
     folder = check_path(images, "image folder")
     if not folder.is_dir():
         raise InputError(f"{folder}: image folder not found")
-    return Recording(name or folder.resolve().name, camera, trajectory, tuple(_folder_frames(folder, fps, start)))
+    frames = tuple(_folder_frames(folder, fps, start))
+    return Recording(name or _text(folder.resolve().name), camera, trajectory, frames)
+
+
+def _text(name: str) -> str:
+    """A file name as UTF-8 text for the recording's name (drawn, logged, plotted): bytes that
+    are not UTF-8 become ``\\xff`` escapes."""
+    return os.fsencode(name).decode("utf-8", "backslashreplace")

@@ -20,6 +20,7 @@ import numpy as np
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 from pedenv.video_files import VideoOut
+from pedenv.visualize.overlay import ascii_text
 from pedenv.visualize.shapes import covariance_ellipses, field_of_view
 
 _BG, _GRID, _FOV = (250, 250, 250), (225, 225, 225), (250, 236, 218)
@@ -117,7 +118,8 @@ class BirdsEyeVideo:
                 cv2.putText(img, f"gt {int(gid)}", (int(p[0]) + 7, int(p[1]) + 14), cv2.FONT_HERSHEY_SIMPLEX, 0.35,
                             _TRUTH, 1, cv2.LINE_AA)
         cv2.rectangle(img, (0, 0), (self.size, 52), _BG, -1)
-        title = f"{state.scene}  frame {state.frame_index}  t={state.timestamp:.2f} s  {len(peds)} pedestrians"
+        title = (f"{ascii_text(state.scene)}  frame {state.frame_index}  t={state.timestamp:.2f} s  "
+                 f"{len(peds)} pedestrians")
         cv2.putText(img, title, (10, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.55, _TEXT, 1, cv2.LINE_AA)
         cv2.putText(img, "red: pedenv (2-sigma, velocity, trail)   black x: ground truth   grid 5 m", (10, 44),
                     cv2.FONT_HERSHEY_SIMPLEX, 0.42, _TEXT, 1, cv2.LINE_AA)
