@@ -159,6 +159,15 @@ BUS = Path(importlib.util.find_spec("ultralytics").submodule_search_locations[0]
     if importlib.util.find_spec("ultralytics") else None
 
 
+def _long_bus_recording(folder: Path, photo: Path, frames: int) -> dict:
+    """The bus recording with ``frames`` frames and ego poses covering them all (0.7 m/s ahead)."""
+    rec = _bus_recording(folder, photo, frames=frames)
+    end = 50.0 + 0.1 * frames
+    rows = f"49.9,-0.07,0,0,1,0,0,0\n{end:.1f},{0.7 * (end - 50):.3f},0,0,1,0,0,0\n"
+    _write(rec["ego_poses"], "timestamp,x,y,z,qw,qx,qy,qz\n" + rows)
+    return rec
+
+
 def _run_cli(args, env) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "pedenv", *map(str, args)], env=env, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
@@ -176,7 +185,7 @@ def _wait_for(path_glob, folder, proc, timeout: float = 300.0) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("gap_s", [0.15, 0.3])
 def test_a_double_ctrl_c_keeps_run_json(tmp_path, pose_env, gap_s):  # noqa: F811
-    rec = _bus_recording(tmp_path / "rec", pose_env["bus"], frames=30)
+    rec = _long_bus_recording(tmp_path / "rec", pose_env["bus"], frames=30)
     env = {**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"]}
     out = tmp_path / "out"
     proc = _run_cli(["run", "--images", rec["images"], "--calibration", rec["calibration"], "--ego-poses",
@@ -196,7 +205,7 @@ def test_a_double_ctrl_c_keeps_run_json(tmp_path, pose_env, gap_s):  # noqa: F81
 @pytest.mark.onnx_model
 @pytest.mark.slow
 def test_a_ctrl_c_manifest_run_writes_summary_json(tmp_path, pose_env):  # noqa: F811
-    rec = _bus_recording(tmp_path / "rec", pose_env["bus"], frames=12)
+    rec = _long_bus_recording(tmp_path / "rec", pose_env["bus"], frames=12)
     rows = "".join(f"drive-{k},{rec['images']},{rec['calibration']},{rec['ego_poses']}\n" for k in range(6))
     manifest = _write(tmp_path / "drives.csv", "name,images,calibration,ego_poses\n" + rows)
     out = tmp_path / "out"
