@@ -219,3 +219,26 @@ def test_a_ctrl_c_manifest_run_writes_summary_json(tmp_path, pose_env):  # noqa:
     statuses = [r["status"] for r in summary["recordings"]]
     assert summary["interrupted"] is True and statuses[0] == "done" and statuses[-1] == "interrupted"
     assert [r["name"] for r in summary["recordings"]] == [f"drive-{k}" for k in range(6)]
+
+
+@pytest.mark.ultralytics
+@pytest.mark.onnx_model
+@pytest.mark.slow
+def test_detect_goes_past_a_bad_image_and_takes_any_file_name(tmp_path, pose_env):  # noqa: F811
+    """``detect good.jpg 1x1.png good2.jpg``: one error naming the bad file, the two others written;
+    names with the byte 0xff (a segfault in cv2.imwrite before) for an image and the output folder."""
+    odd = tmp_path / os.fsdecode(b"x\xff.jpg")
+    odd.write_bytes(pose_env["bus"].read_bytes())
+    tiny = tmp_path / "one.png"
+    tiny.write_bytes(cv2.imencode(".png", np.zeros((1, 1, 3), np.uint8))[1].tobytes())
+    out = tmp_path / os.fsdecode(b"o\xff")
+    done = subprocess.run([sys.executable, "-m", "pedenv", "detect", str(pose_env["bus"]), str(tiny), str(odd),
+                           "--output", str(out), "--detection", "fast"], capture_output=True, text=True,
+                          env={**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"]}, timeout=300)
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
+    assert done.returncode == 2 and len(errors) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert f"1 of 3 images could not be processed ({tiny}: image of 1x1 px is too small" in errors[0]
+    data = json.loads((out / "detections.json").read_text())
+    assert [os.fsencode(Path(d["file"]).name) for d in data["images"]] == [b"bus.jpg", b"x\xff.jpg"]
+    assert data["failed"][0]["file"] == str(tiny) and all(len(d["persons"]) >= 3 for d in data["images"])
+    assert sorted(os.fsencode(p.name) for p in out.glob("*_pose.png")) == [b"bus_pose.png", b"x\xff_pose.png"]
