@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.recordings.ego_poses import MAX_EGO_COORDINATE_M
 
 #: Every key of a calibration file, with what it holds. A key with sub-keys lists them in
 #: :data:`CALIBRATION_SUBFIELDS`.
@@ -24,6 +25,7 @@ CALIBRATION_FIELDS: dict[str, str] = {
     "cx": "principal point u, pixels",
     "cy": "principal point v, pixels",
     "cam_to_vehicle": "the camera's mounting (rotation, translation)",
+    "mount": "vehicle (the default) or static (a camera fixed to the ground)",
 }
 #: The keys of the calibration's mappings.
 CALIBRATION_SUBFIELDS: dict[str, dict[str, str]] = {
@@ -36,7 +38,9 @@ CALIBRATION_SUBFIELDS: dict[str, dict[str, str]] = {
 FOCAL_RANGE_PX = (1.0, 1e5)
 #: Image width and height in pixels.
 IMAGE_SIDE_RANGE_PX = (8, 20_000)
-#: Farthest camera from the vehicle origin, metres (a camera is mounted on the vehicle).
+#: Farthest camera from the vehicle origin, metres (a camera is mounted on the vehicle). A
+#: static camera's ``cam_to_vehicle`` places it in the world: up to
+#: :data:`pedenv.recordings.ego_poses.MAX_EGO_COORDINATE_M`.
 MAX_MOUNT_DISTANCE_M = 100.0
 
 
@@ -53,10 +57,12 @@ def check_keys(data: dict, path: Path) -> None:
                                      f"{', '.join(sub)}")
 
 
-def check_ranges(path: Path, intrinsics: np.ndarray, width: float, height: float, translation: np.ndarray) -> None:
+def check_ranges(path: Path, intrinsics: np.ndarray, width: float, height: float, translation: np.ndarray,
+                 static: bool = False) -> None:
     """InputError naming the file and field whose value is outside its sane range (above).
 
-    intrinsics: (3, 3) pixels. width, height: pixels. translation: (3,) metres.
+    intrinsics: (3, 3) pixels. width, height: pixels. translation: (3,) metres, of a static
+    camera (``static``) in the world frame.
     """
     side_lo, side_hi = IMAGE_SIDE_RANGE_PX
     for name, side in (("width", width), ("height", height)):
@@ -76,6 +82,8 @@ def check_ranges(path: Path, intrinsics: np.ndarray, width: float, height: float
         raise InputError(f"{path}: calibration skew (intrinsics[0][1]) must be at most fx in size, got "
                          f"{intrinsics[0, 1]:g}")
     distance = float(np.linalg.norm(translation))
-    if distance > MAX_MOUNT_DISTANCE_M:
+    limit = MAX_EGO_COORDINATE_M if static else MAX_MOUNT_DISTANCE_M
+    if distance > limit:
+        origin = "world" if static else "vehicle"
         raise InputError(f"{path}: calibration field 'cam_to_vehicle.translation' puts the camera {distance:g} m "
-                         f"from the vehicle origin; at most {MAX_MOUNT_DISTANCE_M:g} m")
+                         f"from the {origin} origin; at most {limit:g} m")

@@ -9,6 +9,11 @@ to the vehicle frame, x forward / y left / z up; translation in metres)::
     cam_to_vehicle:
       rotation: [0.5, -0.5, 0.5, -0.5]     # quaternion [w, x, y, z] or a 3x3 matrix
       translation: [1.70, 0.0, 1.51]
+    mount: vehicle    # optional: vehicle (the default) or static (a camera fixed to the ground)
+
+A ``static`` camera (an infrastructure camera, a parked vehicle) needs no ego poses: its
+vehicle frame stays where it is (the world frame), with ``cam_to_vehicle`` placing the
+camera over the ground (z = 0).
 
 Unknown keys are refused and values are bounded to sane ranges
 (:mod:`pedenv.recordings.calibration_fields`). Ego poses: :mod:`pedenv.recordings.ego_poses`.
@@ -36,7 +41,7 @@ from pedenv.recordings.ego_poses import (  # noqa: F401 - the recordings' API in
     load_ego_poses,
     slerp,
 )
-from pedenv.records import Camera, Frame
+from pedenv.records import MOUNTS, Camera, EgoPose, Frame
 from pedenv.video_files import video_capture
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
@@ -96,9 +101,12 @@ def load_calibration(path: str | Path) -> Camera:
     t[:3, 3] = _numbers(_field(data, "cam_to_vehicle.translation", path), "cam_to_vehicle.translation", path, (3,))
     if width != int(width) or height != int(height):
         raise InputError(f"{path}: calibration fields 'width' and 'height' must be whole pixels, got {width}, {height}")
-    check_ranges(path, k, float(width), float(height), t[:3, 3])
+    mount = data.get("mount", "vehicle")
+    if mount not in MOUNTS:
+        raise InputError(f"{path}: calibration field 'mount' must be one of {', '.join(MOUNTS)}, got {mount!r}")
+    check_ranges(path, k, float(width), float(height), t[:3, 3], static=mount == "static")
     try:
-        return Camera(k, int(width), int(height), t)
+        return Camera(k, int(width), int(height), t, mount)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
 
@@ -139,11 +147,13 @@ class Recording:
 
     images: (path, timestamp in seconds) per frame in order, or empty for a video.
     video: the video file, or None. start_time: seconds of a video's first frame.
+    trajectory: the ego poses, or None for a static camera (every frame's ego pose is the
+    identity: the vehicle frame is the world frame).
     """
 
     name: str
     camera: Camera
-    trajectory: EgoTrajectory
+    trajectory: EgoTrajectory | None
     images: tuple[tuple[Path, float], ...] = ()
     video: Path | None = None
     fps: float | None = None
@@ -177,9 +187,11 @@ class Recording:
         for index, (path, timestamp) in enumerate(self.images):
             self._check_frame(path, index, timestamp, image_size(path))
 
-    def _check_frame(self, path, index: int, timestamp: float, size: tuple[int, int] | None = None):
-        ego = self.trajectory.at(timestamp)
+    def _check_frame(self, path, index: int, timestamp: float, size: tuple[int, int] | None = None) -> EgoPose:
+        """The ego pose of frame ``index`` (the identity without a trajectory: a static camera), its size checked."""
+        ego = EgoPose(np.zeros(3), np.eye(3)) if self.trajectory is None else self.trajectory.at(timestamp)
         if ego is None:
+            assert self.trajectory is not None
             span = self.trajectory.timestamps
             raise InputError(f"{path}: frame {index} at {timestamp:.6f} s has no ego pose: "
                              f"{self.trajectory.source} covers {span[0]:.6f} s to {span[-1]:.6f} s")
@@ -214,22 +226,30 @@ def _video_frames(video: Path, fps: float | None, start_time: float):
         raise InputError(f"{video}: the video holds no readable frame")
 
 
-def load_recording(*, calibration: str | Path, ego_poses: str | Path, images: str | Path | None = None,
+def load_recording(*, calibration: str | Path, ego_poses: str | Path | None, images: str | Path | None = None,
                    video: str | Path | None = None, fps: float | None = None, start_time: float | None = None,
-                   name: str | None = None) -> Recording:
+                   name: str | None = None, static: bool = False) -> Recording:
     """Read a recording: exactly one of ``images`` (a folder) or ``video`` (a file).
 
     Frame timestamps: ``images/timestamps.csv`` (filename,timestamp), else ``fps``; a
     video's come from ``fps`` or its own frame rate. With ``fps`` (and for a video) the first
-    frame is at ``start_time``, by default the first ego pose's timestamp.
+    frame is at ``start_time``, by default the first ego pose's timestamp (0 without poses).
+    ``static`` mounts the camera ``static`` whatever the calibration says; a static camera
+    may come without ``ego_poses`` (its vehicle frame is then the world frame).
     """
     if (images is None) == (video is None):
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if fps is not None and not (np.isfinite(fps) and fps > 0):
         raise InputError(f"fps must be a finite number > 0, got {fps}")
     camera = load_calibration(check_path(calibration, "calibration"))
-    trajectory = load_ego_poses(check_path(ego_poses, "ego poses"))
-    start = float(trajectory.timestamps[0] if start_time is None else start_time)
+    if static and not camera.static:
+        camera = Camera(camera.intrinsics, camera.width, camera.height, camera.cam_to_vehicle, "static")
+    if ego_poses is None and not camera.static:
+        raise InputError(f"{calibration}: a vehicle-mounted camera needs ego poses (--ego-poses); "
+                         "a fixed camera runs without them with --static or 'mount: static' in the calibration")
+    trajectory = None if ego_poses is None else load_ego_poses(check_path(ego_poses, "ego poses"))
+    first = 0.0 if trajectory is None else float(trajectory.timestamps[0])
+    start = float(first if start_time is None else start_time)
     if video is not None:
         video = check_path(video, "video")
         if not video.is_file():
