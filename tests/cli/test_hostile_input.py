@@ -176,3 +176,10 @@ def test_rerun_and_mcap_never_write_over_inputs(monkeypatch, capsys, tmp_path, f
     one_error_line(code, err, message)
     assert frames.read_bytes() == before and (tmp_path / "old.rrd").read_text() == "an earlier recording"
     assert not (tmp_path / "out").exists()  # refused before the output folder was made
+
+
+def test_a_long_name_anywhere_else_is_one_line(monkeypatch, capsys, tmp_path):
+    """Any path option (here --data-root) with a name over 255 bytes: one line, not an OSError traceback."""
+    code, _, err = pedenv(monkeypatch, capsys, "evaluate", "--dataset", "synthetic", "--data-root", tmp_path / LONG,
+                          "--output", tmp_path / "out")
+    one_error_line(code, err, "a name in this path is longer than the file system takes (255 bytes)")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import signal
 import sys
 import warnings
@@ -10,6 +11,7 @@ import typer
 from rich.console import Console
 
 from pedenv.errors import InputError
+from pedenv.paths import MAX_NAME_BYTES
 
 app = typer.Typer(
     name="pedenv",
@@ -48,6 +50,12 @@ def main() -> None:
         app()
     except InputError as exc:  # bad input only: any other exception is a bug and keeps its traceback
         console.print(f"error: {exc}", style="red", highlight=False, markup=False)
+        sys.exit(2)
+    except OSError as exc:
+        if exc.errno != errno.ENAMETOOLONG:  # a path given with a name over 255 bytes is bad input too
+            raise
+        console.print(f"error: {exc.filename}: a name in this path is longer than the file system takes "
+                      f"({MAX_NAME_BYTES} bytes)", style="red", highlight=False, markup=False)
         sys.exit(2)
     finally:
         warnings.formatwarning = previous

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.images import MAX_IMAGE_PIXELS
 from pedenv.recordings.ego_poses import MAX_EGO_COORDINATE_M
 
 #: Every key of a calibration file, with what it holds. A key with sub-keys lists them in
@@ -69,6 +70,9 @@ def check_ranges(path: Path, intrinsics: np.ndarray, width: float, height: float
         if not side_lo <= side <= side_hi:
             raise InputError(f"{path}: calibration field {name!r} must be in [{side_lo}, {side_hi}] pixels, "
                              f"got {side:g}")
+    if width * height > MAX_IMAGE_PIXELS:
+        raise InputError(f"{path}: calibration image size {width:g}x{height:g} is above the limit of "
+                         f"{MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)")
     f_lo, f_hi = FOCAL_RANGE_PX
     for name, f in (("fx", intrinsics[0, 0]), ("fy", intrinsics[1, 1])):
         if not f_lo <= f <= f_hi:
