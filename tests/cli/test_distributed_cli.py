@@ -96,14 +96,16 @@ def test_ctrl_c_keeps_the_finished_scenes_and_leaves_no_ray_process(tmp_path, ma
     ray_root = tempfile.mkdtemp(prefix="pedenv-ray-", dir="/tmp")  # short: Ray's socket paths have a length limit
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "pedenv", "evaluate", "--dataset", "synthetic", "--data-root",
-                             str(many_scenes), "--output", str(out), "--executor", "ray", "--workers", "2"],
+                             str(many_scenes), "--output", str(out), "--executor", "ray", "--workers", "2",
+                             "--pose-backend", "ground-truth"],  # the quickest scenes: the first checkpoint comes soon
                             env={**os.environ, "RAY_TMPDIR": ray_root}, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
     checkpoints = f"{SCENES_FOLDER}/*/{CHECKPOINT}"
-    deadline = time.time() + 300
+    deadline = time.time() + 600
     while time.time() < deadline and proc.poll() is None and not list(out.glob(checkpoints)):
         time.sleep(0.2)  # until the first scene is done; the others still run
     assert proc.poll() is None and _processes_under(ray_root), "the run ended before Ctrl-C"
+    assert list(out.glob(checkpoints)), "no scene finished in 600 s (a machine that busy cannot run this test)"
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "Traceback" not in err, err  # 130: stopped by the signal
