@@ -94,7 +94,8 @@ def _checked_size(path, data) -> tuple[int, int]:
         pixels = re.search(r"\((\d+) pixels\)", str(exc))
         raise InputError(f"{path}: the image has {pixels.group(1) if pixels else 'more'} pixels, above the limit "
                          f"of {MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError):
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError, ImportError):
+        # ImportError: ultralytics wraps Image.open and tries pi_heif on a file Pillow cannot identify
         raise InputError(f"{path}: cannot read the image (corrupt or not an image)") from None
     if width * height > MAX_IMAGE_PIXELS:
         raise InputError(f"{path}: the image is {width}x{height} pixels, above the limit of "

@@ -95,7 +95,7 @@ def test_rerun_and_mcap_targets_are_checked_before_the_run(tmp_path, target, opt
     (tmp_path / "adir.rrd").mkdir()
     path = target if target.startswith("/") else tmp_path / target
     if message is None:
-        assert check_output_file(path, "--rerun", ".rrd", **options) == path and path.parent.is_dir()
+        assert check_output_file(path, "--rerun", ".rrd", **options) == path
     else:
         with pytest.raises(InputError, match=message):
             check_output_file(path, "--rerun", ".rrd", **options)

@@ -87,7 +87,8 @@ def check_output_file(path: str | Path, flag: str, suffix: str, *, overwrite: bo
     ``environment.jsonl``, is ever written over), a name that is not UTF-8 (the Rerun and
     MCAP libraries cannot take it), a folder, a path under a file, a folder
     that cannot be written, and an existing file (or, for several scenes, an existing
-    ``<stem>-<scene><suffix>``) unless ``overwrite``. The missing folders are created.
+    ``<stem>-<scene><suffix>``) unless ``overwrite``. Nothing is created (the writer makes
+    the missing folders when the run starts).
     """
     path = check_path(path, flag)
     if not is_utf8(path):
@@ -104,9 +105,9 @@ def check_output_file(path: str | Path, flag: str, suffix: str, *, overwrite: bo
     earlier = [path] if path.exists() else sorted(path.parent.glob(f"{glob_escape(path.stem)}-*{suffix}"))
     if earlier and not overwrite:
         raise InputError(f"{flag} {earlier[0]} exists; pass --overwrite to replace it, or choose another name")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=path.parent):
+    existing = next(p for p in (path.parent, *path.parent.parents) if p.exists())
+    try:  # nothing is created before the run: the nearest existing folder must take a file
+        with tempfile.TemporaryFile(dir=existing):
             pass
     except OSError as exc:
         raise InputError(f"{flag} {path} cannot be written: {exc.strerror or exc}") from None

@@ -88,16 +88,16 @@ class ExtraOutputs:
     def check(self) -> None:
         """Refuse missing extras and unusable ``rerun``/``mcap`` paths before the run starts (one line
         each, see :func:`require_extra` and :func:`~pedenv.outputs.output_dir.check_output_file`)."""
-        if self.rerun:
-            check_output_file(self.rerun, "--rerun", ".rrd", overwrite=self.overwrite)
-        if self.mcap:
-            check_output_file(self.mcap, "--mcap", ".mcap", overwrite=self.overwrite)
         if self.parquet or self.matches_parquet:
             require_extra("pyarrow.parquet", "viz", "--parquet")
         if self.rerun:
             require_extra("rerun", "viz", "--rerun")
         if self.mcap:
             require_extra("foxglove", "viz", "--mcap")
+        if self.rerun:
+            check_output_file(self.rerun, "--rerun", ".rrd", overwrite=self.overwrite)
+        if self.mcap:
+            check_output_file(self.mcap, "--mcap", ".mcap", overwrite=self.overwrite)
 
     def open(self) -> Sinks:
         """The sinks for the frame-by-frame outputs (all but ``matches_parquet``)."""
