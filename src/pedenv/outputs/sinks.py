@@ -43,7 +43,7 @@ class Sinks:
         """Close every sink, even when one of them fails (the first failure is raised)."""
         first = None
         for sink in self.sinks:
-            self.files.extend(getattr(sink, "files", None) or [sink.path])
+            self.files.extend(getattr(sink, "files", None) or ([] if getattr(sink, "port", None) else [sink.path]))
             try:
                 sink.close()
             except Exception as exc:  # noqa: BLE001 - close the others first
@@ -71,9 +71,11 @@ class ExtraOutputs:
     matches_parquet: evaluation only, the matched prediction/ground-truth pairs (pyarrow).
     rerun: a Rerun ``.rrd`` recording (rerun-sdk); several scenes give ``<stem>-<scene>.rrd``.
     mcap: a Foxglove MCAP file (foxglove-sdk).
+    ros: a rosbag2 MCAP file of ROS 2 messages (rosbags; :mod:`pedenv.outputs.ros_bag`).
+    live: a TCP port on 127.0.0.1 to serve the model on as it runs (foxglove-sdk's WebSocket server).
     birds_eye_video: an mp4 of every frame from above (OpenCV, always installed).
     birds_eye_scene: the one scene the video shows (None: every scene, one after the other).
-    overwrite: replace an existing ``rerun`` or ``mcap`` file (else it is refused, see
+    overwrite: replace an existing ``rerun``, ``mcap`` or ``ros`` file (else it is refused, see
     :func:`~pedenv.outputs.output_dir.check_output_file`).
     """
 
@@ -83,6 +85,8 @@ class ExtraOutputs:
     mcap: Path | None = None
     birds_eye_video: Path | None = None
     birds_eye_scene: str | None = None
+    ros: Path | None = None
+    live: int | None = None
     overwrite: bool = False
 
     def check(self) -> None:
@@ -94,10 +98,16 @@ class ExtraOutputs:
             require_extra("rerun", "viz", "--rerun")
         if self.mcap:
             require_extra("foxglove", "viz", "--mcap")
+        if self.ros:
+            require_extra("rosbags", "ros", "--ros-out")
+        if self.live is not None:
+            require_extra("foxglove", "viz", "--live")
         if self.rerun:
             check_output_file(self.rerun, "--rerun", ".rrd", overwrite=self.overwrite)
         if self.mcap:
             check_output_file(self.mcap, "--mcap", ".mcap", overwrite=self.overwrite)
+        if self.ros:
+            check_output_file(self.ros, "--ros-out", ".mcap", overwrite=self.overwrite)
 
     def open(self) -> Sinks:
         """The sinks for the frame-by-frame outputs (all but ``matches_parquet``)."""
@@ -116,6 +126,14 @@ class ExtraOutputs:
                 from pedenv.outputs.mcap_log import McapWriter
 
                 sinks.append(McapWriter(self.mcap))
+            if self.ros:
+                from pedenv.outputs.ros_bag import RosBagWriter
+
+                sinks.append(RosBagWriter(self.ros))
+            if self.live is not None:
+                from pedenv.outputs.live_view import LiveViewer
+
+                sinks.append(LiveViewer(self.live))
             if self.birds_eye_video:
                 from pedenv.visualize.birds_eye_video import BirdsEyeVideo
 
