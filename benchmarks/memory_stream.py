@@ -1,6 +1,12 @@
-"""Memory of the model over a long stream (issue 10: it must stay flat).
+"""Memory of the model over a long stream (issue 10: it must stay flat), and with ``--sinks DIR``
+the growth of the per-frame outputs (issue 19: linear in the stream's length).
 
     PYTHONPATH=src python benchmarks/memory_stream.py --frames 20000 --method fused
+    PYTHONPATH=src python benchmarks/memory_stream.py --frames 10000 --method fused --sinks /tmp/sinks --every 1000
+
+With ``--sinks`` every frame also goes to a Rerun recording (``DIR/stream.rrd``; its size is
+printed, with the bytes added per frame since the last checkpoint) and the bird's-eye video
+(``DIR/birds_eye.mp4``; the number of track trails it holds is printed).
 
 A synthetic 10 Hz stream with jittered real-world timestamps (every interval distinct, as
 from a real clock), 3 pedestrians walking in and out of view and a small false positive
@@ -14,6 +20,7 @@ from __future__ import annotations
 import argparse
 import os
 import tracemalloc
+from pathlib import Path
 
 import numpy as np
 
@@ -56,20 +63,45 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=20000)
     parser.add_argument("--method", default="paper", choices=["paper", "fused"])
+    parser.add_argument("--sinks", type=Path, default=None, help="Also write a .rrd and the bird's-eye video here.")
+    parser.add_argument("--every", type=int, default=None, help="Print every N frames (default 1000, 5000, 10000).")
     args = parser.parse_args()
     model = PedestrianEnvironmentModel(configure(Config(), args.method))
-    checkpoints = {1000, 5000, 10000, args.frames}
+    checkpoints = set(range(args.every, args.frames + 1, args.every)) if args.every else {1000, 5000, 10000}
+    checkpoints.add(args.frames)
+    sinks = _open_sinks(args.sinks) if args.sinks else None
     tracemalloc.start()
-    far = 0
+    far, rrd_before, frames_before = 0.0, 0, 0
     for frame in stream(args.frames):
         state = model.update(frame)
+        if sinks is not None:
+            for sink in sinks:
+                sink.write(state, frame)
         far = max(far, float(state.pedestrians.distances.max(initial=0.0)))
         if frame.index + 1 in checkpoints:
             current, peak = tracemalloc.get_traced_memory()
-            print(f"{args.method} frame {frame.index + 1:6d}: RSS {rss_mb():7.1f} MB, "
-                  f"traced heap {current / 2**20:6.2f} MB (peak {peak / 2**20:6.2f}), tracks {len(model.tracks)}, "
-                  f"transition cache "
-                  f"{model._transition.cache_info().currsize}, farthest distance so far {far:.1f} m", flush=True)
+            line = (f"{args.method} frame {frame.index + 1:6d}: RSS {rss_mb():7.1f} MB, "
+                    f"traced heap {current / 2**20:6.2f} MB (peak {peak / 2**20:6.2f}), tracks {len(model.tracks)}, "
+                    f"transition cache {model._transition.cache_info().currsize}, farthest distance so far {far:.1f} m")
+            if sinks is not None:
+                rrd = (args.sinks / "stream.rrd").stat().st_size
+                per_frame = (rrd - rrd_before) / (frame.index + 1 - frames_before)
+                line += (f"; .rrd {rrd / 2**20:8.2f} MB (+{per_frame / 1024:6.2f} KB/frame since the last line), "
+                         f"bird's-eye trails held {len(sinks[1]._trails)}")
+                rrd_before, frames_before = rrd, frame.index + 1
+            print(line, flush=True)
+    for sink in sinks or []:
+        sink.close()
+
+
+def _open_sinks(folder: Path) -> list:
+    from pedenv.outputs.rerun_log import RerunWriter
+    from pedenv.visualize.birds_eye_video import BirdsEyeVideo
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for old in (folder / "stream.rrd", folder / "birds_eye.mp4"):
+        old.unlink(missing_ok=True)
+    return [RerunWriter(folder / "stream.rrd"), BirdsEyeVideo(folder / "birds_eye.mp4")]
 
 
 if __name__ == "__main__":

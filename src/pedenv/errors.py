@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import importlib
-from pathlib import Path
 
 import numpy as np
 
@@ -23,16 +22,6 @@ def require_extra(module: str, extra: str, flag: str) -> None:
     except ImportError:
         raise MissingExtra(f'{flag} needs the {extra} extra: pip install -e ".[{extra}]"') from None
 
-
-def read_text(path, what: str, encoding: str = "utf-8-sig") -> str:
-    """The text of the file ``path`` (a byte-order mark is accepted); ``what`` it holds (e.g.
-    "the config") names it in the one :class:`InputError` an unreadable or binary file gives."""
-    try:
-        return Path(path).read_text(encoding=encoding)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read {what}: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: {what} is not UTF-8 text (a binary file?)") from None
 
 
 def check_array(name: str, value, shape: tuple, *, dtype=np.float64, finite: bool = True) -> np.ndarray:

@@ -114,7 +114,8 @@ def test_an_unreachable_or_malformed_address_is_one_clear_error(address, message
 @pytest.mark.parametrize("name, options, message", [
     ("dask", {}, "unknown executor 'dask'; valid: serial, ray"),
     ("serial", {"address": "10.0.0.1:6379"}, "--address applies to --executor ray"),
-    ("ray", {"workers": 0}, "workers must be an integer >= 1"),
+    ("ray", {"workers": 0}, r"workers must be an integer in \[1, 1024\]"),
+    ("ray", {"workers": 100_000_000}, r"workers must be an integer in \[1, 1024\], got 100000000"),
 ])
 def test_create_executor_refuses_bad_options(name, options, message):
     with pytest.raises(InputError, match=message):

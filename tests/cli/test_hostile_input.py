@@ -67,7 +67,8 @@ def test_simulate_refuses_an_earlier_run_until_overwrite(monkeypatch, capsys, tm
     (["simulate", "--frame-rate", "0"], ["frame_rate_hz must be in [0.5, 100], got 0.0"]),
     (["simulate", "--scenes", "0"], ["number of scenes must be an integer in [1, 1000], got 0"]),
     (["simulate", "--scenes", "10000"], ["number of scenes must be an integer in [1, 1000], got 10000"]),
-    (["bench", "--frames", "0", "--no-pose"], ["number of frames to time must be an integer >= 1, got 0"]),
+    (["bench", "--frames", "0", "--no-pose"], ["number of frames to time must be an integer in [1, 10000], got 0"]),
+    (["bench", "--frames", "100000000", "--no-pose"], ["must be an integer in [1, 10000], got 100000000"]),
 ])
 def test_bad_options_are_refused(monkeypatch, capsys, tmp_path, args, fragments):
     code, _, err = pedenv(monkeypatch, capsys, *args, *(["--output", tmp_path / "o"] if args[0] == "simulate" else []))
@@ -127,3 +128,58 @@ def test_simulated_scene_json_is_strict(monkeypatch, capsys, tmp_path):
     assert code == 0, err
     (meta,) = (tmp_path / "o").glob("*/scene.json")
     json.loads(meta.read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON token {c}"))
+
+
+# issue 19 ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("folder", [":x:", ":smile:", "[red]", "[bold]x[/bold]"])
+def test_paths_are_printed_as_they_are(monkeypatch, capsys, tmp_path, folder):
+    """Rich's emoji codes and markup were on: ``:x:/missing`` was printed as a cross emoji."""
+    missing = tmp_path / folder / "missing.json"
+    code, _, err = pedenv(monkeypatch, capsys, "demo", "--config", missing, "--output", tmp_path / "o")
+    one_error_line(code, err, f"{folder}/missing.json")
+
+
+LONG = "a" * 300
+
+
+@pytest.mark.parametrize("command", [SIMULATE, ["evaluate", "--dataset", "synthetic", "--data-root", "SIM",
+                                                "--pose-backend", "ground-truth"]])
+def test_an_output_name_over_255_bytes_is_one_line(monkeypatch, capsys, tmp_path, command):
+    if "SIM" in command:
+        code, _, err = pedenv(monkeypatch, capsys, *SIMULATE, "--output", tmp_path / "sim")
+        assert code == 0, err
+        command = [str(tmp_path / "sim") if c == "SIM" else c for c in command]
+    code, _, err = pedenv(monkeypatch, capsys, *command, "--output", tmp_path / LONG)
+    one_error_line(code, err, "is 300 bytes long; file systems take at most 255")
+
+
+@pytest.mark.parametrize("flag, target, message", [
+    ("--rerun", "INPUT", "the file name must end in .rrd"),
+    ("--mcap", "INPUT", "the file name must end in .mcap"),
+    ("--rerun", "OUT/environment.jsonl", "the file name must end in .rrd"),
+    ("--rerun", "OLD", "exists; pass --overwrite to replace it"),
+    ("--mcap", "INPUT/x.mcap", "which is a file"),
+])
+def test_rerun_and_mcap_never_write_over_inputs(monkeypatch, capsys, tmp_path, flag, target, message):
+    """``--mcap rec/ego_poses.csv`` replaced the poses; ``--rerun out/environment.jsonl`` corrupted it (exit 0)."""
+    code, _, err = pedenv(monkeypatch, capsys, *SIMULATE, "--output", tmp_path / "sim")
+    assert code == 0, err
+    (frames,) = (tmp_path / "sim").glob("*/frames.npz")
+    before = frames.read_bytes()
+    (tmp_path / "old.rrd").write_text("an earlier recording")
+    path = target.replace("INPUT", str(frames)).replace("OUT", str(tmp_path / "out")).replace(
+        "OLD", str(tmp_path / "old.rrd"))
+    code, _, err = pedenv(monkeypatch, capsys, "evaluate", "--dataset", "synthetic", "--data-root", tmp_path / "sim",
+                          "--pose-backend", "ground-truth", "--output", tmp_path / "out", flag, path)
+    one_error_line(code, err, message)
+    assert frames.read_bytes() == before and (tmp_path / "old.rrd").read_text() == "an earlier recording"
+    assert not (tmp_path / "out").exists()  # refused before the output folder was made
+
+
+def test_a_long_name_anywhere_else_is_one_line(monkeypatch, capsys, tmp_path):
+    """Any path option (here --data-root) with a name over 255 bytes: one line, not an OSError traceback."""
+    code, _, err = pedenv(monkeypatch, capsys, "evaluate", "--dataset", "synthetic", "--data-root", tmp_path / LONG,
+                          "--output", tmp_path / "out")
+    one_error_line(code, err, "a name in this path is longer than the file system takes (255 bytes)")

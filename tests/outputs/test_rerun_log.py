@@ -46,11 +46,11 @@ def test_one_recording_per_scene_with_every_frame_and_pedestrian(evaluated):
         entities = {c.split(":")[0] for c in table.column_names}
         assert {f"/world/pedestrians/skeletons/{i}" for i in ids} <= entities
         assert {f"/world/ego/camera/image/skeletons/{i}" for i in ids} <= entities
-        for entity in ("/world/ego", "/world/ego_trajectory", "/world/pedestrians/velocities",
+        for entity in ("/world/ego", "/world/ego_trajectory/0", "/world/pedestrians/velocities",
                        "/world/ground_truth/positions", "/world/ego/camera/image/boxes"):
             assert entity in entities
-        trajectory = table.column("/world/ego_trajectory:LineStrip3D").to_pylist()
-        assert len(trajectory[-1][0]) == FRAMES  # the path so far, one point per frame
+        trajectory = table.column("/world/ego_trajectory/0:LineStrip3D").to_pylist()
+        assert len(trajectory[-1][0]) == FRAMES  # the path so far (one piece: FRAMES < 100), one point per frame
 
 
 def test_the_camera_is_a_pinhole_and_the_image_is_logged_where_the_frame_has_one(evaluated):

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
+import signal
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -104,9 +108,12 @@ def test_rerun_never_mixes_or_loses_runs(tmp_path, pose_env):  # noqa: F811
     good = (tmp_path / "out" / "environment.jsonl").read_text()
     assert len(good.splitlines()) == 6
     wrong = _write(tmp_path / "wrong.yaml", rec["calibration"].read_text().replace("width: 640", "width: 600"))
-    again = run(calibration=wrong)  # fails at frame 0 (image size); the folder holds the good run
+    again = run(calibration=wrong)  # fails at frame 0 (image size), checked first; the folder holds the good run
     errors = [line for line in again.stderr.splitlines() if line.startswith("error:")]
-    assert again.returncode == 2 and len(errors) == 1 and "is not empty; pass --overwrite" in errors[0]
+    assert again.returncode == 2 and len(errors) == 1 and "frame 0 is 640x480 pixels, the calibration says 600x480" \
+        in errors[0]
+    again = run("--overwrite", calibration=wrong)  # issue 19: --overwrite no longer empties the folder first
+    assert again.returncode == 2 and "frame 0 is 640x480 pixels" in again.stderr
     assert (tmp_path / "out" / "environment.jsonl").read_text() == good
     shorter = tmp_path / "rec" / "shorter"
     shorter.mkdir()
@@ -118,3 +125,120 @@ def test_rerun_never_mixes_or_loses_runs(tmp_path, pose_env):  # noqa: F811
     assert run("--overwrite", images=shorter).returncode == 0
     assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(3)]
     assert json.loads((tmp_path / "out" / "run.json").read_text())["frames_done"] == 3
+
+
+# issue 19 ---------------------------------------------------------------------------------------
+
+
+def test_ego_positions_beyond_ten_thousand_km_are_refused(tmp_path):
+    text = "timestamp,x,y,yaw\n0,0,0,0\n0.1,1e20,0,0\n"
+    with pytest.raises(InputError, match=r"poses\.csv: row 2 \(line 3\): x = 1e\+20 m is beyond 1e\+07 m from the "
+                                         r"world origin"):
+        load_ego_poses(_write(tmp_path / "poses.csv", text))
+    utm = load_ego_poses(_write(tmp_path / "utm.csv", "timestamp,x,y,yaw\n0,500000,5400000,0\n0.1,500001,5400000,0\n"))
+    assert utm.translations[1, 0] == 500001.0  # UTM coordinates are fine
+
+
+@pytest.mark.ultralytics  # bus.jpg
+def test_every_frame_is_checked_before_an_earlier_run_is_replaced(tmp_path):
+    """A bad image anywhere in the folder stops ``run --overwrite`` before it empties the folder."""
+    from pedenv.apps.run import run_recording
+
+    rec = _bus_recording(tmp_path / "rec", BUS, frames=3)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".pedenv-output").write_text("an earlier run")
+    (out / "environment.jsonl").write_text("the earlier run's lines\n")
+    (rec["images"] / "frame_002.jpg").write_bytes(b"not a jpeg")
+    with pytest.raises(InputError, match=r"frame_002\.jpg: cannot read the image \(corrupt or not an image\)"):
+        run_recording(**rec, output=out, overwrite=True, pose_backend="detector-model")
+    assert (out / "environment.jsonl").read_text() == "the earlier run's lines\n"
+
+
+BUS = Path(importlib.util.find_spec("ultralytics").submodule_search_locations[0]) / "assets" / "bus.jpg" \
+    if importlib.util.find_spec("ultralytics") else None
+
+
+def _long_bus_recording(folder: Path, photo: Path, frames: int) -> dict:
+    """The bus recording with ``frames`` frames and ego poses covering them all (0.7 m/s ahead)."""
+    rec = _bus_recording(folder, photo, frames=frames)
+    end = 50.0 + 0.1 * frames
+    rows = f"49.9,-0.07,0,0,1,0,0,0\n{end:.1f},{0.7 * (end - 50):.3f},0,0,1,0,0,0\n"
+    _write(rec["ego_poses"], "timestamp,x,y,z,qw,qx,qy,qz\n" + rows)
+    return rec
+
+
+def _run_cli(args, env) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "pedenv", *map(str, args)], env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for(path_glob, folder, proc, timeout: float = 300.0) -> None:
+    deadline = time.time() + timeout
+    while time.time() < deadline and proc.poll() is None and not list(folder.glob(path_glob)):
+        time.sleep(0.05)
+    assert proc.poll() is None, f"the run ended before the signal: {proc.stderr.read() if proc.stderr else ''}"
+
+
+@pytest.mark.ultralytics
+@pytest.mark.onnx_model
+@pytest.mark.slow
+@pytest.mark.parametrize("gap_s", [0.15, 0.3])
+def test_a_double_ctrl_c_keeps_run_json(tmp_path, pose_env, gap_s):  # noqa: F811
+    rec = _long_bus_recording(tmp_path / "rec", pose_env["bus"], frames=30)
+    env = {**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"]}
+    out = tmp_path / "out"
+    proc = _run_cli(["run", "--images", rec["images"], "--calibration", rec["calibration"], "--ego-poses",
+                     rec["ego_poses"], "--output", out, "--detection", "fast"], env)
+    _wait_for("overlays/000002.png", out, proc)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(gap_s)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "Traceback" not in err, err
+    summary = json.loads((out / "run.json").read_text())
+    lines = (out / "environment.jsonl").read_text().splitlines()
+    assert 3 <= summary["frames_done"] == len(lines) < 30
+
+
+@pytest.mark.ultralytics
+@pytest.mark.onnx_model
+@pytest.mark.slow
+def test_a_ctrl_c_manifest_run_writes_summary_json(tmp_path, pose_env):  # noqa: F811
+    rec = _long_bus_recording(tmp_path / "rec", pose_env["bus"], frames=12)
+    rows = "".join(f"drive-{k},{rec['images']},{rec['calibration']},{rec['ego_poses']}\n" for k in range(6))
+    manifest = _write(tmp_path / "drives.csv", "name,images,calibration,ego_poses\n" + rows)
+    out = tmp_path / "out"
+    proc = _run_cli(["run", "--manifest", manifest, "--output", out, "--detection", "fast"],
+                    {**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"]})
+    _wait_for("drive-1/overlays/000001.png", out, proc)  # the first recording done, the second running
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "Traceback" not in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    statuses = [r["status"] for r in summary["recordings"]]
+    assert summary["interrupted"] is True and statuses[0] == "done" and statuses[-1] == "interrupted"
+    assert [r["name"] for r in summary["recordings"]] == [f"drive-{k}" for k in range(6)]
+
+
+@pytest.mark.ultralytics
+@pytest.mark.onnx_model
+@pytest.mark.slow
+def test_detect_goes_past_a_bad_image_and_takes_any_file_name(tmp_path, pose_env):  # noqa: F811
+    """``detect good.jpg 1x1.png good2.jpg``: one error naming the bad file, the two others written;
+    names with the byte 0xff (a segfault in cv2.imwrite before) for an image and the output folder."""
+    odd = tmp_path / os.fsdecode(b"x\xff.jpg")
+    odd.write_bytes(pose_env["bus"].read_bytes())
+    tiny = tmp_path / "one.png"
+    tiny.write_bytes(cv2.imencode(".png", np.zeros((1, 1, 3), np.uint8))[1].tobytes())
+    out = tmp_path / os.fsdecode(b"o\xff")
+    done = subprocess.run([sys.executable, "-m", "pedenv", "detect", str(pose_env["bus"]), str(tiny), str(odd),
+                           "--output", str(out), "--detection", "fast"], capture_output=True, text=True,
+                          env={**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"]}, timeout=300)
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
+    assert done.returncode == 2 and len(errors) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert f"1 of 3 images could not be processed ({tiny}: image of 1x1 px is too small" in errors[0]
+    data = json.loads((out / "detections.json").read_text())
+    assert [os.fsencode(Path(d["file"]).name) for d in data["images"]] == [b"bus.jpg", b"x\xff.jpg"]
+    assert data["failed"][0]["file"] == str(tiny) and all(len(d["persons"]) >= 3 for d in data["images"])
+    assert sorted(os.fsencode(p.name) for p in out.glob("*_pose.png")) == [b"bus_pose.png", b"x\xff_pose.png"]

@@ -80,3 +80,23 @@ def test_a_bad_manifest_file_is_one_clear_error(recordings, name, text, message)
         path.write_text(text)
     with pytest.raises(InputError, match=f"^{path}: {message}"):
         read_manifest(path)
+
+
+@pytest.mark.parametrize("name, message", [
+    ("summary.json", r"row 1: field 'name' 'summary\.json' is the name of a file the run writes in the output folder"),
+    (".pedenv-output", r"row 1: field 'name' '\.pedenv-output' is the name of a file the run writes"),
+    ("a" * 256, r"row 1: field 'name' must be usable as a folder name \(no / or \\, at most 255 bytes\)"),
+])
+def test_names_the_run_cannot_use_are_refused_before_it_starts(recordings, name, message):
+    """Issue 19: a recording named summary.json ended in a traceback and no summary; 256 bytes in a traceback."""
+    path = recordings / "m.csv"
+    path.write_text(f"name,images,calibration,ego_poses\n{name},a/images,calib.yaml,a/poses.csv\n")
+    with pytest.raises(InputError, match=r"m\.csv: " + message):
+        read_manifest(path)
+
+
+def test_a_path_field_over_255_bytes_is_one_error(recordings):
+    path = recordings / "m.csv"
+    path.write_text(f"images,calibration,ego_poses\n{'b' * 300}/images,calib.yaml,a/poses.csv\n")
+    with pytest.raises(InputError, match=r"m\.csv: row 1: field 'images': .* is 300 bytes long; file systems take"):
+        read_manifest(path)

@@ -6,7 +6,9 @@ Each row of the manifest (:mod:`pedenv.recordings.manifest`) is one
 :func:`~pedenv.apps.run.run_recording` into ``<output>/<name>/``, as ``pedenv run`` writes
 it. The pose network is loaded once per worker process and kept for its later
 recordings. ``<output>/summary.json`` lists every recording in manifest order with its
-status (``done``, ``failed`` with the error, or ``resumed``), frames and folder. A recording
+status (``done``, ``failed`` with the error, ``resumed``, or ``interrupted`` for the
+recordings not finished when Ctrl-C stopped the run: ``summary.json`` is written then too,
+``"interrupted": true``), frames and folder. A recording
 that fails stops alone: the others finish, and what it wrote before the failure stays.
 ``resume`` keeps the recordings an earlier run completed (their ``run.json`` counts every
 frame) and runs the others again.
@@ -30,10 +32,8 @@ from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.localization import configure
 from pedenv.outputs.output_dir import prepare_output_dir
-from pedenv.recordings.manifest import ManifestRow, read_manifest
+from pedenv.recordings.manifest import SUMMARY, ManifestRow, read_manifest
 from pedenv.structured_text import load_json
-
-SUMMARY = "summary.json"
 
 
 def run_manifest(manifest: str | Path, output: str | Path, *, executor: str = "serial", address: str | None = None,
@@ -60,21 +60,41 @@ def run_manifest(manifest: str | Path, output: str | Path, *, executor: str = "s
     todo = [r for r in rows if r.name not in entries]
     options = {"pose_backend": pose_backend, "pose_model": pose_model, "pose_input_size": pose_input_size,
                "detection": detection, "video_out": video_out, "config": cfg}
-    with create_executor(executor, address=address, workers=workers, object_store_memory=object_store_memory) as ex, \
-            progress_bar(Console(stderr=True), enabled=progress) as bar:  # on stderr, as pedenv run's
-        counter = FrameCounter(bar, len(rows), already=len(entries), noun="recordings")
-        shared = {"options": options, "output": str(out)}
-        for row, value, error in ex.run(_recording_task, todo, shared=shared, on_progress=counter.update):
-            if error is None:
-                entries[row.name] = {**value, "status": "done"}
-            else:
-                entries[row.name] = {**_complete(out / row.name, partial=True), "status": "failed",
-                                     "error": f"{type(error).__name__}: {error}"}
-            counter.finish(row, failed=error is not None)
-    recordings = [{"name": r.name, "row": r.row, "output": str(out / r.name), **entries[r.name]} for r in rows]
+    interrupted = False
+    try:
+        with create_executor(executor, address=address, workers=workers,
+                             object_store_memory=object_store_memory) as ex, \
+                progress_bar(Console(stderr=True, emoji=False, markup=False), enabled=progress) as bar:
+            counter = FrameCounter(bar, len(rows), already=len(entries), noun="recordings")
+            shared = {"options": options, "output": str(out)}
+            for row, value, error in ex.run(_recording_task, todo, shared=shared, on_progress=counter.update):
+                if error is None:
+                    entries[row.name] = {**value, "status": "done"}
+                else:
+                    entries[row.name] = {**_complete(out / row.name, partial=True), "status": "failed",
+                                         "error": f"{type(error).__name__}: {error}"}
+                counter.finish(row, failed=error is not None)
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
+    finally:  # also after Ctrl-C: the recordings finished so far are listed
+        summary = _write_summary(manifest, out, executor, rows, entries, interrupted)
+    return summary
+
+
+def _write_summary(manifest, out: Path, executor: str, rows: list[ManifestRow], entries: dict,
+                   interrupted: bool) -> dict:
+    """``out/summary.json``: every row in manifest order; a row without an entry is ``interrupted``
+    (Ctrl-C) or ``not run`` (the executor failed)."""
+    missing = "interrupted" if interrupted else "not run"
+    recordings = [{"name": r.name, "row": r.row, "output": str(out / r.name),
+                   **entries.get(r.name, {**_complete(out / r.name, partial=True), "status": missing})}
+                  for r in rows]
     summary = {"manifest": str(manifest), "output": str(out), "executor": executor, "recordings": recordings,
-               "failed": sum(e["status"] == "failed" for e in recordings)}
-    (out / SUMMARY).write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
+               "failed": sum(e["status"] == "failed" for e in recordings), "interrupted": interrupted}
+    tmp = out / f".{SUMMARY}.tmp"
+    tmp.write_text(json.dumps(summary, indent=2, allow_nan=False, default=str) + "\n")
+    tmp.replace(out / SUMMARY)  # whole or not at all
     return summary
 
 

@@ -5,38 +5,60 @@ from __future__ import annotations
 from pathlib import Path
 
 from pedenv.errors import InputError
-from pedenv.images import read_image_rgb, write_image
+from pedenv.images import image_size, read_image_rgb, write_image
 from pedenv.outputs.detections import detections_to_dict, unique_names, write_detections
+from pedenv.outputs.output_dir import prepare_output_dir
 from pedenv.visualize.overlay import draw_detections
 
 
-def annotate_images(images, output: str | Path, backend) -> Path:
+def annotate_images(images, output: str | Path, backend, *, overwrite: bool = False, prepare: bool = True) -> Path:
     """Run a pose ``backend`` on image files; write ``output/detections.json`` and the drawn images.
 
     images: image paths. Each drawn image is ``output/<stem>_pose.png`` (``<stem>-2_pose.png``
     for a second image of the same name). The JSON (:mod:`pedenv.outputs.detections`) holds per
     image: file, width, height, backend, drawn image and persons. An image that cannot be
-    read is listed under ``failed``; the others are still written, then an InputError names
-    the failed ones. Returns the JSON path.
+    read, is above the pixel limit or that the backend refuses (too small) is listed under
+    ``failed`` with its error; the others are still processed and written, then one InputError
+    names the failed files. Every image's header is read before ``output`` is prepared
+    (``prepare``: :func:`~pedenv.outputs.output_dir.prepare_output_dir` with ``overwrite``),
+    so when no image can be read an earlier run there is left as it was. Returns the JSON path.
     """
-    output = Path(output)
     paths = [Path(p) for p in images]
     if not paths:
         raise InputError("no images given")
-    records, failed = [], []
-    for path, name in zip(paths, unique_names(paths, "_pose.png")):
+    failed: dict[int, str] = {}
+    for i, path in enumerate(paths):
         try:
-            image = read_image_rgb(path)
+            image_size(path)
         except InputError as exc:
-            failed.append({"file": str(path), "error": str(exc)})
+            failed[i] = str(exc)
+    if len(failed) == len(paths):
+        errors = failed[0] if len(paths) == 1 else \
+            f"none of the {len(paths)} images can be read ({'; '.join(failed.values())})"
+        raise InputError(f"{errors}; {output} was left as it was")
+    output = prepare_output_dir(output, overwrite=overwrite, command="pedenv detect") if prepare else Path(output)
+    records = []
+    for i, (path, name) in enumerate(zip(paths, unique_names(paths, "_pose.png"))):
+        if i in failed:
             continue
-        det = backend.detect(image)
-        drawn = write_image(output / name, draw_detections(image, det))
-        records.append({"file": str(path), "width": image.shape[1], "height": image.shape[0],
-                        "backend": backend.name, "drawn": str(drawn), "persons": detections_to_dict(det)})
-    target = write_detections(output / "detections.json", records, failed)
+        try:
+            records.append(_annotate(path, output / name, backend))
+        except InputError as exc:
+            message = str(exc)
+            failed[i] = message if str(path) in message else f"{path}: {message}"
+    target = write_detections(output / "detections.json", records,
+                              [{"file": str(paths[i]), "error": failed[i]} for i in sorted(failed)])
     if failed:
-        names = ", ".join(f["error"] for f in failed)
-        raise InputError(f"{len(failed)} of {len(paths)} images could not be read ({names}); "
+        names = "; ".join(failed[i] for i in sorted(failed))
+        raise InputError(f"{len(failed)} of {len(paths)} images could not be processed ({names}); "
                          f"the detections of the other {len(records)} are in {target}")
     return target
+
+
+def _annotate(path: Path, drawn_path: Path, backend) -> dict:
+    """One image's record: read, detected, drawn to ``drawn_path``."""
+    image = read_image_rgb(path)
+    det = backend.detect(image)
+    drawn = write_image(drawn_path, draw_detections(image, det))
+    return {"file": str(path), "width": image.shape[1], "height": image.shape[0], "backend": backend.name,
+            "drawn": str(drawn), "persons": detections_to_dict(det)}

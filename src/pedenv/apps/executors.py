@@ -80,6 +80,11 @@ class SerialExecutor:
                 yield item, value, None
 
 
+#: Most Ray workers (``--workers``): far above one machine's cores, low enough that a typo
+#: (``--workers 100000000``) does not ask Ray for a hundred million CPUs.
+MAX_WORKERS = 1024
+
+
 class RayExecutor:
     """Runs each item as one Ray task on a local Ray (started here) or on a cluster at ``address``.
 
@@ -92,8 +97,9 @@ class RayExecutor:
 
     def __init__(self, *, address: str | None = None, workers: int | None = None, max_retries: int = MAX_RETRIES,
                  object_store_memory: int | None = None) -> None:
-        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
-            raise InputError(f"workers must be an integer >= 1, got {workers!r}")
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                    or not 1 <= workers <= MAX_WORKERS):
+            raise InputError(f"workers must be an integer in [1, {MAX_WORKERS}], got {workers!r}")
         if isinstance(max_retries, bool) or not isinstance(max_retries, int) or max_retries < 0:
             raise InputError(f"max_retries must be an integer >= 0, got {max_retries!r}")
         self.address, self.workers, self.max_retries = address, workers, max_retries

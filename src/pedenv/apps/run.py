@@ -22,6 +22,7 @@ from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.pose.redetect import with_redetection
 from pedenv.recordings.footage import Recording, load_recording
+from pedenv.video_files import VideoOut, video_capture
 from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
@@ -72,6 +73,8 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
         backend = create_pose_backend(pose_backend, **backend_options(
             pose_backend, pose_model, pose_input_size, cfg.detection if detection else None,
             cfg.tracking.pose_score_threshold, cfg.merge))
+    if hasattr(rec, "check"):  # a folder or video recording: every frame's size and ego pose, before an
+        rec.check()  # earlier run is replaced (a bag is read once, as it runs)
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     model = PedestrianEnvironmentModel(cfg)
@@ -127,16 +130,12 @@ def _load_bag(bag, options):
     return load_bag_recording(bag, options)
 
 
-def _open_video(path: Path, rec: Recording, shape):
+def _open_video(path: Path, rec: Recording, shape) -> VideoOut:
     import cv2
 
     stamps = np.array([t for _, t in rec.images]) if rec.images else None
     rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
     if rec.video is not None and not rec.fps:
-        cap = cv2.VideoCapture(str(rec.video))
-        rate = cap.get(cv2.CAP_PROP_FPS) or rate
-        cap.release()
-    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"mp4v"), rate, (shape[1], shape[0]))
-    if not writer.isOpened():
-        raise InputError(f"{path}: cannot write the overlay video")
-    return writer
+        with video_capture(rec.video) as cap:
+            rate = cap.get(cv2.CAP_PROP_FPS) or rate
+    return VideoOut(path, rate, (shape[1], shape[0]), what="overlay video")

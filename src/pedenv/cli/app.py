@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import signal
 import sys
 import warnings
@@ -10,6 +11,7 @@ import typer
 from rich.console import Console
 
 from pedenv.errors import InputError
+from pedenv.paths import MAX_NAME_BYTES
 
 app = typer.Typer(
     name="pedenv",
@@ -18,7 +20,14 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-console = Console(stderr=True, soft_wrap=True)
+#: stderr console for errors, warnings and progress. Emoji codes and markup are off: a path
+#: such as ``runs/:x:/a.png`` or ``[red]/b.png`` is printed as it is, not as an emoji or a style.
+console = Console(stderr=True, soft_wrap=True, emoji=False, markup=False)
+
+
+def stdout_console(width: int | None) -> Console:
+    """The stdout console of tables and results (``width`` columns when piped), emoji and markup off."""
+    return Console(width=width, emoji=False, markup=False)
 
 
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
@@ -30,18 +39,37 @@ def main() -> None:
     warnings one ``warning:`` line each.
 
     SIGTERM (``kill``, ``timeout``) stops a run as Ctrl-C does (exit code 130): through the
-    writers' ``close()``, so the outputs stay valid up to the last finished frame.
+    writers' ``close()``, so the outputs stay valid up to the last finished frame. A second
+    Ctrl-C or SIGTERM while they close is ignored with one line (it would cut ``run.json`` or
+    ``summary.json`` short); Ctrl-\\ (SIGQUIT) still ends the process at once.
     """
     previous, warnings.formatwarning = warnings.formatwarning, _one_line_warning
-    signal.signal(signal.SIGTERM, _stop)
+    _Stop.stopping = False
+    handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
         app()
     except InputError as exc:  # bad input only: any other exception is a bug and keeps its traceback
         console.print(f"error: {exc}", style="red", highlight=False, markup=False)
         sys.exit(2)
+    except OSError as exc:
+        if exc.errno != errno.ENAMETOOLONG:  # a path given with a name over 255 bytes is bad input too
+            raise
+        console.print(f"error: {exc.filename}: a name in this path is longer than the file system takes "
+                      f"({MAX_NAME_BYTES} bytes)", style="red", highlight=False, markup=False)
+        sys.exit(2)
     finally:
         warnings.formatwarning = previous
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
+
+
+class _Stop:
+    stopping = False  # a stop signal came: the outputs are being closed
 
 
 def _stop(signum, _frame) -> None:
+    if _Stop.stopping:
+        print("pedenv: still closing the outputs; they are kept (Ctrl-\\ quits at once)", file=sys.stderr, flush=True)
+        return
+    _Stop.stopping = True
     raise KeyboardInterrupt(f"signal {signum}")

@@ -9,14 +9,14 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from pedenv.cli.app import app, console
+from pedenv.cli.app import app, console, stdout_console
 from pedenv.config import Config
 
 if TYPE_CHECKING:
     from pedenv.pose import PoseBackend
 
 #: stdout console for tables and results; wide enough for the tables when piped
-_out = console.__class__(width=None if sys.stdout.isatty() else 140)
+_out = stdout_console(None if sys.stdout.isatty() else 140)
 
 
 def _config(path: Path | None, method: str | None = None, **paper) -> Config:
@@ -30,7 +30,8 @@ def _config(path: Path | None, method: str | None = None, **paper) -> Config:
 
 
 def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path | None, *,
-                   matches: bool = False, video_scene: str | None = None, ros: Path | None = None):
+                   matches: bool = False, video_scene: str | None = None, ros: Path | None = None,
+                   overwrite: bool = False):
     """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap``, ``--ros-out`` flags (and the bird's-eye
     video)."""
     from pedenv.outputs.sinks import ExtraOutputs
@@ -38,18 +39,22 @@ def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path |
     return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
                         matches_parquet=output / "matches.parquet" if parquet and matches else None,
                         rerun=rerun, mcap=mcap, ros=ros,
-                        birds_eye_video=output / "birds_eye.mp4" if video_scene else None, birds_eye_scene=video_scene)
+                        birds_eye_video=output / "birds_eye.mp4" if video_scene else None, birds_eye_scene=video_scene,
+                        overwrite=overwrite)
 
 
 #: The flags of the per-frame outputs, shared by demo and evaluate (run has them too).
 _PARQUET = typer.Option(
     False, "--parquet", help="Also write environment.parquet (and matches.parquet when evaluating)."
 )
-_RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several).")
-_MCAP = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap).")
+_RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several; "
+                                             "an existing file only with --overwrite).")
+_MCAP = typer.Option(None, "--mcap",
+                     help="Write a Foxglove MCAP file (FILE.mcap; an existing file only with --overwrite).")
 _ROS_OUT = typer.Option(None, "--ros-out", help="Write ROS 2 messages as a rosbag2 FILE.mcap (FILE-<method>.mcap "
                                                  "with --method both).")
-_OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output.")
+_OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output, and "
+                                                     "an existing --rerun/--mcap/--ros-out file.")
 _EXECUTOR = typer.Option("serial", "--executor", help="serial (in this process) or ray (one task per scene).")
 _ADDRESS = typer.Option(None, "--address", help="Ray cluster HOST:PORT (`ray start --head`); default: a local Ray.")
 _WORKERS = typer.Option(None, "--workers", help="Ray: CPUs of the local Ray, or most tasks at once on a cluster.")
@@ -86,7 +91,9 @@ def demo(
     from pedenv.outputs.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE, ros=ros_out)
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE, ros=ros_out,
+                           overwrite=overwrite)
+    extra.check()
     prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
     methods = result.extras["methods"]
@@ -195,7 +202,8 @@ def evaluate(
     backend: str | PoseBackend | None = onnx() if onnx else pose_backend
     from pedenv.outputs.output_dir import prepare_output_dir
 
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, ros=ros_out)
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, ros=ros_out, overwrite=overwrite)
+    extra.check()
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
     if method == "both":
         from pedenv.apps.compare import (

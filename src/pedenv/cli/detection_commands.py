@@ -8,9 +8,9 @@ from pathlib import Path
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from pedenv.cli.app import app, console
+from pedenv.cli.app import app, console, stdout_console
 
-_out = console.__class__(width=None if sys.stdout.isatty() else 200)
+_out = stdout_console(None if sys.stdout.isatty() else 200)
 
 
 @app.command("evaluate-detections")

@@ -50,13 +50,11 @@ def detect(
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
-    from pedenv.outputs.output_dir import prepare_output_dir
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
-    prepare_output_dir(output, overwrite=overwrite, command="pedenv detect")
-    path = annotate_images(images=images, output=output, backend=backend)
+    path = annotate_images(images=images, output=output, backend=backend, overwrite=overwrite)
     typer.echo(str(path))
 
 
@@ -94,8 +92,10 @@ def run(
     parquet: bool = typer.Option(
         False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."
     ),
-    rerun: Path | None = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd)."),
-    mcap: Path | None = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap)."),
+    rerun: Path | None = typer.Option(
+        None, "--rerun", help="Write a Rerun recording (FILE.rrd; an existing file only with --overwrite)."),
+    mcap: Path | None = typer.Option(
+        None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap; an existing file only with --overwrite)."),
     manifest: Path | None = typer.Option(
         None, "--manifest", help="CSV or YAML, one recording per row: one output folder each + summary.json."
     ),
@@ -145,7 +145,7 @@ def run(
     from pedenv.outputs.sinks import ExtraOutputs
 
     extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap,
-                         ros=ros_out, live=live_port if live else None)
+                         ros=ros_out, live=live_port if live else None, overwrite=overwrite)
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(

@@ -22,11 +22,11 @@ from __future__ import annotations
 from collections.abc import Iterator
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from pedenv.datasets import kitti_files as kitti
 from pedenv.errors import InputError
+from pedenv.images import image_size
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
 
 #: Optical / KITTI camera axes (x right, y down, z forward) -> vehicle axes (x forward, y left, z up).
@@ -73,13 +73,11 @@ class KittiTrackingDataset:
         if not seq.frames:
             return
         first = seq.image_path(seq.frames[0])
-        image = cv2.imread(str(first), cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise InputError(f"{first}: cannot read the image")
+        width, height = image_size(first)  # from the header; any file name (pedenv.images)
         to_vehicle = cam0_to_vehicle(self.camera_height_m)
         cam2 = np.eye(4)
         cam2[:3, 3] = seq.calib.cam2_position
-        camera = Camera(seq.calib.K, image.shape[1], image.shape[0], to_vehicle @ cam2)
+        camera = Camera(seq.calib.K, width, height, to_vehicle @ cam2)
         from_vehicle = np.linalg.inv(to_vehicle)
         for index, frame in enumerate(seq.frames):
             cam0_pose = seq.poses[frame] if seq.poses is not None else np.eye(4)

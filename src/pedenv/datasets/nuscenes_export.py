@@ -85,7 +85,7 @@ def write_nuscenes(scenes: Iterable[Scene], output_dir: str | Path, version: str
     for scene, name in zip(scenes, names):
         _write_scene(scene, name, root, tables, skeletons, sensor_token, jpeg_quality)
     map_file = "maps/pedenv_blank.png"
-    cv2.imwrite(str(root / map_file), np.zeros((64, 64), np.uint8))
+    (root / map_file).write_bytes(cv2.imencode(".png", np.zeros((64, 64), np.uint8))[1].tobytes())
     tables["map"] = [{"token": token("map"), "category": "semantic_prior", "filename": map_file,
                       "log_tokens": [r["token"] for r in tables["log"]]}]
     for name, records in tables.items():
@@ -234,5 +234,7 @@ def _write_image(frame: Frame, path: Path, quality: int) -> None:
             for a, b in COCO_BONES:
                 if vis[a] and vis[b]:
                     cv2.line(image, tuple(map(int, kp[a])), tuple(map(int, kp[b])), (255, 255, 255), 2)
-    if not cv2.imwrite(str(path), image, [cv2.IMWRITE_JPEG_QUALITY, quality]):
-        raise OSError(f"could not write image {path}")
+    ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])  # written by Python: any name
+    if not ok:
+        raise OSError(f"could not encode image {path}")
+    path.write_bytes(data.tobytes())

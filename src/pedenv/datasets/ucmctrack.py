@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from pedenv.datasets import mot17
-from pedenv.errors import InputError, read_text
+from pedenv.errors import InputError
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth, Scene
+from pedenv.structured_text import read_limited_text
 
 BLOCKS = ("RotationMatrices", "TranslationVectors", "IntrinsicMatrix")
 #: A box bottom whose ray meets the ground farther than this (metres) from the camera, or
@@ -54,7 +55,7 @@ def read_camera_parameters(path: str | Path) -> CameraParameters:
     path = Path(path)
     blocks: dict[str, list[list[float]]] = {}
     current = None
-    for n, line in enumerate(read_text(path, "the camera parameters").splitlines(), start=1):
+    for n, line in enumerate(read_limited_text(path, "the camera parameters").splitlines(), start=1):
         words = line.split()
         if not words:
             continue

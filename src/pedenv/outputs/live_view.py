@@ -14,6 +14,7 @@ import foxglove
 from foxglove import channels as fc
 
 from pedenv.errors import InputError
+from pedenv.outputs.ego_path import EgoPath
 from pedenv.outputs.mcap_log import McapWriter
 
 DEFAULT_PORT = 8765
@@ -50,7 +51,7 @@ class LiveViewer(McapWriter):
         self._scene: str | None = None
         self._offset = 0.0
         self._last = float("-inf")
-        self._trajectory: list = []
+        self._trajectory = EgoPath()
 
     def close(self) -> None:
         if self._server is not None:

@@ -8,7 +8,8 @@ Topics (Foxglove schemas unless said otherwise), frames ``world`` -> ``ego`` -> 
   a sphere at the position, a velocity arrow, the 3D skeleton (line list), the 2-sigma
   ellipse on the ground (line loop) and the id as text; each update first deletes all;
 * ``/ground_truth``: ``SceneUpdate`` with the true positions (where the frame is labelled);
-* ``/ego``: ``SceneUpdate`` with the ego's path so far;
+* ``/ego``: ``SceneUpdate`` with the ego's path so far, entities ``ego-path-<piece>`` of 100
+  positions each (:mod:`pedenv.outputs.ego_path`: the file grows linearly with the stream);
 * ``/camera/calibration``: ``CameraCalibration``; ``/camera/image``: ``CompressedImage`` (JPEG, when
   the frame has an image); ``/camera/annotations``: ``ImageAnnotations`` (skeletons, boxes, ids);
 * ``/environment``: JSON, ``EnvironmentState.to_dict()`` (the JSON Lines record).
@@ -28,6 +29,7 @@ import numpy as np
 from foxglove import channels as fc
 from foxglove import messages as fm
 
+from pedenv.outputs.ego_path import EgoPath
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES
 from pedenv.state import EnvironmentState
@@ -80,11 +82,11 @@ class McapWriter:
         self._scene: str | None = None
         self._offset = 0.0
         self._last = -np.inf
-        self._trajectory: list[np.ndarray] = []
+        self._trajectory = EgoPath()
 
     def write(self, state: EnvironmentState, frame: Frame) -> None:
         if state.scene != self._scene:
-            self._scene, self._trajectory = state.scene, []
+            self._scene, self._trajectory = state.scene, EgoPath()
             self._offset = 0.0 if state.timestamp > self._last else self._last + 1.0 - state.timestamp
         t = state.timestamp + self._offset
         self._last = t
@@ -94,11 +96,11 @@ class McapWriter:
         self._peds.log(fm.SceneUpdate(deletions=[_delete_all(stamp)], entities=[
             _pedestrian(state, i, stamp) for i in range(len(state.pedestrians))]), log_time=ns)
         self._log_ground_truth(frame, stamp, ns)
-        self._trajectory.append(np.asarray(state.ego.translation, float))
+        piece, points = self._trajectory.add(state.ego.translation)
         self._ego.log(fm.SceneUpdate(entities=[fm.SceneEntity(
-            timestamp=stamp, frame_id="world", id="ego-path",
+            timestamp=stamp, frame_id="world", id=f"ego-path-{piece}",
             lines=[fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineStrip, thickness=0.15, color=_GREEN,
-                                    points=[_p3(p) for p in self._trajectory])])]), log_time=ns)
+                                    points=[_p3(p) for p in points])])]), log_time=ns)
         self._log_camera(state, frame, stamp, ns)
         record = state.to_dict()
         record["log_time"] = t

@@ -15,9 +15,11 @@ Every command that writes a folder (``run``, ``evaluate``, ``simulate``, ``detec
 from __future__ import annotations
 
 import shutil
+import tempfile
 from pathlib import Path
 
 from pedenv.errors import InputError
+from pedenv.paths import check_path, is_utf8
 
 #: The file pedenv leaves in every output folder it prepares; ``overwrite`` needs it.
 MARKER = ".pedenv-output"
@@ -29,7 +31,7 @@ def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: st
     Raises InputError if ``path`` is a file, lies under a file, is not writable, or is a
     non-empty folder and ``overwrite`` is off (or it is on but pedenv did not write the folder).
     """
-    path = Path(path)
+    path = check_path(path, "output folder")
     if path.exists() and not path.is_dir():
         raise InputError(f"output folder {path} is an existing file; choose a folder")
     blocking = next((p for p in path.parents if p.exists() and not p.is_dir()), None)
@@ -67,7 +69,7 @@ def _clear(path: Path) -> None:
 
 def writable_file(path: str | Path, what: str = "output file") -> Path:
     """``path`` with its folder created, checked to be no folder; InputError naming it otherwise."""
-    path = Path(path)
+    path = check_path(path, what)
     if path.is_dir():
         raise InputError(f"{what} {path} is a folder")
     try:
@@ -75,3 +77,43 @@ def writable_file(path: str | Path, what: str = "output file") -> Path:
     except OSError as exc:
         raise InputError(f"cannot create the folder of {what} {path}: {exc.strerror or exc}") from None
     return path
+
+
+def check_output_file(path: str | Path, flag: str, suffix: str, *, overwrite: bool = False) -> Path:
+    """Check a file a run is asked to write (``--rerun FILE.rrd``, ``--mcap FILE.mcap``) before it starts.
+
+    Refused with one InputError naming ``flag`` and the path: a name without ``suffix`` (so
+    that no input, such as the poses CSV, and no file the run writes itself, such as
+    ``environment.jsonl``, is ever written over), a name that is not UTF-8 (the Rerun and
+    MCAP libraries cannot take it), a folder, a path under a file, a folder
+    that cannot be written, and an existing file (or, for several scenes, an existing
+    ``<stem>-<scene><suffix>``) unless ``overwrite``. Nothing is created (the writer makes
+    the missing folders when the run starts).
+    """
+    path = check_path(path, flag)
+    if not is_utf8(path):
+        raise InputError(f"{flag} {path}: the name is not UTF-8 text, which the {flag[2:]} writer needs; "
+                         f"choose another name")
+    if path.suffix.lower() != suffix:
+        raise InputError(f"{flag} {path}: the file name must end in {suffix} (pedenv writes no file of another kind "
+                         f"there, so that no input or other output is written over)")
+    if path.is_dir():
+        raise InputError(f"{flag} {path} is a folder; give a file name ending in {suffix}")
+    blocking = next((p for p in path.parents if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise InputError(f"{flag} {path} lies under {blocking}, which is a file")
+    earlier = [path] if path.exists() else sorted(path.parent.glob(f"{glob_escape(path.stem)}-*{suffix}"))
+    if earlier and not overwrite:
+        raise InputError(f"{flag} {earlier[0]} exists; pass --overwrite to replace it, or choose another name")
+    existing = next(p for p in (path.parent, *path.parent.parents) if p.exists())
+    try:  # nothing is created before the run: the nearest existing folder must take a file
+        with tempfile.TemporaryFile(dir=existing):
+            pass
+    except OSError as exc:
+        raise InputError(f"{flag} {path} cannot be written: {exc.strerror or exc}") from None
+    return path
+
+
+def glob_escape(name: str) -> str:
+    """``name`` with the glob pattern characters ``*?[`` taken literally."""
+    return "".join(f"[{c}]" if c in "*?[" else c for c in name)

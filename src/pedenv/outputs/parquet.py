@@ -61,6 +61,11 @@ MATCHES_SCHEMA = pa.schema([
 ])
 
 
+def _text(name: str) -> str:
+    """``name`` as UTF-8 text: a scene named after a file whose name is not UTF-8 keeps ``\\udcff`` escapes."""
+    return name.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 def _arrow(values, kind: pa.DataType) -> pa.Array:
     """``values`` as an Arrow array of ``kind``; (n, a[, b]) numpy arrays become nested fixed-size lists."""
     if not pa.types.is_fixed_size_list(kind):
@@ -87,7 +92,8 @@ class _IncrementalTable:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.every = int(frames_per_row_group)
-        self._writer = pq.ParquetWriter(self.path, self.schema, compression="zstd")
+        self._file = self.path.open("wb")  # opened by Python: pyarrow cannot take a name that is not UTF-8
+        self._writer = pq.ParquetWriter(self._file, self.schema, compression="zstd")
         self._pending: list[pa.RecordBatch] = []
         self._frames = 0
         self.rows = 0
@@ -119,6 +125,7 @@ class _IncrementalTable:
         finally:
             self._writer.close()
             self._writer = None
+            self._file.close()
 
     def __enter__(self):
         return self
@@ -136,7 +143,7 @@ class EnvironmentTableWriter(_IncrementalTable):
         p, n = state.pedestrians, len(state.pedestrians)
         ego = state.ego
         self._add({
-            "scene": [state.scene] * n, "frame": [state.frame_index] * n, "timestamp": [state.timestamp] * n,
+            "scene": [_text(state.scene)] * n, "frame": [state.frame_index] * n, "timestamp": [state.timestamp] * n,
             "track_id": p.track_ids.tolist(), "age": p.ages.tolist(),
             "x": p.positions[:, 0].tolist(), "y": p.positions[:, 1].tolist(), "z": p.positions[:, 2].tolist(),
             "vx": p.velocities[:, 0].tolist(), "vy": p.velocities[:, 1].tolist(),
@@ -160,7 +167,7 @@ class MatchesTableWriter(_IncrementalTable):
         """K matched pairs of one frame: ids (K,), x-y (K, 2) world metres, errors (K,) m and %, distance (K,) m."""
         k = len(track_ids)
         self._add({
-            "scene": [frame.scene] * k, "frame": [frame.index] * k, "timestamp": [frame.timestamp] * k,
+            "scene": [_text(frame.scene)] * k, "frame": [frame.index] * k, "timestamp": [frame.timestamp] * k,
             "track_id": np.asarray(track_ids).tolist(), "gt_id": np.asarray(gt_ids).tolist(),
             "pred_x": pred_xy[:, 0].tolist(), "pred_y": pred_xy[:, 1].tolist(),
             "gt_x": gt_xy[:, 0].tolist(), "gt_y": gt_xy[:, 1].tolist(),

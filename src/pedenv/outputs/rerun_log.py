@@ -6,7 +6,8 @@ Entities, on the timelines ``frame`` (the frame index) and ``time`` (seconds):
   ``world/ego/camera`` (camera -> vehicle transform, a pinhole: the frustum in 3D, the image in 2D);
 * ``world/ego/camera/image``: the camera image (when the frame has one), ``boxes`` (with the
   track ids) and ``skeletons/<track id>`` (2D COCO-17 keypoints);
-* ``world/ego_trajectory``: the ego's path so far;
+* ``world/ego_trajectory/<piece>``: the ego's path so far, in pieces of 100 positions
+  (:mod:`pedenv.outputs.ego_path`: the file grows linearly with the stream);
 * ``world/pedestrians``: ``positions`` (labelled with the track ids), ``velocities`` (arrows),
   ``ellipses`` (2-sigma outlines on the ground), ``skeletons/<track id>`` (3D keypoints);
 * ``world/ground_truth/positions`` and ``world/ego/camera/image/ground_truth`` (boxes) where labelled.
@@ -27,6 +28,7 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
+from pedenv.outputs.ego_path import EgoPath
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES, KEYPOINT_NAMES
 from pedenv.state import EnvironmentState
@@ -74,7 +76,7 @@ class RerunWriter:
         self._rec: rr.RecordingStream | None = None
         self._scene: str | None = None
         self._scenes: list[str] = []
-        self._trajectory: list[np.ndarray] = []
+        self._trajectory = EgoPath()
         self._shown: set[int] = set()
 
     def write(self, state: EnvironmentState, frame: Frame) -> None:
@@ -101,9 +103,10 @@ class RerunWriter:
             self.path.replace(first)
             self.files[0] = first
         path = self.path if len(self._scenes) == 1 else self._scene_path(scene)
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=f"{APPLICATION_ID}-{scene or 'scene'}")
+        label = (scene or "scene").encode("utf-8", "backslashreplace").decode()  # a non-UTF-8 video name
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=f"{APPLICATION_ID}-{label}")
         rec.save(path)
-        rec.send_recording_name(scene or "scene")
+        rec.send_recording_name(label)
         rec.log("/", annotation_context(), static=True)
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         cam = frame.camera
@@ -120,7 +123,7 @@ class RerunWriter:
             static=True,
         )
         self.files.append(path)
-        self._rec, self._scene, self._trajectory, self._shown = rec, scene, [], set()
+        self._rec, self._scene, self._trajectory, self._shown = rec, scene, EgoPath(), set()
 
     def _scene_path(self, scene: str) -> Path:
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in scene) or "scene"
@@ -134,8 +137,8 @@ class RerunWriter:
 
     def _log_ego(self, rec, state: EnvironmentState, frame: Frame) -> None:
         rec.log("world/ego", rr.Transform3D(translation=state.ego.translation, mat3x3=state.ego.rotation))
-        self._trajectory.append(np.asarray(state.ego.translation, float))
-        rec.log("world/ego_trajectory", rr.LineStrips3D([np.array(self._trajectory)], colors=[_EGO]))
+        piece, points = self._trajectory.add(state.ego.translation)
+        rec.log(f"world/ego_trajectory/{piece}", rr.LineStrips3D([points], colors=[_EGO]))
 
     def _log_image(self, rec, state: EnvironmentState, frame: Frame) -> None:
         base = "world/ego/camera/image"

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Protocol
 
 from pedenv.errors import require_extra
+from pedenv.outputs.output_dir import check_output_file
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 
@@ -74,6 +75,8 @@ class ExtraOutputs:
     live: a TCP port on 127.0.0.1 to serve the model on as it runs (foxglove-sdk's WebSocket server).
     birds_eye_video: an mp4 of every frame from above (OpenCV, always installed).
     birds_eye_scene: the one scene the video shows (None: every scene, one after the other).
+    overwrite: replace an existing ``rerun``, ``mcap`` or ``ros`` file (else it is refused, see
+    :func:`~pedenv.outputs.output_dir.check_output_file`).
     """
 
     parquet: Path | None = None
@@ -84,9 +87,11 @@ class ExtraOutputs:
     birds_eye_scene: str | None = None
     ros: Path | None = None
     live: int | None = None
+    overwrite: bool = False
 
     def check(self) -> None:
-        """Refuse missing extras before the run starts (one line each, see :func:`require_extra`)."""
+        """Refuse missing extras and unusable ``rerun``/``mcap`` paths before the run starts (one line
+        each, see :func:`require_extra` and :func:`~pedenv.outputs.output_dir.check_output_file`)."""
         if self.parquet or self.matches_parquet:
             require_extra("pyarrow.parquet", "viz", "--parquet")
         if self.rerun:
@@ -97,6 +102,12 @@ class ExtraOutputs:
             require_extra("rosbags", "ros", "--ros-out")
         if self.live is not None:
             require_extra("foxglove", "viz", "--live")
+        if self.rerun:
+            check_output_file(self.rerun, "--rerun", ".rrd", overwrite=self.overwrite)
+        if self.mcap:
+            check_output_file(self.mcap, "--mcap", ".mcap", overwrite=self.overwrite)
+        if self.ros:
+            check_output_file(self.ros, "--ros-out", ".mcap", overwrite=self.overwrite)
 
     def open(self) -> Sinks:
         """The sinks for the frame-by-frame outputs (all but ``matches_parquet``)."""

@@ -15,30 +15,36 @@ A ``static`` camera (an infrastructure camera, a parked vehicle) needs no ego po
 vehicle frame stays where it is (the world frame), with ``cam_to_vehicle`` placing the
 camera over the ground (z = 0).
 
-Ego poses (CSV, vehicle -> world, timestamps in seconds, rows sorted by time), either
-``timestamp,x,y,z,qw,qx,qy,qz`` or ``timestamp,x,y,yaw`` (yaw in radians, z = 0).
-Each frame gets the pose interpolated at its timestamp (linear position, slerp rotation).
+Unknown keys are refused and values are bounded to sane ranges
+(:mod:`pedenv.recordings.calibration_fields`). Ego poses: :mod:`pedenv.recordings.ego_poses`.
 """
 
 from __future__ import annotations
 
 import csv
-import warnings
+import os
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
-from pedenv.errors import InputError, check_array
+from pedenv.errors import InputError
 from pedenv.geometry import quaternion_to_rotation
-from pedenv.images import read_image_rgb
+from pedenv.images import image_size, read_image_rgb
+from pedenv.paths import check_path
+from pedenv.recordings.calibration_fields import check_keys, check_ranges
+from pedenv.recordings.ego_poses import (  # noqa: F401 - the recordings' API in one place
+    MAX_PLAUSIBLE_EGO_SPEED_MPS,
+    EgoTrajectory,
+    load_ego_poses,
+    slerp,
+)
 from pedenv.records import MOUNTS, Camera, EgoPose, Frame
 from pedenv.structured_text import load_yaml
+from pedenv.video_files import video_capture
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
-POSE_HEADERS = (("timestamp", "x", "y", "z", "qw", "qx", "qy", "qz"), ("timestamp", "x", "y", "yaw"))
 
 
 def _field(data: dict, key: str, path: Path):
@@ -66,6 +72,7 @@ def load_calibration(path: str | Path) -> Camera:
     data = load_yaml(path, "the calibration")  # size, nesting and alias limits
     if not isinstance(data, dict):
         raise InputError(f"{path}: calibration must be a YAML mapping of fields")
+    check_keys(data, path)
     if "intrinsics" in data:
         k = _numbers(data["intrinsics"], "intrinsics", path, (3, 3))
         if not np.array_equal(k[2], [0.0, 0.0, 1.0]):
@@ -93,119 +100,11 @@ def load_calibration(path: str | Path) -> Camera:
     mount = data.get("mount", "vehicle")
     if mount not in MOUNTS:
         raise InputError(f"{path}: calibration field 'mount' must be one of {', '.join(MOUNTS)}, got {mount!r}")
+    check_ranges(path, k, float(width), float(height), t[:3, 3], static=mount == "static")
     try:
         return Camera(k, int(width), int(height), t, mount)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
-
-
-def slerp(q0: np.ndarray, q1: np.ndarray, fraction: float) -> np.ndarray:
-    """Spherical interpolation between unit quaternions ``[w, x, y, z]`` (shortest arc).
-
-    Returns the rotation ``fraction`` (0..1) of the way from ``q0`` to ``q1`` as a unit
-    quaternion ``[w, x, y, z]`` with ``w >= 0`` (scipy's :class:`~scipy.spatial.transform.Slerp`).
-    """
-    ends = Rotation.from_quat(np.stack([q0, q1]), scalar_first=True)
-    return Slerp([0.0, 1.0], ends)(fraction).as_quat(canonical=True, scalar_first=True)
-
-
-@dataclass(frozen=True)
-class EgoTrajectory:
-    """Time-stamped ego poses of a recording.
-
-    timestamps: (T,) seconds, strictly increasing. translations: (T, 3) world frame, metres.
-    quaternions: (T, 4) unit ``[w, x, y, z]``, vehicle -> world. source: the file they came from.
-    """
-
-    timestamps: np.ndarray
-    translations: np.ndarray
-    quaternions: np.ndarray
-    source: str = ""
-    _rotations: Slerp | Rotation = field(init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        ts = check_array("ego timestamps", self.timestamps, (None,))
-        if len(ts) == 0 or np.any(np.diff(ts) <= 0):
-            raise InputError(f"{self.source or 'ego poses'}: timestamps must be non-empty and strictly increasing")
-        object.__setattr__(self, "timestamps", ts)
-        object.__setattr__(self, "translations", check_array("ego translations", self.translations, (len(ts), 3)))
-        object.__setattr__(self, "quaternions", check_array("ego quaternions", self.quaternions, (len(ts), 4)))
-        # one interpolator for the whole trajectory, built once (not two rotations per frame)
-        rotations = Rotation.from_quat(self.quaternions, scalar_first=True)
-        object.__setattr__(self, "_rotations", Slerp(ts, rotations) if len(ts) > 1 else rotations[0])
-
-    def at(self, timestamp: float) -> EgoPose | None:
-        """The pose interpolated at ``timestamp`` seconds; None outside the recorded span."""
-        ts = self.timestamps
-        if not ts[0] <= timestamp <= ts[-1]:
-            return None
-        if len(ts) == 1:
-            return EgoPose(self.translations[0], self._rotations.as_matrix())
-        i = int(np.clip(np.searchsorted(ts, timestamp, side="right") - 1, 0, len(ts) - 2))
-        f = (timestamp - ts[i]) / (ts[i + 1] - ts[i])
-        pos = (1.0 - f) * self.translations[i] + f * self.translations[i + 1]
-        return EgoPose(pos, self._rotations(timestamp).as_matrix())
-
-
-def load_ego_poses(path: str | Path) -> EgoTrajectory:
-    """The ego poses of a CSV file (format in the module doc); rows must be sorted by time."""
-    path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as f:  # -sig: a byte-order mark is accepted
-            rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the ego poses: {exc.strerror}") from None
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(f"{path}: the ego poses are not a UTF-8 CSV text file (a binary file?): {exc}") from None
-    header = tuple(c.strip().lower() for c in rows[0]) if rows else ()
-    if header not in POSE_HEADERS:
-        raise InputError(f"{path}: ego poses header must be {' or '.join(','.join(h) for h in POSE_HEADERS)}, "
-                         f"got {','.join(header) or 'an empty file'}")
-    if len(rows) < 2:
-        raise InputError(f"{path}: no ego pose rows after the header")
-    values = np.empty((len(rows) - 1, len(header)))
-    for n, row in enumerate(rows[1:]):
-        try:
-            if len(row) != len(header):
-                raise ValueError
-            values[n] = [float(c) for c in row]
-        except ValueError:
-            raise InputError(f"{path}: row {n + 1} (line {n + 2}) must hold {len(header)} numbers "
-                             f"({','.join(header)}), got {','.join(row)}") from None
-        if not np.all(np.isfinite(values[n])):
-            raise InputError(f"{path}: row {n + 1} (line {n + 2}) contains NaN or inf")
-        if n and values[n, 0] <= values[n - 1, 0]:
-            raise InputError(f"{path}: rows must be sorted by time: row {n + 1} (line {n + 2}, timestamp "
-                             f"{values[n, 0]:.6f} s) is not after row {n} ({values[n - 1, 0]:.6f} s)")
-    ts = values[:, 0]
-    if header == POSE_HEADERS[0]:
-        trans, quats = values[:, 1:4], values[:, 4:8]
-        norms = np.linalg.norm(quats, axis=1)
-        if np.any(norms < 1e-9):
-            raise InputError(f"{path}: row {int(np.argmax(norms < 1e-9)) + 1} has a zero quaternion")
-        quats = quats / norms[:, None]
-    else:
-        trans = np.column_stack([values[:, 1:3], np.zeros(len(values))])
-        quats = Rotation.from_euler("z", values[:, 3:4]).as_quat(canonical=True, scalar_first=True)
-    _warn_implausible_speed(path, ts, trans)
-    return EgoTrajectory(ts, trans, quats, str(path))
-
-
-#: Ego speeds above this (m/s, about 300 km/h) between two pose rows are warned about:
-#: a jump in the poses (a wrong row, a reset) makes every pedestrian seem to race.
-MAX_PLAUSIBLE_EGO_SPEED_MPS = 85.0
-
-
-def _warn_implausible_speed(path: Path, ts: np.ndarray, trans: np.ndarray) -> None:
-    if len(ts) < 2:
-        return
-    speeds = np.linalg.norm(np.diff(trans, axis=0), axis=1) / np.diff(ts)
-    fast = np.flatnonzero(speeds > MAX_PLAUSIBLE_EGO_SPEED_MPS)
-    if len(fast):
-        i = int(fast[0])
-        warnings.warn(f"{path}: the ego moves at {speeds[i]:.0f} m/s between rows {i + 1} and {i + 2} (lines {i + 2}-"
-                      f"{i + 3}), above the plausible {MAX_PLAUSIBLE_EGO_SPEED_MPS:g} m/s; {len(fast)} such step(s): "
-                      f"check the poses (positions must be metres, timestamps seconds)", stacklevel=3)
 
 
 def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[tuple[Path, float]]:
@@ -242,10 +141,10 @@ def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[t
 class Recording:
     """One recording: camera, ego trajectory and either an image folder or a video file.
 
-    trajectory: the ego poses, or None for a static camera (every frame's ego pose is the
-    identity: the vehicle frame is the world frame).
     images: (path, timestamp in seconds) per frame in order, or empty for a video.
     video: the video file, or None. start_time: seconds of a video's first frame.
+    trajectory: the ego poses, or None for a static camera (every frame's ego pose is the
+    identity: the vehicle frame is the world frame).
     """
 
     name: str
@@ -265,22 +164,36 @@ class Recording:
         source = _video_frames(self.video, self.fps, self.start_time) if self.video else (
             (i, t, p, read_image_rgb(p)) for i, (p, t) in enumerate(self.images))
         for index, timestamp, path, image in source:
-            ego = self._ego_at(index, timestamp, path)
-            if image.shape[:2] != (self.camera.height, self.camera.width):
-                raise InputError(f"{path}: frame {index} is {image.shape[1]}x{image.shape[0]} pixels, "
-                                 f"the calibration says {self.camera.width}x{self.camera.height}")
+            ego = self._check_frame(path, index, timestamp, (image.shape[1], image.shape[0]))
             yield Frame(index, timestamp, self.camera, ego, image=image,
                         image_path=None if self.video else path, scene=self.name)
 
-    def _ego_at(self, index: int, timestamp: float, path) -> EgoPose:
-        """The ego pose of frame ``index``: the identity without a trajectory (a static camera)."""
-        if self.trajectory is None:
-            return EgoPose(np.zeros(3), np.eye(3))
-        ego = self.trajectory.at(timestamp)
+    def check(self) -> None:
+        """Check every frame before anything runs, without decoding an image: each image's size
+        (from its header) is the calibrated one and each frame's timestamp has an ego pose; a
+        video opens and its frame size is the calibrated one. InputError naming the first bad one.
+        """
+        if self.video is not None:
+            with video_capture(self.video) as cap:
+                import cv2
+
+                size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+            self._check_frame(f"{self.video}#0", 0, self.start_time, size)
+            return
+        for index, (path, timestamp) in enumerate(self.images):
+            self._check_frame(path, index, timestamp, image_size(path))
+
+    def _check_frame(self, path, index: int, timestamp: float, size: tuple[int, int] | None = None) -> EgoPose:
+        """The ego pose of frame ``index`` (the identity without a trajectory: a static camera), its size checked."""
+        ego = EgoPose(np.zeros(3), np.eye(3)) if self.trajectory is None else self.trajectory.at(timestamp)
         if ego is None:
+            assert self.trajectory is not None
             span = self.trajectory.timestamps
             raise InputError(f"{path}: frame {index} at {timestamp:.6f} s has no ego pose: "
                              f"{self.trajectory.source} covers {span[0]:.6f} s to {span[-1]:.6f} s")
+        if size is not None and size != (self.camera.width, self.camera.height):
+            raise InputError(f"{path}: frame {index} is {size[0]}x{size[1]} pixels, "
+                             f"the calibration says {self.camera.width}x{self.camera.height}")
         return ego
 
     def __len__(self) -> int:
@@ -288,21 +201,16 @@ class Recording:
             return len(self.images)
         import cv2
 
-        cap = cv2.VideoCapture(str(self.video))
-        count = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
-        cap.release()
-        return max(count, 0)
+        with video_capture(self.video) as cap:
+            return max(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)), 0)
 
 
 def _video_frames(video: Path, fps: float | None, start_time: float):
     import cv2
 
-    cap = cv2.VideoCapture(str(video))
-    if not cap.isOpened():
-        raise InputError(f"{video}: cannot open the video")
-    rate = fps or cap.get(cv2.CAP_PROP_FPS)
     index = 0
-    try:
+    with video_capture(video) as cap:
+        rate = fps or cap.get(cv2.CAP_PROP_FPS)
         while True:
             ok, bgr = cap.read()
             if not ok:
@@ -310,8 +218,6 @@ def _video_frames(video: Path, fps: float | None, start_time: float):
             offset = index / rate if rate and rate > 0 else cap.get(cv2.CAP_PROP_POS_MSEC) / 1e3
             yield index, start_time + offset, f"{video}#{index}", cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
             index += 1
-    finally:
-        cap.release()
     if index == 0:
         raise InputError(f"{video}: the video holds no readable frame")
 
@@ -331,22 +237,29 @@ def load_recording(*, calibration: str | Path, ego_poses: str | Path | None, ima
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if fps is not None and not (np.isfinite(fps) and fps > 0):
         raise InputError(f"fps must be a finite number > 0, got {fps}")
-    camera = load_calibration(calibration)
+    camera = load_calibration(check_path(calibration, "calibration"))
     if static and not camera.static:
         camera = Camera(camera.intrinsics, camera.width, camera.height, camera.cam_to_vehicle, "static")
     if ego_poses is None and not camera.static:
         raise InputError(f"{calibration}: a vehicle-mounted camera needs ego poses (--ego-poses); "
                          "a fixed camera runs without them with --static or 'mount: static' in the calibration")
-    trajectory = None if ego_poses is None else load_ego_poses(ego_poses)
+    trajectory = None if ego_poses is None else load_ego_poses(check_path(ego_poses, "ego poses"))
     first = 0.0 if trajectory is None else float(trajectory.timestamps[0])
     start = float(first if start_time is None else start_time)
     if video is not None:
-        video = Path(video)
+        video = check_path(video, "video")
         if not video.is_file():
             raise InputError(f"{video}: video file not found")
-        return Recording(name or video.stem, camera, trajectory, video=video, fps=fps, start_time=start)
+        return Recording(name or _text(video.stem), camera, trajectory, video=video, fps=fps, start_time=start)
     assert images is not None  # exactly one of images and video (checked above)
-    folder = Path(images)
+    folder = check_path(images, "image folder")
     if not folder.is_dir():
         raise InputError(f"{folder}: image folder not found")
-    return Recording(name or folder.resolve().name, camera, trajectory, tuple(_folder_frames(folder, fps, start)))
+    frames = tuple(_folder_frames(folder, fps, start))
+    return Recording(name or _text(folder.resolve().name), camera, trajectory, frames)
+
+
+def _text(name: str) -> str:
+    """A file name as UTF-8 text for the recording's name (drawn, logged, plotted): bytes that
+    are not UTF-8 become ``\\xff`` escapes."""
+    return os.fsencode(name).decode("utf-8", "backslashreplace")

@@ -10,7 +10,8 @@ CSV with a header row, or YAML (a list of mappings, or a mapping with the list u
 * ``calibration``, ``ego_poses``: required files (formats of :mod:`pedenv.recordings.footage`);
 * exactly one of ``images`` (a folder) and ``video`` (a file);
 * ``name`` (optional): the recording's output folder, by default the image folder's name or
-  the video's stem; names must be distinct;
+  the video's stem; names must be distinct, usable as a folder name (at most 255 bytes) and
+  none of the names the run itself writes in the output folder (:data:`RESERVED_NAMES`);
 * ``fps``, ``start_time`` (optional, seconds): as ``pedenv run --fps/--start-time``.
 
 Every problem is one :class:`~pedenv.errors.InputError` naming the manifest, the row
@@ -22,13 +23,20 @@ from __future__ import annotations
 import csv
 import io
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from pedenv.errors import InputError
+from pedenv.outputs.output_dir import MARKER
+from pedenv.paths import MAX_NAME_BYTES, check_path
 from pedenv.structured_text import parse_yaml, read_limited_text
 
 FIELDS = ("name", "images", "video", "calibration", "ego_poses", "fps", "start_time")
+#: The manifest run's summary file in the output folder.
+SUMMARY = "summary.json"
+#: Names no recording may take: the files the manifest run writes beside the recordings' folders.
+RESERVED_NAMES = (SUMMARY, MARKER)
 
 
 @dataclass(frozen=True)
@@ -109,7 +117,7 @@ def _row(manifest: Path, n: int, fields: dict) -> ManifestRow:
             if required:
                 raise InputError(f"{where}: field {key!r} is missing")
             return None
-        p = Path(str(value)).expanduser()
+        p = check_path(Path(str(value)).expanduser(), f"{where}: field {key!r}:")
         p = p if p.is_absolute() else manifest.parent / p
         exists = p.is_dir() if kind == "folder" else p.is_file()
         if not exists:
@@ -135,7 +143,15 @@ def _row(manifest: Path, n: int, fields: dict) -> ManifestRow:
     calibration, ego_poses = file("calibration", "file", True), file("ego_poses", "file", True)
     assert calibration is not None and ego_poses is not None  # required above
     name = str(fields.get("name") or "").strip() or (images.resolve().name if images else video.stem)  # type: ignore[union-attr]
-    if "/" in name or "\\" in name or name in (".", ".."):
-        raise InputError(f"{where}: field 'name' must be usable as a folder name, got {name!r}")
+    if "/" in name or "\\" in name or name in (".", "..") or len(os.fsencode(name)) > MAX_NAME_BYTES:
+        raise InputError(f"{where}: field 'name' must be usable as a folder name (no / or \\, at most "
+                         f"{MAX_NAME_BYTES} bytes), got {_short(name)!r}")
+    if name in RESERVED_NAMES:
+        raise InputError(f"{where}: field 'name' {name!r} is the name of a file the run writes in the output folder "
+                         f"({', '.join(RESERVED_NAMES)}); choose another name")
     return ManifestRow(name, calibration, ego_poses, images, video, number("fps", True), number("start_time", False),
                        row=n)
+
+
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 3:]}"

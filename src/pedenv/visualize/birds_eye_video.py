@@ -5,20 +5,22 @@ bottom centre: a grid every 5 m, the camera's field of view, the ego, each pedes
 ellipse, trail (the last ``trail`` positions of its track), velocity arrow (where it will be in
 one second) and id, and the ground truth as black crosses with their ids where the frame is
 labelled. One video for the whole run (or for the one ``scene`` named); trails start anew
-with each scene.
+with each scene, and the trail of a track not seen for ``trail`` frames is dropped, so the
+memory stays bounded by the tracks of the last ``trail`` frames however long the stream.
 """
 
 from __future__ import annotations
 
-from collections import defaultdict, deque
+from collections import deque
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from pedenv.errors import InputError
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
+from pedenv.video_files import VideoOut
+from pedenv.visualize.overlay import ascii_text
 from pedenv.visualize.shapes import covariance_ellipses, field_of_view
 
 _BG, _GRID, _FOV = (250, 250, 250), (225, 225, 225), (250, 236, 218)
@@ -39,6 +41,8 @@ class BirdsEyeVideo:
             raise ValueError(f"size_px must be in [200, 4000], got {size_px}")
         if not 5.0 <= float(ahead_m) <= 500.0:
             raise ValueError(f"ahead_m must be in [5, 500] metres, got {ahead_m}")
+        if not 1 <= int(trail) <= 10_000:
+            raise ValueError(f"trail must be in [1, 10000] positions, got {trail}")
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.size, self.ahead, self.trail_length, self.fps = int(size_px), float(ahead_m), int(trail), fps
@@ -46,11 +50,13 @@ class BirdsEyeVideo:
         self.scale = 0.9 * self.size / self.ahead  # pixels per metre
         self.origin = np.array([self.size / 2.0, self.size * 0.95])  # the ego's pixel (u, v)
         self.frames_written = 0
-        self._writer: cv2.VideoWriter | None = None
+        self._writer: VideoOut | None = None
         self._first: tuple[np.ndarray, float] | None = None
         self._scene: str | None = None
         self._base: tuple | None = None
-        self._trails: dict[int, deque] = defaultdict(lambda: deque(maxlen=self.trail_length))
+        self._trails: dict[int, deque] = {}
+        self._last_seen: dict[int, int] = {}  # track id -> the draw count when it was last seen
+        self._draws = 0
 
     def write(self, state: EnvironmentState, frame: Frame | None = None) -> None:
         if self.only_scene is not None and state.scene != self.only_scene:
@@ -58,6 +64,7 @@ class BirdsEyeVideo:
         if state.scene != self._scene:
             self._scene = state.scene
             self._trails.clear()
+            self._last_seen.clear()
         picture = self.draw(state, frame)
         if self._writer is None and self.fps is None and self._first is None:
             self._first = (picture, state.timestamp)  # the rate comes from the next frame
@@ -87,8 +94,7 @@ class BirdsEyeVideo:
         peds = state.pedestrians
         rot, origin = state.ego.rotation, state.ego.translation
         to_vehicle = lambda p: ((np.asarray(p, float) - origin) @ rot)[..., :2]  # noqa: E731
-        for tid, pos in zip(peds.track_ids, peds.positions):
-            self._trails[int(tid)].append(np.asarray(pos, float))
+        self._update_trails(peds.track_ids, peds.positions)
         if len(peds):
             pos = to_vehicle(peds.positions)
             vel = peds.velocities[:, :2] @ rot[:2, :2]
@@ -112,11 +118,27 @@ class BirdsEyeVideo:
                 cv2.putText(img, f"gt {int(gid)}", (int(p[0]) + 7, int(p[1]) + 14), cv2.FONT_HERSHEY_SIMPLEX, 0.35,
                             _TRUTH, 1, cv2.LINE_AA)
         cv2.rectangle(img, (0, 0), (self.size, 52), _BG, -1)
-        title = f"{state.scene}  frame {state.frame_index}  t={state.timestamp:.2f} s  {len(peds)} pedestrians"
+        title = (f"{ascii_text(state.scene)}  frame {state.frame_index}  t={state.timestamp:.2f} s  "
+                 f"{len(peds)} pedestrians")
         cv2.putText(img, title, (10, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.55, _TEXT, 1, cv2.LINE_AA)
         cv2.putText(img, "red: pedenv (2-sigma, velocity, trail)   black x: ground truth   grid 5 m", (10, 44),
                     cv2.FONT_HERSHEY_SIMPLEX, 0.42, _TEXT, 1, cv2.LINE_AA)
         return img
+
+    def _update_trails(self, track_ids, positions) -> None:
+        """Append each track's position (world, metres); drop the trails of tracks gone for ``trail`` frames."""
+        self._draws += 1
+        for tid, pos in zip(track_ids, positions):
+            self._trails.setdefault(int(tid), deque(maxlen=self.trail_length)).append(np.asarray(pos, float))
+            self._last_seen[int(tid)] = self._draws
+        gone = [t for t, seen in self._last_seen.items() if self._draws - seen >= self.trail_length]
+        for tid in gone:
+            del self._trails[tid], self._last_seen[tid]
+
+    @property
+    def trails_kept(self) -> int:
+        """How many tracks' trails are held (bounded: the tracks seen in the last ``trail`` frames)."""
+        return len(self._trails)
 
     def _background(self, hfov: float, cam_x: float) -> np.ndarray:
         """Grid, field of view and ego: fixed in the vehicle frame, so drawn once per camera."""
@@ -145,10 +167,7 @@ class BirdsEyeVideo:
                 cv2.line(img, (int(u0), int(v0)), (int(u1), int(v1)), _GRID, 1)
 
     def _open(self, fps: float) -> None:
-        writer = cv2.VideoWriter(str(self.path), cv2.VideoWriter.fourcc(*"mp4v"), float(fps), (self.size, self.size))
-        self._writer = writer
-        if not writer.isOpened():
-            raise InputError(f"{self.path}: cannot write the bird's-eye video")
+        self._writer = VideoOut(self.path, fps, (self.size, self.size), what="bird's-eye video")
 
     def _put(self, picture: np.ndarray) -> None:
         assert self._writer is not None  # _open() came first

@@ -25,6 +25,12 @@ def color_for(key: int) -> tuple[int, int, int]:
     return r, g, b
 
 
+def ascii_text(text: str) -> str:
+    """``text`` as OpenCV can draw it: its fonts have ASCII only, and a name that is not UTF-8
+    (a surrogate escape, as from a file ``v\\xff.mp4``) would crash ``cv2.putText``; others become ``?``."""
+    return str(text).encode("ascii", "replace").decode("ascii")
+
+
 def _scale(image: np.ndarray) -> float:
     return max(image.shape[0], image.shape[1]) / 1000.0
 
@@ -44,6 +50,7 @@ def draw_skeleton(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndar
 
 def draw_label(image: np.ndarray, text: str, anchor, color) -> None:
     """Draw ``text`` in place on a filled box whose bottom-left corner is ``anchor`` (u, v) pixels."""
+    text = ascii_text(text)
     scale = 0.5 * _scale(image) + 0.2
     thick = max(1, round(_scale(image)))
     (w, h), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thick)

@@ -1,0 +1,93 @@
+"""The fields a calibration YAML may hold, and the sane ranges of their values.
+
+A key not listed in :data:`CALIBRATION_FIELDS` is refused (a typo such as ``focal_lenght``,
+or ``distortion`` that pedenv would otherwise ignore silently): to support a new key, add it
+here with what it holds (a mapping's own keys go under ``"<key>."``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from pedenv.errors import InputError
+from pedenv.images import MAX_IMAGE_PIXELS
+from pedenv.recordings.ego_poses import MAX_EGO_COORDINATE_M
+
+#: Every key of a calibration file, with what it holds. A key with sub-keys lists them in
+#: :data:`CALIBRATION_SUBFIELDS`.
+CALIBRATION_FIELDS: dict[str, str] = {
+    "width": "image width, pixels",
+    "height": "image height, pixels",
+    "intrinsics": "3x3 camera matrix, pixels (or fx, fy, cx, cy)",
+    "fx": "focal length along u, pixels",
+    "fy": "focal length along v, pixels",
+    "cx": "principal point u, pixels",
+    "cy": "principal point v, pixels",
+    "cam_to_vehicle": "the camera's mounting (rotation, translation)",
+    "mount": "vehicle (the default) or static (a camera fixed to the ground)",
+}
+#: The keys of the calibration's mappings.
+CALIBRATION_SUBFIELDS: dict[str, dict[str, str]] = {
+    "cam_to_vehicle": {"rotation": "quaternion [w, x, y, z] or 3x3 matrix, optical -> vehicle",
+                       "translation": "camera position in the vehicle frame, metres"},
+}
+
+#: Focal lengths (fx, fy) in pixels: a 100,000 px focal length is a 1 degree field of view
+#: on a 2,000 px image; beyond it distances overflow.
+FOCAL_RANGE_PX = (1.0, 1e5)
+#: Image width and height in pixels.
+IMAGE_SIDE_RANGE_PX = (8, 20_000)
+#: Farthest camera from the vehicle origin, metres (a camera is mounted on the vehicle). A
+#: static camera's ``cam_to_vehicle`` places it in the world: up to
+#: :data:`pedenv.recordings.ego_poses.MAX_EGO_COORDINATE_M`.
+MAX_MOUNT_DISTANCE_M = 100.0
+
+
+def check_keys(data: dict, path: Path) -> None:
+    """InputError naming the file and the first unknown key of ``data`` (a calibration mapping)."""
+    for key, value in data.items():
+        if key not in CALIBRATION_FIELDS:
+            raise InputError(f"{path}: unknown calibration field {str(key)!r}; fields: {', '.join(CALIBRATION_FIELDS)}")
+        sub = CALIBRATION_SUBFIELDS.get(key)
+        if sub is not None and isinstance(value, dict):
+            for name in value:
+                if name not in sub:
+                    raise InputError(f"{path}: unknown calibration field '{key}.{name}'; fields of {key!r}: "
+                                     f"{', '.join(sub)}")
+
+
+def check_ranges(path: Path, intrinsics: np.ndarray, width: float, height: float, translation: np.ndarray,
+                 static: bool = False) -> None:
+    """InputError naming the file and field whose value is outside its sane range (above).
+
+    intrinsics: (3, 3) pixels. width, height: pixels. translation: (3,) metres, of a static
+    camera (``static``) in the world frame.
+    """
+    side_lo, side_hi = IMAGE_SIDE_RANGE_PX
+    for name, side in (("width", width), ("height", height)):
+        if not side_lo <= side <= side_hi:
+            raise InputError(f"{path}: calibration field {name!r} must be in [{side_lo}, {side_hi}] pixels, "
+                             f"got {side:g}")
+    if width * height > MAX_IMAGE_PIXELS:
+        raise InputError(f"{path}: calibration image size {width:g}x{height:g} is above the limit of "
+                         f"{MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)")
+    f_lo, f_hi = FOCAL_RANGE_PX
+    for name, f in (("fx", intrinsics[0, 0]), ("fy", intrinsics[1, 1])):
+        if not f_lo <= f <= f_hi:
+            raise InputError(f"{path}: calibration focal length {name} must be in [{f_lo:g}, {f_hi:g}] pixels, "
+                             f"got {f:g}")
+    for name, c, side in (("cx", intrinsics[0, 2], width), ("cy", intrinsics[1, 2], height)):
+        if not -side <= c <= 2 * side:
+            raise InputError(f"{path}: calibration principal point {name} must be in [-{side:g}, {2 * side:g}] "
+                             f"pixels (within an image's size of the image), got {c:g}")
+    if abs(intrinsics[0, 1]) > intrinsics[0, 0]:
+        raise InputError(f"{path}: calibration skew (intrinsics[0][1]) must be at most fx in size, got "
+                         f"{intrinsics[0, 1]:g}")
+    distance = float(np.linalg.norm(translation))
+    limit = MAX_EGO_COORDINATE_M if static else MAX_MOUNT_DISTANCE_M
+    if distance > limit:
+        origin = "world" if static else "vehicle"
+        raise InputError(f"{path}: calibration field 'cam_to_vehicle.translation' puts the camera {distance:g} m "
+                         f"from the {origin} origin; at most {limit:g} m")
