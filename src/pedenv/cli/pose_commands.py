@@ -9,6 +9,10 @@ import typer
 
 from pedenv.cli.app import app, console
 
+#: ``--device``, shared by run, detect, evaluate and bench.
+DEVICE = typer.Option("auto", "--device", help="onnx: auto (the GPU when onnxruntime has one, else the CPU), "
+                                               "cpu or cuda (a GPU or an error).")
+
 models_app = typer.Typer(help="Pose-network weights: export and cache the ONNX models (offline).",
                          no_args_is_help=True)
 app.add_typer(models_app, name="models")
@@ -47,6 +51,7 @@ def detect(
     pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
+    device: str = DEVICE,
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
@@ -54,7 +59,8 @@ def detect(
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
 
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection,
+                                                                  device=device))
     prepare_output_dir(output, overwrite=overwrite, command="pedenv detect")
     path = annotate_images(images=images, output=output, backend=backend)
     typer.echo(str(path))
@@ -100,6 +106,10 @@ def run(
     address: str | None = typer.Option(None, "--address", help="Ray cluster HOST:PORT; default: a local Ray."),
     workers: int | None = typer.Option(None, "--workers", help="Ray: local CPUs, or most tasks at once on a cluster."),
     resume: bool = typer.Option(False, "--resume", help="With --manifest: keep the recordings already complete."),
+    device: str = DEVICE,
+    realtime: bool = typer.Option(
+        False, "--realtime", help="Frames at the recording's own rate; those arriving while the model is busy are dropped."
+    ),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
     or on every recording of a --manifest."""
@@ -111,8 +121,9 @@ def run(
         given = [flag for flag, value in per_recording if value is not None]
         if given:
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
-        if parquet or rerun or mcap:
-            raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+        if parquet or rerun or mcap or realtime or device != "auto":
+            raise InputError("--parquet, --rerun, --mcap, --realtime and --device apply to single-recording runs, "
+                             "not --manifest runs")
         _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
                       overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
                       pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
@@ -122,6 +133,7 @@ def run(
         raise InputError("give --calibration and --ego-poses (or a --manifest of recordings)")
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
+    from pedenv.apps.pipeline import PipelineConfig
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
     from pedenv.outputs.sinks import ExtraOutputs
@@ -133,8 +145,10 @@ def run(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            extra_outputs=extra, progress=progress, method=method)
-    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")
+            extra_outputs=extra, progress=progress, method=method, device=device,
+            pipeline=PipelineConfig(realtime=realtime))
+    dropped = f" ({summary['frames_dropped']} dropped: the model was busy)" if realtime else ""
+    typer.echo(f"{summary['frames_done']} frames{dropped} -> {summary['environment']}")
 
 
 def _run_manifest(manifest: Path, output: Path, **options) -> None:

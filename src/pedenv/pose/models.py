@@ -227,9 +227,11 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     return (384, 640) if width / height >= 1.6 else (640, 640)
 
 
-def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None) -> dict:
-    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size
-    and detection mode (``fast`` or ``far``, onnx only).
+def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None,
+                    device: str = "auto") -> dict:
+    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size,
+    detection mode (``fast`` or ``far``, onnx only) and device (``auto``, ``cpu`` or ``cuda``:
+    :mod:`pedenv.pose.providers`; ultralytics runs on the CPU, ``cuda`` is refused for it).
 
     ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, else the
     dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
@@ -239,7 +241,9 @@ def backend_options(backend: str, model=None, input_size=None, detection=None, s
     """
     scores = {} if score_threshold is None else {"score_threshold": score_threshold}
     if backend == "onnx":
-        return {"model_path": model, "input_size": input_size, "detection": detection, **scores}
+        return {"model_path": model, "input_size": input_size, "detection": detection, "device": device, **scores}
+    if device not in ("auto", "cpu"):
+        raise InputError(f"device {device!r} applies to the onnx pose backend; {backend} runs on the CPU")
     if backend == "ultralytics":
         return {"weights": model, "input_size": input_size or 640, **scores}
     return {}
