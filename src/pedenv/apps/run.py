@@ -157,7 +157,7 @@ class _Outputs:
         self.out, self.rec, self.video_out, self.summary, self.progress = out, rec, video_out, summary, progress
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
-        self.video = None
+        self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
         self.last: tuple | None = None  # (state, frame) of the last frame written
 
     def write(self, result) -> None:

@@ -108,7 +108,7 @@ def run(
     resume: bool = typer.Option(False, "--resume", help="With --manifest: keep the recordings already complete."),
     device: str = DEVICE,
     realtime: bool = typer.Option(
-        False, "--realtime", help="Frames at the recording's own rate; those arriving while the model is busy are dropped."
+        False, "--realtime", help="Frames at the recording's rate; those arriving while the model is busy are dropped."
     ),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
