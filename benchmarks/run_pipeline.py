@@ -108,19 +108,21 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path) -> dict:
     clock = NetworkClock(backend)
     load = [os.getloadavg()[0]]
     frames = 0
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     for frame in load_recording(**rec).frames():
         backend(replace(frame))
         frames += 1
     alone_s = time.perf_counter() - start
-    alone = {"ms_per_frame": 1e3 * alone_s / frames, "network_ms_per_frame": 1e3 * clock.seconds / frames}
+    alone = {"ms_per_frame": 1e3 * alone_s / frames, "network_ms_per_frame": 1e3 * clock.seconds / frames,
+             "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / frames}
     clock.reset()
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     summary = run_recording(**rec, output=work / "run", detection=detection, backend=backend, video_out=video_out)
     run_s = time.perf_counter() - start
     load.append(os.getloadavg()[0])
     done = summary["frames_done"]
     run = {"ms_per_frame": 1e3 * run_s / done, "frames_per_second": done / run_s,
+           "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / done,
            "network_ms_per_frame": 1e3 * clock.seconds / done, "passes_per_frame": clock.runs / done,
            "frames": done, "speed": summary.get("speed")}
     return {"frames": frames, "load": load, "alone": alone, "run": run,
@@ -151,9 +153,11 @@ def main() -> None:
     print(f"pedenv from {result['pedenv']}; {result['frames']} frames of {args.video.name}"
           f"{' at ' + args.size if args.size else ''}, --detection {args.detection}, overlays {result['overlays']}, "
           f"{result['provider']}; load {result['load'][0]:.1f} -> {result['load'][1]:.1f}")
-    print(f"network alone: {a['ms_per_frame']:.1f} ms/frame read + detect, network {a['network_ms_per_frame']:.1f}")
+    print(f"network alone: {a['ms_per_frame']:.1f} ms/frame read + detect, network {a['network_ms_per_frame']:.1f}, "
+          f"CPU {a['cpu_ms_per_frame']:.1f} ms/frame (all threads)")
     print(f"pedenv run:    {r['ms_per_frame']:.1f} ms/frame ({r['frames_per_second']:.2f} fps), network "
-          f"{r['network_ms_per_frame']:.1f} ms/frame in the run, {r['passes_per_frame']:.2f} passes/frame")
+          f"{r['network_ms_per_frame']:.1f} ms/frame in the run, {r['passes_per_frame']:.2f} passes/frame, "
+          f"CPU {r['cpu_ms_per_frame']:.1f} ms/frame")
     print(f"ratio run / network in the same run: {result['ratio_same_run']:.2f}; "
           f"run / network alone: {result['ratio_network_alone']:.2f}")
     if r["speed"]:

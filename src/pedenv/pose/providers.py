@@ -11,7 +11,8 @@ cannot start; the providers the session really holds are what :func:`create_sess
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+import importlib.util
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 from pedenv.errors import InputError
@@ -107,20 +108,21 @@ def create_session(model_path: Path, config: SessionConfig):
     options.inter_op_num_threads = 1
     options.log_severity_level = 3
     options.add_session_config_entry("session.intra_op.allow_spinning", "1" if config.spin_wait else "0")
-    providers = wanted_providers(config.device, list(ort.get_available_providers()), _trt_cache())
-    if providers != [CPU] and hasattr(ort, "preload_dlls"):
-        try:
-            ort.preload_dlls()  # the CUDA and cuDNN libraries of the nvidia-* pip packages
-        except Exception:  # noqa: BLE001 - missing libraries show below as a session without the GPU
-            pass
+    available = [p for p in ort.get_available_providers() if p != TENSORRT or _tensorrt_installed()]
+    providers = wanted_providers(config.device, available, _trt_cache())
+    if providers != [CPU] and hasattr(ort, "preload_dlls") and importlib.util.find_spec("nvidia") is not None:
+        ort.preload_dlls()  # the CUDA and cuDNN libraries of the gpu extra's nvidia-* pip packages
+    if providers != [CPU]:
+        ort.set_default_logger_severity(4)  # a GPU that cannot start: auto takes the CPU, cuda says so below
     try:
         session = ort.InferenceSession(str(model_path), options, providers=providers)
     except Exception as exc:
-        if providers == [CPU] or config.device == "cuda":
-            raise InputError(f"{model_path}: not a readable ONNX model or the GPU session did not start "
-                             f"({', '.join(p if isinstance(p, str) else p[0] for p in providers)}): {exc}"
-                             if providers != [CPU] else f"{model_path}: not a readable ONNX model: {exc}") from None
-        return create_session(model_path, SessionConfig("cpu", config.threads, config.spin_wait, config.batch))
+        if providers != [CPU] and config.device == "auto":
+            return create_session(model_path, replace(config, device="cpu"))  # a GPU that fails to start
+        what = "not a readable ONNX model" + (", or the GPU session did not start" if providers != [CPU] else "")
+        raise InputError(f"{model_path}: {what}: {exc}") from None
+    finally:
+        ort.set_default_logger_severity(3)
     running = list(session.get_providers())
     if config.device == "cuda" and CUDA not in running and TENSORRT not in running:
         raise InputError(f"--device cuda: onnxruntime could not start the CUDA provider (no usable GPU or "
@@ -130,3 +132,11 @@ def create_session(model_path: Path, config: SessionConfig):
 
 def _trt_cache() -> Path:
     return cache_dir() / "tensorrt"
+
+
+def _tensorrt_installed() -> bool:
+    """Whether TensorRT's libraries are at hand (its pip packages or a system libnvinfer)."""
+    import ctypes.util
+
+    return any(importlib.util.find_spec(m) is not None for m in ("tensorrt_libs", "tensorrt")) \
+        or ctypes.util.find_library("nvinfer") is not None
