@@ -1,7 +1,7 @@
 """``pedenv run`` end to end against the network's own time, on a real video.
 
     PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 1600x900]
-        [--detection fast] [--video-out] [--output-json FILE]
+        [--detection fast] [--video-out] [--realtime] [--output-json FILE]
 
 The video (default: ``vtest.avi``, the 768x576 street video of Debian's ``opencv-doc``,
 ``/usr/share/doc/opencv-doc/examples/data/vtest.avi``) is cut to its first ``--frames`` frames,
@@ -12,7 +12,8 @@ before the clock starts):
 
 1. ``network alone``: every frame read and detected, nothing written;
 2. ``run``: :func:`pedenv.apps.run.run_recording` (what ``pedenv run`` calls, overlays on: a
-   PNG per frame, or ``--video-out``), wall time from the call to its return.
+   PNG per frame, or ``--video-out``), wall time from the call to its return;
+3. with ``--realtime``: the run once more at the recording's own rate: frames done and dropped.
 
 The network's time is the backend's session runs (``_infer`` wrapped here, so the same
 script times main's serial loop: ``PYTHONPATH=/path/to/main/src``); ``ratio`` is run ms per
@@ -94,8 +95,9 @@ class NetworkClock:
         self.seconds, self.runs = 0.0, 0
 
 
-def measure(rec: dict, detection: str, video_out: bool, work: Path) -> dict:
-    """The network alone and the run on the recording ``rec`` (module doc)."""
+def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bool = False) -> dict:
+    """The network alone and the run on the recording ``rec`` (module doc); with ``realtime``
+    also a ``--realtime`` run (this checkout's pedenv only)."""
     from dataclasses import replace
 
     from pedenv.apps.run import run_recording
@@ -125,6 +127,13 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path) -> dict:
            "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / done,
            "network_ms_per_frame": 1e3 * clock.seconds / done, "passes_per_frame": clock.runs / done,
            "frames": done, "speed": summary.get("speed")}
+    if realtime:  # the same recording once more, taken at its own rate (10 Hz for vtest.avi)
+        from pedenv.apps.pipeline import PipelineConfig
+
+        live = run_recording(**rec, output=work / "live", detection=detection, backend=backend, video_out=video_out,
+                             pipeline=PipelineConfig(realtime=True))
+        run["realtime"] = {"frames_done": live["frames_done"], "frames_dropped": live["frames_dropped"],
+                           "latency_ms": live["speed"]["latency_ms"]}
     return {"frames": frames, "load": load, "alone": alone, "run": run,
             "ratio_same_run": run["ms_per_frame"] / run["network_ms_per_frame"],
             "ratio_network_alone": run["ms_per_frame"] / alone["network_ms_per_frame"],
@@ -138,6 +147,7 @@ def main() -> None:
     parser.add_argument("--size", default=None, help="HEIGHTxWIDTH to scale and crop to, e.g. 900x1600")
     parser.add_argument("--detection", default="fast")
     parser.add_argument("--video-out", action="store_true", help="overlay.mp4 instead of a PNG per frame")
+    parser.add_argument("--realtime", action="store_true", help="also a --realtime run: frames done and dropped")
     parser.add_argument("--output-json", type=Path, default=None)
     args = parser.parse_args()
     size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
@@ -146,7 +156,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         rec = write_recording(args.video, work, args.frames, size)  # type: ignore[arg-type]
-        result = measure(rec, args.detection, args.video_out, work)
+        result = measure(rec, args.detection, args.video_out, work, args.realtime)
     result.update(pedenv=str(Path(pedenv.__file__).parent), video=str(args.video), size=args.size,
                   detection=args.detection, overlays="mp4" if args.video_out else "png")
     r, a = result["run"], result["alone"]
@@ -164,6 +174,10 @@ def main() -> None:
         lat = r["speed"]["latency_ms"]
         print(f"run.json: {r['speed']['frames_per_second']:.2f} fps, latency median {lat['median']:.0f} ms, "
               f"p95 {lat['p95']:.0f} ms")
+    if "realtime" in r:
+        live = r["realtime"]
+        print(f"--realtime: {live['frames_done']} frames done, {live['frames_dropped']} dropped (the model was busy), "
+              f"latency median {live['latency_ms']['median']:.0f} ms")
     if args.output_json:
         args.output_json.write_text(json.dumps(result, indent=2) + "\n")
 

@@ -21,7 +21,8 @@ from pedenv.pose.models import cache_dir
 #: The valid values of ``device``.
 DEVICES = ("auto", "cpu", "cuda")
 CPU, CUDA, TENSORRT = "CPUExecutionProvider", "CUDAExecutionProvider", "TensorrtExecutionProvider"
-GPU_HINT = 'install the gpu extra (pip install -e ".[gpu]", in place of onnxruntime) on a machine with an NVIDIA GPU'
+GPU_HINT = ('it needs an NVIDIA GPU with its driver and the gpu extra (pip uninstall onnxruntime; '
+            'pip install -e ".[gpu]"), or --device auto or cpu')
 
 
 def check_device(device) -> str:
