@@ -121,9 +121,11 @@ def run(
         given = [flag for flag, value in per_recording if value is not None]
         if given:
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
-        if parquet or rerun or mcap or realtime or device != "auto":
-            raise InputError("--parquet, --rerun, --mcap, --realtime and --device apply to single-recording runs, "
-                             "not --manifest runs")
+        if parquet or rerun or mcap:
+            raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+        if realtime or device != "auto":
+            raise InputError("--realtime and --device apply to single-recording runs, not --manifest runs (which "
+                             "take the GPU where onnxruntime has one)")
         _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
                       overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
                       pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
