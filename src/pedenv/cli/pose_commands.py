@@ -118,14 +118,8 @@ def run(
     if manifest is not None:
         per_recording = (("--images", images), ("--video", video), ("--calibration", calibration),
                          ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time))
-        given = [flag for flag, value in per_recording if value is not None]
-        if given:
-            raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
-        if parquet or rerun or mcap:
-            raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
-        if realtime or device != "auto":
-            raise InputError("--realtime and --device apply to single-recording runs, not --manifest runs (which "
-                             "take the GPU where onnxruntime has one)")
+        _refuse_beside_manifest([flag for flag, value in per_recording if value is not None],
+                                bool(parquet or rerun or mcap), realtime or device != "auto")
         _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
                       overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
                       pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
@@ -151,6 +145,20 @@ def run(
             pipeline=PipelineConfig(realtime=realtime))
     dropped = f" ({summary['frames_dropped']} dropped: the model was busy)" if realtime else ""
     typer.echo(f"{summary['frames_done']} frames{dropped} -> {summary['environment']}")
+
+
+def _refuse_beside_manifest(given: list[str], outputs: bool, live: bool) -> None:
+    """One error for the flags of single recordings given with ``--manifest``: the recording's
+    files and timing (``given``), the per-frame outputs, ``--realtime`` and ``--device``."""
+    from pedenv.errors import InputError
+
+    if given:
+        raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
+    if outputs:
+        raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+    if live:
+        raise InputError("--realtime and --device apply to single-recording runs, not --manifest runs (which "
+                         "take the GPU where onnxruntime has one)")
 
 
 def _run_manifest(manifest: Path, output: Path, **options) -> None:
