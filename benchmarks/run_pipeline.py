@@ -10,7 +10,8 @@ written as a recording (MJPG video, a GUESSED static camera 5 m up looking 30 de
 standing ego) into a temporary folder. Then, with one pose backend (``--detection``, made
 before the clock starts):
 
-1. ``network alone``: every frame read and detected, nothing written;
+1. ``network alone``: every frame read, detected and given to the model (the default, fused
+   preset, whose re-detection crops run the network too), nothing written;
 2. ``run``: :func:`pedenv.apps.run.run_recording` (what ``pedenv run`` calls, overlays on: a
    PNG per frame, or ``--video-out``), wall time from the call to its return;
 3. with ``--realtime``: the run once more at the recording's own rate: frames done and dropped.
@@ -102,7 +103,9 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bo
 
     from pedenv.apps.run import run_recording
     from pedenv.config import Config
+    from pedenv.model import PedestrianEnvironmentModel
     from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.redetect import with_redetection
     from pedenv.recordings.footage import load_recording
 
     cfg = Config()
@@ -110,9 +113,11 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bo
     clock = NetworkClock(backend)
     load = [os.getloadavg()[0]]
     frames = 0
+    model = PedestrianEnvironmentModel(cfg)
+    middle = with_redetection(backend, model, cfg.redetect)  # as run_recording wraps it
     start, cpu = time.perf_counter(), time.process_time()
     for frame in load_recording(**rec).frames():
-        backend(replace(frame))
+        model.update(replace(frame, detections=middle(frame)))
         frames += 1
     alone_s = time.perf_counter() - start
     alone = {"ms_per_frame": 1e3 * alone_s / frames, "network_ms_per_frame": 1e3 * clock.seconds / frames,
@@ -163,7 +168,8 @@ def main() -> None:
     print(f"pedenv from {result['pedenv']}; {result['frames']} frames of {args.video.name}"
           f"{' at ' + args.size if args.size else ''}, --detection {args.detection}, overlays {result['overlays']}, "
           f"{result['provider']}; load {result['load'][0]:.1f} -> {result['load'][1]:.1f}")
-    print(f"network alone: {a['ms_per_frame']:.1f} ms/frame read + detect, network {a['network_ms_per_frame']:.1f}, "
+    print(f"network alone: {a['ms_per_frame']:.1f} ms/frame read + detect + model, network "
+          f"{a['network_ms_per_frame']:.1f}, "
           f"CPU {a['cpu_ms_per_frame']:.1f} ms/frame (all threads)")
     print(f"pedenv run:    {r['ms_per_frame']:.1f} ms/frame ({r['frames_per_second']:.2f} fps), network "
           f"{r['network_ms_per_frame']:.1f} ms/frame in the run, {r['passes_per_frame']:.2f} passes/frame, "
