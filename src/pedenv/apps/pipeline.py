@@ -46,7 +46,7 @@ class PipelineConfig:
     """How ``pedenv run`` overlaps reading, the network and writing.
 
     read_ahead: decoded frames waiting for the network (1..64; 4). More smooths out slow
-        reads; each frame holds its image in memory (6 MB at 1600x900... 4 MB).
+        reads; each frame holds its image in memory (4.3 MB at 1600x900).
     write_behind: finished frames waiting for their outputs (1..256; 8). More lets the network
         run on while a slow writer (PNG encoding) catches up; each holds its image too.
     realtime: take frames at the recording's own rate and drop those that arrive while the
