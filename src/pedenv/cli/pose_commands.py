@@ -148,8 +148,9 @@ def run(
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
             extra_outputs=extra, progress=progress, method=method, device=device,
             pipeline=PipelineConfig(realtime=realtime))
-    dropped = f" ({summary['frames_dropped']} dropped: the model was busy)" if realtime else ""
-    typer.echo(f"{summary['frames_done']} frames{dropped} -> {summary['environment']}")
+    dropped = f", {summary['frames_dropped']} dropped: the model was busy" if realtime else ""
+    fps = summary["speed"]["frames_per_second"]
+    typer.echo(f"{summary['frames_done']} frames ({fps or 0:.1f} per second{dropped}) -> {summary['environment']}")
 
 
 def _refuse_beside_manifest(given: list[str], outputs: bool, live: bool) -> None:
