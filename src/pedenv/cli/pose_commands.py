@@ -164,7 +164,7 @@ def run(
             device=device, pipeline=PipelineConfig(realtime=realtime))
     dropped = f", {summary['frames_dropped']} dropped: the model was busy" if realtime else ""
     fps = summary["speed"]["frames_per_second"]
-    typer.echo(f"{summary['frames_done']} frames ({fps or 0:.1f} per second{dropped}) -> {summary['environment']}")
+    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']} ({fps or 0:.1f} per second{dropped})")
 
 
 def _refuse_beside_manifest(given: list[str], outputs: bool, paced: bool) -> None:
