@@ -96,7 +96,7 @@ def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
     return table
 
 
-def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
+def bench_end_to_end(repeats: int = 10, threads: int = 2, device: str = "auto") -> list[dict]:
     """Pose network + model (the paper's method) per 1600x900 frame, and the networks alone
     (onnx square/rect, ultralytics).
 
@@ -106,12 +106,13 @@ def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
     from pedenv.pose.timing import benchmark_image, benchmark_pose
 
     rows = []
-    for r in benchmark_pose(repeats=repeats, threads=threads):
+    for r in benchmark_pose(repeats=repeats, threads=threads, device=device):
         if r.get("ms_per_frame") is not None:
             rows.append({"stage": f"pose network {r['backend']} {r['input_size']}", "ms": r["ms_per_frame"],
-                         "pedestrians": r.get("persons", ""), "paper_key": "pose_network"})
+                         "pedestrians": r.get("persons", ""), "paper_key": "pose_network",
+                         "provider": r.get("provider", "")})
     image = benchmark_image()
-    pose = OnnxPose(input_size=(384, 640), threads=threads)
+    pose = OnnxPose(input_size=(384, 640), threads=threads, device=device)
     model = PedestrianEnvironmentModel(Config(method="paper"))
     camera = Camera.from_fov()
     times = []
@@ -125,7 +126,7 @@ def bench_end_to_end(repeats: int = 10, threads: int = 2) -> list[dict]:
     return rows
 
 
-def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2) -> list[dict]:
+def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2, device: str = "auto") -> list[dict]:
     """``fast`` and ``far`` side by side: ms per 1600x900 frame and recall on the real samples.
 
     The time is over ``repeats`` runs on a 1600x900 street frame seen by a level camera 1.5 m
@@ -147,7 +148,7 @@ def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2)
     geometry = CameraGeometry.level(Camera.from_fov().intrinsics, 1.5)
     rows = []
     for mode in ("fast", "far"):
-        pose = OnnxPose(detection=mode, threads=threads)
+        pose = OnnxPose(detection=mode, threads=threads, device=device)
         pose.detect(image, geometry)
         times = []
         for _ in range(repeats):

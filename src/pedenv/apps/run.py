@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import time
 import warnings
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.images import write_image
@@ -17,11 +21,12 @@ from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import prepare_output_dir
-from pedenv.outputs.sinks import ExtraOutputs
+from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.pose.redetect import with_redetection
 from pedenv.recordings.footage import Recording, load_recording
+from pedenv.records import Frame
 from pedenv.video_files import VideoOut, video_capture
 from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
@@ -32,27 +37,33 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
                   video_out: bool = False, overwrite: bool = False, progress=None,
                   detection: str | None = "far", extra_outputs: ExtraOutputs | None = None,
-                  method: str | None = None, backend: PoseBackend | None = None, bag=None, bag_options=None) -> dict:
+                  method: str | None = None, backend: PoseBackend | None = None, bag=None, bag_options=None,
+                  device: str = "auto", pipeline: PipelineConfig | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
-    ``run.json`` (pose backend, recording, frames done), ``overlays/<index>.png`` or
-    ``overlay.mp4`` (``video_out``) with skeletons, track ids and distances, and
-    ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the
+    ``run.json`` (pose backend and the provider that ran it, recording, frames done, speed),
+    ``overlays/<index>.png`` or ``overlay.mp4`` (``video_out``) with skeletons, track ids and
+    distances, and ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the
     ``extra_outputs`` asked for (Parquet, Rerun, MCAP; refused before the run when their extra
-    is missing). A bad frame stops the run with an InputError; what was computed before it
-    stays on disk. ``progress(done, total)`` is called per frame.
+    is missing). Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`,
+    ``pipeline``); every output holds the frames in order. A bad frame stops the run with an
+    InputError; what was computed before it stays on disk. ``progress(done, total)`` is called
+    per frame written.
     ``output`` must be empty or new, unless ``overwrite`` (then an earlier pedenv run there is
     deleted once the inputs are checked: :func:`pedenv.outputs.output_dir.prepare_output_dir`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
     ``fast`` (one pass fitted to the camera's aspect); None with ``pose_input_size`` None
-    picks 384x640 for wide cameras, else 640 (one pass).
+    picks 384x640 for wide cameras, else 640 (one pass). ``device`` (``onnx``): ``auto``,
+    ``cpu`` or ``cuda`` (:mod:`pedenv.pose.providers`).
+    ``pipeline.realtime``: frames at the recording's rate, those arriving while the model is
+    busy dropped and counted (``frames_dropped``); an image folder needs its timestamps.csv or ``fps``.
     ``config``: a Config or a config.json (default ``Config()``, the fused method);
     ``method`` switches it to another position method (:func:`pedenv.localization.configure`).
     ``backend``: a pose backend already made (a worker's, kept over recordings) instead of
-    the one ``pose_backend``, ``pose_model``, ``pose_input_size`` and ``detection`` describe.
+    the one ``pose_backend``, ``pose_model``, ``pose_input_size``, ``detection`` and ``device`` describe.
     ``static``: the camera is fixed to the ground (``mount: static``, whatever the calibration
     says); ``ego_poses`` may then be None (:func:`pedenv.recordings.footage.load_recording`).
     ``bag``: a ROS bag instead of images/video + calibration + ego poses, read with
@@ -62,8 +73,10 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
     cfg = configure(cfg, method) if method else cfg
     cfg = detection_mode(cfg, pose_backend, detection)
+    pipe = pipeline or PipelineConfig()
     extra = extra_outputs or ExtraOutputs()
     extra.check()
+    _check_realtime(pipe, images, fps)
     rec = _load_bag(bag, bag_options) if bag is not None else load_recording(
         calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps, start_time=start_time,
         static=static)
@@ -72,7 +85,7 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
     if backend is None:
         backend = create_pose_backend(pose_backend, **backend_options(
             pose_backend, pose_model, pose_input_size, cfg.detection if detection else None,
-            cfg.tracking.pose_score_threshold, cfg.merge))
+            cfg.tracking.pose_score_threshold, cfg.merge, device=device))
     if hasattr(rec, "check"):  # a folder or video recording: every frame's size and ego pose, before an
         rec.check()  # earlier run is replaced (a bag is read once, as it runs)
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
@@ -82,37 +95,26 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
     summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(out / "environment.jsonl")}
-    writer_video, last = None, None
+    stats, timer = PipelineStats(), _StepTimes()
+    outputs = _Outputs(out, rec, video_out, summary, progress)
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
         with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
-            for frame in rec.frames():
-                frame = dataclasses.replace(frame, detections=backend(frame))
-                state = model.update(frame)
-                writer.write(state)
-                sinks.write(state, frame)
-                if frame.image is None:
-                    raise InputError(f"{rec.name}: frame {frame.index} has no image")
-                drawn = draw_environment(frame.image, state)
-                if video_out:
-                    writer_video = writer_video or _open_video(out / "overlay.mp4", rec, drawn.shape)
-                    writer_video.write(drawn[..., ::-1].copy())
-                else:
-                    write_image(out / "overlays" / f"{frame.index:06d}.png", drawn)
-                last = (state, frame)
-                summary["frames_done"] += 1
-                if progress is not None:
-                    progress(summary["frames_done"], summary["frames_total"])
-        if rec.video is not None and summary["frames_done"] < summary["frames_total"]:
-            summary["ended_early"] = (f"{rec.video}: the video ended after {summary['frames_done']} of the "
+            outputs.writer, outputs.sinks = writer, sinks
+            run_frames(rec.frames(), partial(_step, backend, model, timer), outputs.write, config=pipe,
+                       done=outputs.done, stats=stats)
+        if rec.video is not None and stats.taken + stats.dropped < summary["frames_total"]:
+            summary["ended_early"] = (f"{rec.video}: the video ended after {stats.taken + stats.dropped} of the "
                                       f"{summary['frames_total']} frames its header announces (cut or damaged?)")
             warnings.warn(summary["ended_early"], stacklevel=2)
     finally:
-        if writer_video is not None:
-            writer_video.release()
+        outputs.close()
         summary["pose_backend"] = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
-        if last is not None:
-            summary["birds_eye"] = str(plot_birds_eye(last[0], out / "birds_eye.png", last[1], title=rec.name))
+        summary["frames_dropped"] = stats.dropped
+        summary["speed"] = {**stats.to_dict(), **timer.per_frame(backend), "pipeline": dataclasses.asdict(pipe)}
+        if outputs.last is not None:
+            state, frame = outputs.last
+            summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=rec.name))
         summary["files"] = [str(p) for p in sinks.files]
         (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
@@ -128,6 +130,84 @@ def _load_bag(bag, options):
     from pedenv.recordings.bag import load_bag_recording
 
     return load_bag_recording(bag, options)
+
+
+def _check_realtime(pipe: PipelineConfig, images, fps) -> None:
+    """``--realtime`` on an image folder needs the frames' times: its timestamps.csv or ``fps``."""
+    if pipe.realtime and images is not None and fps is None and Path(images).is_dir() \
+            and not (Path(images) / "timestamps.csv").is_file():
+        raise InputError(f"{images}: --realtime takes the frames at their own times, and the folder has no "
+                         "timestamps.csv (filename,timestamp); add one or give --fps")
+
+
+@dataclass
+class _StepTimes:
+    """Seconds spent in the middle stage: detection (the backend's call: network, pre- and
+    post-processing, re-detection crops) and the model's update, over ``frames`` frames."""
+
+    detection_s: float = 0.0
+    model_s: float = 0.0
+    frames: int = 0
+
+    def per_frame(self, backend) -> dict:
+        """ms per frame of detection, model and the network alone (an onnx backend's
+        ``network_s``: its session runs, counted by the backend), and network passes per frame."""
+        n = max(self.frames, 1)
+        onnx = getattr(backend, "backend", backend)  # under the re-detection wrapper
+        times = {"detection_ms_per_frame": 1e3 * self.detection_s / n, "model_ms_per_frame": 1e3 * self.model_s / n}
+        if hasattr(onnx, "network_s"):
+            times.update(network_ms_per_frame=1e3 * onnx.network_s / n, network_passes_per_frame=onnx.network_runs / n)
+        return times
+
+
+def _step(backend, model: PedestrianEnvironmentModel, timer: _StepTimes, frame: Frame):
+    """The network and the model on one frame (the pipeline's middle stage): (state, frame)."""
+    start = time.perf_counter()
+    frame = dataclasses.replace(frame, detections=backend(frame))
+    middle = time.perf_counter()
+    state = model.update(frame)
+    timer.detection_s += middle - start
+    timer.model_s += time.perf_counter() - middle
+    timer.frames += 1
+    return state, frame
+
+
+class _Outputs:
+    """The writer stage: each frame's state to the JSON Lines file and the sinks, its overlay
+    to a PNG or the overlay video; counts the frames written into ``summary``."""
+
+    def __init__(self, out: Path, rec: Recording, video_out: bool, summary: dict, progress) -> None:
+        self.out, self.rec, self.video_out, self.summary, self.progress = out, rec, video_out, summary, progress
+        self.writer: EnvironmentWriter | None = None
+        self.sinks: Sinks | None = None
+        self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
+        self.last: tuple | None = None  # (state, frame) of the last frame written
+
+    def write(self, result) -> None:
+        state, frame = result
+        assert self.writer is not None and self.sinks is not None  # set before the run
+        self.writer.write(state)
+        self.sinks.write(state, frame)
+        if frame.image is None:
+            raise InputError(f"{self.rec.name}: frame {frame.index} has no image")
+        drawn = draw_environment(frame.image, state)
+        if self.video_out:
+            if self.video is None:
+                self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)
+            self.video.write(drawn[..., ::-1].copy())
+        else:
+            write_image(self.out / "overlays" / f"{frame.index:06d}.png", drawn)
+        self.last = (state, frame)
+
+    def done(self, result) -> None:
+        self.summary["frames_done"] += 1
+        if self.progress is not None:
+            self.progress(self.summary["frames_done"], self.summary["frames_total"])
+
+    def close(self) -> None:
+        if self.video is not None:
+            self.video.release()
+            self.video = None
 
 
 def _open_video(path: Path, rec: Recording, shape) -> VideoOut:

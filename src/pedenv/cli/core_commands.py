@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 import typer
 
 from pedenv.cli.app import app, console, stdout_console
+from pedenv.cli.pose_commands import DEVICE
 from pedenv.config import Config
 
 if TYPE_CHECKING:
@@ -162,6 +163,7 @@ def evaluate(
     address: str | None = _ADDRESS,
     workers: int | None = _WORKERS,
     resume: bool = _RESUME,
+    device: str = DEVICE,
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
     from pedenv.apps.evaluate import evaluate_dataset
@@ -179,15 +181,16 @@ def evaluate(
     if cues:
         cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
     onnx = None  # the onnx backend's factory: called here, or once per Ray worker
-    if detection is not None or pose_backend == "onnx":
+    if detection is not None or pose_backend == "onnx" or device != "auto":
         from pedenv.pose.base import create_pose_backend
 
         if (pose_backend or data.default_pose_backend) != "onnx":
-            raise InputError("--detection applies to the onnx pose backend; add --pose-backend onnx")
+            raise InputError("--detection and --device apply to the onnx pose backend; add --pose-backend onnx")
         threshold = {} if cfg.tracking.pose_score_threshold is None else {
             "score_threshold": cfg.tracking.pose_score_threshold}
         cfg = cfg.replace(detection={"mode": detection or "far"})  # saved in config.json with the merge
-        onnx = partial(create_pose_backend, "onnx", detection=cfg.detection, merge=cfg.merge, **threshold)
+        onnx = partial(create_pose_backend, "onnx", detection=cfg.detection, merge=cfg.merge, device=device,
+                       **threshold)
     if executor == "serial" and (address is not None or workers is not None):
         from pedenv.errors import InputError
 
@@ -265,6 +268,7 @@ def bench(
         "--samples",
         help="Real samples for the detection modes' recall (skipped if absent).",
     ),
+    device: str = DEVICE,
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
     from pedenv.apps.bench import bench_core, format_bench
@@ -276,12 +280,15 @@ def bench(
         from pedenv.apps.bench import bench_end_to_end
 
         try:
-            pose_rows = bench_end_to_end()
+            pose_rows = bench_end_to_end(device=device)
         except (ImportError, InputError) as exc:
             console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
     _out.print(format_bench(rows, pose_rows))
+    providers = sorted({r["provider"] for r in pose_rows if r.get("provider")})
+    if providers:
+        _out.print(f"pose networks ran on: {', '.join(providers)} (--device {device})", highlight=False)
     if pose and pose_rows:
         from pedenv.apps.bench import bench_detection_modes, format_detection_modes
 
         root = samples if samples is not None and samples.is_dir() else None
-        _out.print(format_detection_modes(bench_detection_modes(root)))
+        _out.print(format_detection_modes(bench_detection_modes(root, device=device)))

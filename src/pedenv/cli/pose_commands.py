@@ -9,6 +9,10 @@ import typer
 
 from pedenv.cli.app import app, console
 
+#: ``--device``, shared by run, detect, evaluate and bench.
+DEVICE = typer.Option("auto", "--device", help="onnx: auto (the GPU when onnxruntime has one, else the CPU), "
+                                               "cpu or cuda (a GPU or an error).")
+
 models_app = typer.Typer(help="Pose-network weights: export and cache the ONNX models (offline).",
                          no_args_is_help=True)
 app.add_typer(models_app, name="models")
@@ -47,13 +51,15 @@ def detect(
     pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
+    device: str = DEVICE,
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
 
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
+    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection,
+                                                                  device=device))
     path = annotate_images(images=images, output=output, backend=backend, overwrite=overwrite)
     typer.echo(str(path))
 
@@ -117,6 +123,10 @@ def run(
     live: bool = typer.Option(
         False, "--live", help="Serve the model as it runs to Foxglove over WebSocket on 127.0.0.1 (--live-port)."),
     live_port: int = typer.Option(8765, "--live-port", help="--live: the TCP port (0: any free one)."),
+    device: str = DEVICE,
+    realtime: bool = typer.Option(
+        False, "--realtime", help="Frames at the recording's rate; those arriving while the model is busy are dropped."
+    ),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
     or on every recording of a --manifest."""
@@ -126,11 +136,8 @@ def run(
         per_recording = (("--images", images), ("--video", video), ("--calibration", calibration),
                          ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time),
                          ("--static", static or None))
-        given = [flag for flag, value in per_recording if value is not None]
-        if given:
-            raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
-        if parquet or rerun or mcap:
-            raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+        _refuse_beside_manifest([flag for flag, value in per_recording if value is not None],
+                                bool(parquet or rerun or mcap), realtime or device != "auto")
         _run_manifest(manifest, output, single=(ros_out, bag, live), executor=executor, address=address,
                       workers=workers, resume=resume, overwrite=overwrite, pose_backend=pose_backend,
                       pose_model=pose_model, pose_input_size=pose_input_size, config=config, detection=detection,
@@ -140,6 +147,7 @@ def run(
                                (image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame))
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
+    from pedenv.apps.pipeline import PipelineConfig
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
     from pedenv.outputs.sinks import ExtraOutputs
@@ -152,8 +160,25 @@ def run(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, static=static, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            extra_outputs=extra, progress=progress, method=method, bag=bag, bag_options=bag_options)
-    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")
+            extra_outputs=extra, progress=progress, method=method, bag=bag, bag_options=bag_options,
+            device=device, pipeline=PipelineConfig(realtime=realtime))
+    dropped = f", {summary['frames_dropped']} dropped: the model was busy" if realtime else ""
+    fps = summary["speed"]["frames_per_second"]
+    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']} ({fps or 0:.1f} per second{dropped})")
+
+
+def _refuse_beside_manifest(given: list[str], outputs: bool, paced: bool) -> None:
+    """One error for the flags of single recordings given with ``--manifest``: the recording's
+    files and timing (``given``), the per-frame outputs, ``--realtime`` and ``--device``."""
+    from pedenv.errors import InputError
+
+    if given:
+        raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
+    if outputs:
+        raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
+    if paced:
+        raise InputError("--realtime and --device apply to single-recording runs, not --manifest runs (which "
+                         "take the GPU where onnxruntime has one)")
 
 
 def _bag_options(bag: Path | None, recording: tuple, flags: tuple):

@@ -228,9 +228,10 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
 
 
 def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None,
-                    merge=None) -> dict:
-    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size
-    and detection mode (``fast`` or ``far``, onnx only).
+                    merge=None, device: str = "auto") -> dict:
+    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size,
+    detection mode (``fast`` or ``far``, onnx only) and device (``auto``, ``cpu`` or ``cuda``:
+    :mod:`pedenv.pose.providers`; ultralytics runs on the CPU, ``cuda`` is refused for it).
 
     ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, else the
     dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
@@ -241,8 +242,10 @@ def backend_options(backend: str, model=None, input_size=None, detection=None, s
     """
     scores = {} if score_threshold is None else {"score_threshold": score_threshold}
     if backend == "onnx":
-        return {"model_path": model, "input_size": input_size, "detection": detection, **scores,
+        return {"model_path": model, "input_size": input_size, "detection": detection, "device": device, **scores,
                 **({} if merge is None else {"merge": merge})}
+    if device not in ("auto", "cpu"):
+        raise InputError(f"device {device!r} applies to the onnx pose backend; {backend} runs on the CPU")
     if backend == "ultralytics":
         return {"weights": model, "input_size": input_size or 640, **scores}
     return {}

@@ -8,6 +8,7 @@ the frame's aspect; ``far`` adds tiles over the band where far people stand.
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,7 @@ from pedenv.pose.levels import plan_passes
 from pedenv.pose.merge import MergeConfig
 from pedenv.pose.multipass import detect_levels
 from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
+from pedenv.pose.providers import CPU, SessionConfig, create_session
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
 from pedenv.records import Detections, Frame
 
@@ -44,30 +46,26 @@ class OnnxPose:
     iou_threshold: a box overlapping a higher-scoring one by more than this IoU is
         suppressed (0.7). Lowering it merges nearby persons more readily.
     max_detections: at most this many persons per image (300).
-    threads: onnxruntime intra-op threads (1..64; 2 suits a 2-core machine).
-    spin_wait: let onnxruntime's idle threads spin for work (False). Spinning saves a little
-        on an otherwise idle machine; on a busy one (the tracker, other processes) it burns
-        the cores the network needs: a 384x640 pass took twice as long with it at load 19
-        on 2 cores (median 767 vs 372 ms).
+    session: where and how the network runs (:class:`~pedenv.pose.providers.SessionConfig`:
+        ``device`` auto/cpu/cuda, ``threads``, ``spin_wait``, ``batch``); its fields may also be
+        given as keywords (``OnnxPose(device="cuda", threads=4)``). :attr:`provider` is the
+        onnxruntime provider that runs it.
     """
 
     name = "onnx"
 
     def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
-                 iou_threshold: float = 0.7, max_detections: int = 300, threads: int = 2,
-                 detection: str | DetectionConfig | None = None, spin_wait: bool = False,
-                 merge: MergeConfig | None = None) -> None:
+                 iou_threshold: float = 0.7, max_detections: int = 300,
+                 detection: str | DetectionConfig | None = None, merge: MergeConfig | None = None,
+                 session: SessionConfig | None = None, **session_options) -> None:
         require_extra("onnxruntime", "pose", "the onnx pose backend")
-        import onnxruntime as ort
-
+        self.session_config = SessionConfig.of(session, session_options)
         self.score_threshold = _check_unit("score_threshold", score_threshold)
         self.iou_threshold = _check_unit("iou_threshold", iou_threshold)
         if isinstance(max_detections, bool) or not isinstance(max_detections, int) or max_detections < 1:
             raise InputError(f"max_detections must be an integer >= 1, got {max_detections!r}")
-        if isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 64:
-            raise InputError(f"threads must be an integer in [1, 64], got {threads!r}")
         self.max_detections = max_detections
-        self.threads = threads
+        self.threads = self.session_config.threads
         wanted = None if input_size is None else parse_input_size(input_size)
         if detection is None and wanted is None:
             detection = "far"
@@ -82,17 +80,7 @@ class OnnxPose:
         self.model_path = Path(model_path).expanduser()
         if not self.model_path.is_file():
             raise InputError(f"{self.model_path}: ONNX model file not found")
-        options = ort.SessionOptions()
-        options.graph_optimization_level = ort.GraphOptimizationLevel.ORT_ENABLE_ALL
-        options.execution_mode = ort.ExecutionMode.ORT_SEQUENTIAL
-        options.intra_op_num_threads = threads
-        options.inter_op_num_threads = 1
-        options.log_severity_level = 3
-        options.add_session_config_entry("session.intra_op.allow_spinning", "1" if spin_wait else "0")
-        try:
-            self._session = ort.InferenceSession(str(self.model_path), options, providers=["CPUExecutionProvider"])
-        except Exception as exc:
-            raise InputError(f"{self.model_path}: not a readable ONNX model: {exc}") from None
+        self._session, self.provider = create_session(self.model_path, self.session_config)
         fixed = models.check_session(self._session, self.model_path)
         self.dynamic = None in fixed
         self._base_input = wanted
@@ -106,6 +94,9 @@ class OnnxPose:
             assert height is not None and width is not None  # not dynamic: both sides fixed
             self.input_size = (height, width)
         self._input_name = self._session.get_inputs()[0].name
+        self._batch_axis_dynamic = not isinstance(self._session.get_inputs()[0].shape[0], int)
+        #: Seconds in the network's session runs and how many runs, since this backend was made.
+        self.network_s, self.network_runs = 0.0, 0
         #: The passes the last :meth:`detect` ran, and how their rows were chosen.
         self.last_passes: list[Pass] = []
         self.last_note = ""
@@ -114,7 +105,36 @@ class OnnxPose:
         return self.detect(frame_image(frame), CameraGeometry.from_frame(frame))
 
     def _infer(self, tensor: np.ndarray) -> np.ndarray:
-        return self._session.run(None, {self._input_name: tensor})[0]
+        start = time.perf_counter()
+        out = self._session.run(None, {self._input_name: tensor})[0]
+        self.network_s += time.perf_counter() - start
+        self.network_runs += 1
+        return out
+
+    @property
+    def batches(self) -> bool:
+        """Whether :meth:`infer_batch` runs tensors of one size as one batch (``session.batch``;
+        None: on a GPU only)."""
+        batch = self.session_config.batch
+        return self.provider != CPU if batch is None else batch
+
+    def infer_batch(self, tensors: list[np.ndarray]) -> list[np.ndarray]:
+        """The network on several inputs: ``tensors`` (1, 3, h, w) float32 each, sizes may differ;
+        returns one (1, 56, N) output each, in order. Tensors of one size run as one batch when
+        :attr:`batches` and the model's batch axis is dynamic, else one by one (same results)."""
+        outputs: list[np.ndarray | None] = [None] * len(tensors)
+        groups: dict[tuple, list[int]] = {}
+        for i, tensor in enumerate(tensors):
+            groups.setdefault(tuple(tensor.shape), []).append(i)
+        for rows in groups.values():
+            if len(rows) > 1 and self.batches and self._batch_axis_dynamic:
+                out = self._infer(np.concatenate([tensors[i] for i in rows]))
+                for k, i in enumerate(rows):
+                    outputs[i] = out[k:k + 1]
+            else:
+                for i in rows:
+                    outputs[i] = self._infer(tensors[i])
+        return [o for o in outputs if o is not None]
 
     def plan(self, width: int, height: int, geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
         """The passes this backend runs on a ``width`` x ``height`` image before any detection,
@@ -148,5 +168,6 @@ class OnnxPose:
     def describe(self) -> dict:
         """What to save next to results: backend, model file, input size, detection mode, thresholds."""
         return {"backend": self.name, "model": str(self.model_path), "input_size": list(self.input_size),
+                "device": self.session_config.device, "provider": self.provider,
                 "detection": None if self.detection is None else self.detection.to_dict(),
                 "score_threshold": self.score_threshold, "iou_threshold": self.iou_threshold}

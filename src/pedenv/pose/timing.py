@@ -48,11 +48,12 @@ def time_detect(backend, image: np.ndarray, repeats: int = 10, warmup: int = 2) 
             "ms_min": float(np.min(times)), "repeats": repeats}
 
 
-def benchmark_pose(repeats: int = 10, threads: int = 2) -> list[dict]:
+def benchmark_pose(repeats: int = 10, threads: int = 2, device: str = "auto") -> list[dict]:
     """Time the pose backends on a 1600x900 frame, pre- and post-processing included.
 
     Rows (one per backend and input size): ``backend``, ``input_size`` ("HxW"),
-    ``ms_per_frame`` (mean), ``ms_median``, ``ms_min``, ``repeats``, ``persons`` found;
+    ``ms_per_frame`` (mean), ``ms_median``, ``ms_min``, ``repeats``, ``persons`` found, and the
+    onnxruntime ``provider`` that ran it (``device``: auto, cpu or cuda, :mod:`pedenv.pose.providers`);
     a backend that cannot run here (no prepared model, no ultralytics) gets ``ms_per_frame``
     None and the reason in ``skipped``.
     """
@@ -62,8 +63,8 @@ def benchmark_pose(repeats: int = 10, threads: int = 2) -> list[dict]:
     from pedenv.pose.onnx_backend import OnnxPose
 
     image = benchmark_image()
-    runs = [("onnx", (640, 640), lambda: OnnxPose(input_size=(640, 640), threads=threads)),
-            ("onnx", (384, 640), lambda: OnnxPose(input_size=(384, 640), threads=threads)),
+    runs = [("onnx", (640, 640), lambda: OnnxPose(input_size=(640, 640), threads=threads, device=device)),
+            ("onnx", (384, 640), lambda: OnnxPose(input_size=(384, 640), threads=threads, device=device)),
             ("ultralytics", (640, 640), _ultralytics)]
     rows = []
     for name, size, make in runs:
@@ -73,7 +74,8 @@ def benchmark_pose(repeats: int = 10, threads: int = 2) -> list[dict]:
         except (InputError, ImportError) as exc:
             rows.append({**row, "ms_per_frame": None, "skipped": str(exc)})
             continue
-        rows.append({**row, **time_detect(backend, image, repeats), "persons": len(backend.detect(image))})
+        rows.append({**row, **time_detect(backend, image, repeats), "persons": len(backend.detect(image)),
+                     "provider": getattr(backend, "provider", "torch, CPU")})
     return rows
 
 

@@ -1,0 +1,86 @@
+"""Where the pose network runs: the providers asked for per device, the CPU fallback of ``auto``,
+the one clear error of ``cuda`` without a GPU, and batched passes giving what single passes give."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pedenv.errors import InputError
+from pedenv.pose.providers import CPU, CUDA, TENSORRT, SessionConfig, wanted_providers
+
+
+@pytest.mark.parametrize("device, available, wanted", [
+    ("cpu", [TENSORRT, CUDA, CPU], [CPU]),
+    ("auto", ["AzureExecutionProvider", CPU], [CPU]),
+    ("auto", [CUDA, CPU], [CUDA, CPU]),
+    ("cuda", [CUDA, CPU], [CUDA, CPU]),
+    ("auto", [TENSORRT, CUDA, CPU], [TENSORRT, CUDA, CPU]),
+    ("cuda", [CPU], "--device cuda: this onnxruntime has no CUDA provider .*gpu extra"),
+    ("gpu", [CUDA, CPU], "device must be one of auto, cpu, cuda, got 'gpu'"),
+])
+def test_the_providers_asked_for_per_device(device, available, wanted, tmp_path):
+    if isinstance(wanted, str):
+        with pytest.raises(InputError, match=wanted):
+            wanted_providers(device, available, tmp_path)
+        return
+    got = wanted_providers(device, available, tmp_path)
+    assert [p if isinstance(p, str) else p[0] for p in got] == wanted
+    if TENSORRT in wanted:  # TensorRT keeps its engines (one per input size) in the cache
+        assert got[0][1] == {"trt_engine_cache_enable": True, "trt_engine_cache_path": str(tmp_path)}
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"threads": 0}, r"threads must be an integer in \[1, 64\], got 0"),
+    ({"device": None}, "device must be one of"),
+    ({"batch": "yes"}, "batch must be true or false"),
+    ({"spin_wait": 1}, "spin_wait must be true or false"),
+    ({"gpu": 0}, "unknown onnx backend option.* gpu; valid: device, threads, spin_wait, batch"),
+])
+def test_session_options_are_checked(options, message):
+    with pytest.raises(InputError, match=message):
+        SessionConfig.of(None, options)
+
+
+@pytest.mark.onnx_model
+@pytest.mark.ultralytics
+def test_auto_runs_on_the_cpu_here_and_cuda_is_one_clear_error(use_pose_cache):
+    import onnxruntime as ort
+
+    from pedenv.pose.base import create_pose_backend
+
+    if CUDA in ort.get_available_providers():
+        pytest.skip("this onnxruntime has the CUDA provider: the CPU-only fallback is not what runs here")
+    pose = create_pose_backend("onnx", detection="fast", device="auto")
+    assert pose.provider == CPU and pose.describe()["provider"] == CPU and not pose.batches
+    assert create_pose_backend("onnx", detection="fast", device="cpu").provider == CPU
+    with pytest.raises(InputError, match="--device cuda: this onnxruntime has no CUDA provider"):
+        create_pose_backend("onnx", detection="fast", device="cuda")
+
+
+@pytest.mark.onnx_model
+@pytest.mark.ultralytics
+def test_a_batch_of_passes_gives_what_the_passes_give_one_by_one(use_pose_cache, photo):
+    from pedenv.images import read_image_rgb
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
+
+    image = read_image_rgb(photo("bus.jpg"))  # 810x1080, 4 people
+    crops = [(0, 0, 810, 1080), (0, 300, 405, 1000), (400, 300, 810, 1000), (100, 400, 500, 800)]
+    sizes = [(640, 480), (416, 256), (416, 256), (320, 320)]
+    inputs = [letterbox(image[y0:y1, x0:x1], size) for (x0, y0, x1, y1), size in zip(crops, sizes)]
+    tensors = [to_input_tensor(padded) for padded, _ in inputs]
+    batched = OnnxPose(detection="fast", batch=True)
+    assert batched.batches
+    together = batched.infer_batch(tensors)
+    assert batched.network_runs == 3  # the two 416x256 passes ran as one batch
+    single = OnnxPose(detection="fast", batch=False)
+    apart = single.infer_batch(tensors)
+    assert single.network_runs == 4
+    for a, b, (_, box) in zip(together, apart, inputs):
+        assert a.shape == b.shape and a.shape[0] == 1
+        np.testing.assert_allclose(a, b, rtol=1e-3, atol=1e-2)
+        da, db = decode(a, box, 0.25, 0.7, 300), decode(b, box, 0.25, 0.7, 300)
+        assert len(da) == len(db)
+        np.testing.assert_allclose(da.boxes, db.boxes, atol=0.05)
+    assert len(decode(together[0], inputs[0][1], 0.25, 0.7, 300)) >= 4
