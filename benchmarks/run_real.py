@@ -99,7 +99,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
     parser.add_argument("--only", choices=["kitti", "mot17"], default=None)
-    parser.add_argument("--detection", default="far", choices=["far", "fast"])
+    parser.add_argument("--detection", default="far", choices=["far", "fast", "stream"])
+    parser.add_argument("--configs", default="paper,fused,fused-image",
+                        help="Comma-separated configs to run (paper, fused, fused-image).")
     parser.add_argument("--json", type=Path, default=None, help="Also write the figures here.")
     args = parser.parse_args(argv)
 
@@ -113,6 +115,7 @@ def main(argv=None) -> int:
     # the preset without the steps that need a true camera (ground gate, memory): for MOT17's guess
     image_only = fused.replace(tracking={"ground_gate": 0.0, "memory_s": 0.0})
     configs = {"paper": Config(method="paper"), "fused": fused, "fused-image": image_only}
+    configs = {k: v for k, v in configs.items() if k in args.configs.split(",")}
     totals: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, write, gt in sequences(args.samples, args.only):
@@ -126,6 +129,7 @@ def main(argv=None) -> int:
                 acc, counts = score_run(out / "environment.jsonl", gt)
                 counts["seconds"] = seconds
                 counts["crops"] = summary["pose_backend"].get("redetect", {}).get("crops", 0)
+                counts["units"] = summary["pose_backend"].get("stream", {}).get("units_per_frame")
                 totals.setdefault((name.split("/")[0], cname), []).append((name, acc, counts))
                 print(f"  {name} {cname}: {counts}", file=sys.stderr)
     print(f"pedenv run --detection {args.detection} on the real samples (MOT17: guessed camera, standing ego)")

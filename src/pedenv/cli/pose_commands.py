@@ -47,6 +47,8 @@ def detect(
     pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
+    calibration: Path | None = typer.Option(
+        None, "--calibration", help="Calibration YAML (as for run): places the far band; default: fitted."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
@@ -55,8 +57,13 @@ def detect(
     from pedenv.pose.models import backend_options
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection))
+    camera = None
+    if calibration is not None:
+        from pedenv.recordings.footage import load_calibration
+
+        camera = load_calibration(calibration)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv detect")
-    path = annotate_images(images=images, output=output, backend=backend)
+    path = annotate_images(images=images, output=output, backend=backend, camera=camera)
     typer.echo(str(path))
 
 
@@ -86,7 +93,8 @@ def run(
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option(
-        "far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."
+        "far", "--detection", help="onnx: far (whole frame + tiles over the far band), stream (far over "
+                                   "consecutive frames, within a budget) or fast (one pass)."
     ),
     parquet: bool = typer.Option(
         False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."

@@ -16,8 +16,9 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.pose.stream_config import CascadeConfig, StreamConfig
 
-MODES = ("fast", "far")
+MODES = ("fast", "far", "stream")
 STRIDE = 32
 
 
@@ -33,7 +34,8 @@ class DetectionConfig:
     distances where such people stand) or, without a usable calibration, from a line fitted
     to the heights and foot rows of the people the coarser levels found.
 
-    mode: ``fast`` (one pass) or ``far`` (the levels).
+    mode: ``fast`` (one pass), ``far`` (the levels) or ``stream`` (consecutive frames: the
+        levels' tiles in rotation, :mod:`pedenv.pose.stream`; on a single image as ``far``).
     base_long_side: long side of the whole-frame pass's input, px (multiple of 32, 160..2048);
         the short side follows the frame's aspect. Raising it finds smaller people, costs more.
     tile_width: longest side of one tile's network input, px (multiple of 32, 160..4096); a
@@ -49,7 +51,11 @@ class DetectionConfig:
         (100..4000): a fragment of someone too large for that level (whole-frame pass exempt).
     whole_image_max_mpx: a level whose rows are unknown (no usable calibration, too few
         people found to fit them) runs over the whole image when that costs at most this many
-        network input megapixels (0.1..50); else it is skipped.
+        network input megapixels (0.1..50); else it is skipped. The finest level is not skipped:
+    whole_image_finest_mpx: the finest level with unknown rows runs over the whole image, at its
+        scale lowered so that costs at most this many network input megapixels (0.1..50; 6 holds
+        a 1600x900 image at x2: about 23 units). So a street photo with only small people in it
+        (none found to fit the rows) is still searched at the finest level.
     near_m, far_m: distances bounding every band, metres (0.5 <= near < far <= 1000).
     top_m: height above the ground the band reaches, metres (0.5..5; a tall person 2 m); the
         tallest person assumed when heights in px are turned into distances.
@@ -69,6 +75,8 @@ class DetectionConfig:
     max_pitch_up_deg: a camera tilted up more than this sees sky, no ground: fitted rows (1..89).
     max_tiles: at most this many tiles per level; the level's scale is lowered to fit (1..64).
     edge_margin_px: a detection within this many input px of an inner tile edge counts as cut (0..64).
+    cascade: low-scoring small persons verified at a higher zoom (``far``, ``stream``): :class:`CascadeConfig`.
+    stream: the ``stream`` mode's budget and rotation: :class:`StreamConfig`.
     """
 
     mode: str = "far"
@@ -79,6 +87,7 @@ class DetectionConfig:
     min_person_px: float = 80.0
     max_person_px: float = 480.0
     whole_image_max_mpx: float = 2.1
+    whole_image_finest_mpx: float = 6.0
     near_m: float = 5.0
     far_m: float = 150.0
     top_m: float = 2.2
@@ -93,13 +102,16 @@ class DetectionConfig:
     max_pitch_up_deg: float = 30.0
     max_tiles: int = 12
     edge_margin_px: int = 16
+    cascade: CascadeConfig = CascadeConfig()
+    stream: StreamConfig = StreamConfig()
 
     def __post_init__(self) -> None:
         if self.mode not in MODES:
             raise ValueError(f"DetectionConfig.mode must be one of {', '.join(MODES)}, got {self.mode!r}")
         ranges = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "tile_overlap": (0.0, 0.5),
                   "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
-                  "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
+                  "whole_image_max_mpx": (0.1, 50.0),
+                  "whole_image_finest_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
                   "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "band_margin_px": (0, 200),
                   "fit_min_people": (2, 100), "fit_min_score": (0.0, 1.0), "fit_margin": (0.0, 2.0),
                   "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0), "max_pitch_down_deg": (1.0, 89.0),
@@ -124,13 +136,14 @@ class DetectionConfig:
 
     @classmethod
     def named(cls, mode: str, **changes) -> DetectionConfig:
-        """The config of a mode (``fast`` or ``far``) with some fields changed."""
+        """The config of a mode (``fast``, ``far`` or ``stream``) with some fields changed."""
         if mode not in MODES:
             raise ValueError(f"detection mode must be one of {', '.join(MODES)}, got {mode!r}")
         return replace(cls(mode=mode), **changes)
 
     def to_dict(self) -> dict:
-        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else
+                         v.to_dict() if hasattr(v, "to_dict") else v) for f in fields(self)}
 
 
 def _check_range(name: str, value, low, high) -> None:
@@ -174,6 +187,12 @@ class CameraGeometry:
         pitch = np.array([[1, 0, 0], [0, cp, sp], [0, -sp, cp]])  # about x: forward axis goes down
         roll = np.array([[cr, 0, sr], [0, 1, 0], [-sr, 0, cr]])  # about the forward axis
         return cls(np.asarray(K, float), pitch @ roll @ base, float(height_m))
+
+    @classmethod
+    def of_camera(cls, camera) -> CameraGeometry:
+        """From a :class:`~pedenv.records.Camera` on a level vehicle (its mount's rotation and height)."""
+        mount = camera.cam_to_vehicle
+        return cls(np.asarray(camera.intrinsics, float), mount[:3, :3], float(mount[2, 3]))
 
     @classmethod
     def from_frame(cls, frame) -> CameraGeometry:
