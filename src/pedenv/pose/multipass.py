@@ -66,11 +66,13 @@ def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.nd
 Parts = list[tuple[Detections, np.ndarray]]
 
 
-def run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, score_threshold: float,
-               iou_threshold: float, max_detections: int, config: DetectionConfig,
-               low: list[Detections] | None = None) -> Parts:
-    """Run ``passes``; with ``low`` a list, persons scoring ``cascade.min_score`` up to the
-    threshold (whole, not too tall for the level) are appended to it for the cascade."""
+def run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, settings: DecodeSettings,
+              config: DetectionConfig, low: list[Detections] | None = None) -> Parts:
+    """Run ``passes`` (``settings``: score threshold, NMS, max persons); with ``low`` a list, persons
+    scoring ``cascade.min_score`` up to the threshold (whole, not too tall for the level) are
+    appended to it for the cascade."""
+    score_threshold, iou_threshold, max_detections = (settings.score_threshold, settings.iou_threshold,
+                                                      settings.max_detections)
     parts = []
     image_size = (image.shape[0], image.shape[1])
     floor = min(config.cascade.min_score, score_threshold) if low is not None else score_threshold
@@ -109,8 +111,8 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
     if base_input is not None:
         first = Pass(first.region, base_input, "full")
     low: list[Detections] | None = [] if config.cascade.enabled and config.mode != "fast" else None
-    run = partial(run_level, infer, image, fixed_input=fixed_input, score_threshold=score_threshold,
-                  iou_threshold=iou_threshold, max_detections=max_detections, config=config, low=low)
+    settings = DecodeSettings(score_threshold, iou_threshold, max_detections, config.edge_margin_px)
+    run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, config=config, low=low)
     parts = run([first])
     passes, notes = [first], []
     levels = pyramid(width, height, config)[1:]
@@ -124,7 +126,6 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
         passes += more
     dets = parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)
     if low is not None:
-        settings = DecodeSettings(score_threshold, iou_threshold, max_detections, config.edge_margin_px)
         verified, more = verify(infer, image, candidates(concat(low), dets, config.cascade), config.cascade,
                                 config.stream.mosaic_size, settings)
         if more:
@@ -141,5 +142,6 @@ def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarra
     """Given passes over ``image`` (H, W, 3) uint8 RGB, merged, no level filter; ``fixed_input``
     forces every pass's input size."""
     config = DetectionConfig(edge_margin_px=int(edge_margin_px), max_person_px=4000.0, plausible_keypoint_conf=0.0)
-    parts = run_level(infer, image, passes, fixed_input, score_threshold, iou_threshold, max_detections, config)
+    parts = run_level(infer, image, passes, fixed_input, DecodeSettings(score_threshold, iou_threshold, max_detections),
+                      config)
     return parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)

@@ -29,7 +29,7 @@ from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, full_pass
 from pedenv.records import Detections, Frame
 
-#: Boxes of the latest whole people kept to fit the band's rows without a calibration.
+#: Boxes of the latest people found (all passes) kept to fit the band's rows without a calibration.
 FIT_MEMORY = 60
 
 
@@ -117,11 +117,9 @@ class StreamPose:
         low: list[Detections] = []
         settings = DecodeSettings(b.score_threshold, b.iou_threshold, b.max_detections, cfg.edge_margin_px)
         fixed = None if b.dynamic else b.input_size
-        run = partial(run_level, b._infer, image, fixed_input=fixed, score_threshold=b.score_threshold,
-                      iou_threshold=b.iou_threshold, max_detections=b.max_detections, config=cfg,
+        run = partial(run_level, b._infer, image, fixed_input=fixed, settings=settings, config=cfg,
                       low=low if cfg.cascade.enabled else None)
         parts = run([first])
-        self._remember_fit(parts[0])
         line = HeightLine.fit(self._fit_boxes, cfg.fit_min_people, height)
         tiles, note = band_tiles(width, height, cfg, geometry, line)
         ids, predicted, hits = tracks if tracks is not None else (np.zeros(0, np.int64), np.zeros((0, 4)),
@@ -152,16 +150,12 @@ class StreamPose:
             dets = merge_detections([(dets, np.zeros(len(dets), bool)), (extra, np.zeros(len(extra), bool))],
                                     max_detections=b.max_detections)
         self.finder.update(ids, predicted, dets.boxes, timestamp, cfg.stream.missed_iou)
+        self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= cfg.fit_min_score]])[-FIT_MEMORY:]
         self.last_passes = [first, *steps, *passes]
         self.last_note = ("cold start, whole band; " if cold else "") + note
-        self.accounts.add(first, steps, passes, plan, cold, len(rows), found_tracks, verified,
-                          [a for a, i in zip(ages, range(len(tiles))) if i not in chosen], cfg.stream.scan_period_s)
+        late = sum(1 for i, a in enumerate(ages) if i not in chosen and cfg.stream.scan_period_s < a < math.inf)
+        self.accounts.add((first, steps, passes), plan, cold, (len(rows), found_tracks, verified), late)
         return dets
-
-    def _remember_fit(self, part) -> None:
-        dets, cut = part
-        whole = dets.boxes[~cut & (dets.scores >= self.config.fit_min_score)] if len(dets) else np.zeros((0, 4))
-        self._fit_boxes = np.concatenate([self._fit_boxes, whole])[-FIT_MEMORY:]
 
     def _packed(self, image, dets, low, predicted, rows, track_crops, limit: int, settings):
         """At most ``limit`` packed inputs: the tracks' crops first, then the cascade's candidates

@@ -76,9 +76,12 @@ class StreamAccounts:
     tiles_late: int = 0
     band_reserve_units: float = 0.0
 
-    def add(self, first, steps, passes, plan, cold: bool, at_risk: int, found: int, verified: int,
-            skipped_ages: list[float], period_s: float) -> None:
-        """One frame: its whole-frame pass, band tiles and packed inputs (Pass lists), its plan."""
+    def add(self, ran: tuple, plan, cold: bool, counts: tuple[int, int, int], late: int) -> None:
+        """One frame: ``ran`` (its whole-frame pass, band tiles, packed inputs), its plan, whether a
+        cold start, ``counts`` (tracks searched, found in crops, cascade confirmations) and the
+        tiles it left older than the scan period."""
+        first, steps, passes = ran
+        at_risk, found, verified = counts
         spent = [units(first.input_size), sum(units(s.input_size) for s in steps),
                  sum(units(p.input_size) for p in passes)]
         for key, value in zip(self.units, spent):
@@ -94,7 +97,7 @@ class StreamAccounts:
         self.tracks_found += found
         self.cascade_confirmed += verified
         self.tile_visits += len(steps)
-        self.tiles_late += sum(1 for a in skipped_ages if a > period_s and np.isfinite(a))
+        self.tiles_late += late
         self.band_reserve_units = plan.reserve_units
 
     def to_dict(self) -> dict:

@@ -45,19 +45,22 @@ class CascadeConfig:
     plausible_keypoint_conf: and average at least this keypoint confidence (0..1).
     max_units: at most this many network units (384x640 inputs) per frame for the cascade (1..16);
         the best-scoring candidates go first.
+
+    The defaults were chosen on the real samples (``benchmarks/cascade_real.py``, docs/detection.md):
+    ``far`` 40-80 px recall 53 -> 65 %, precision 94 -> 90 %, about 1 unit per image more.
     """
 
     enabled: bool = True
     min_score: float = 0.05
     min_height_px: float = 16.0
     max_height_px: float = 160.0
-    person_px: float = 128.0
+    person_px: float = 96.0
     max_zoom: float = 3.5
     margin: float = 0.3
-    match_iou: float = 0.5
-    verify_score: float = 0.4
-    plausible_keypoint_conf: float = 0.5
-    max_units: int = 2
+    match_iou: float = 0.6
+    verify_score: float = 0.28
+    plausible_keypoint_conf: float = 0.6
+    max_units: int = 3
 
     def __post_init__(self) -> None:
         if not isinstance(self.enabled, bool):
