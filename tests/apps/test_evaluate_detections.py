@@ -19,10 +19,11 @@ pytestmark = [pytest.mark.onnx_model, pytest.mark.ultralytics, pytest.mark.slow]
 
 #: mode -> (overall recall, recall >= 80 px, recall 40-80 px, precision): measured 2026-11-22
 #: (fast 0.175, 0.225, 0.00, 0.981) and 2026-11-23 (far, the pyramid with its rows fitted to
-#: people scoring >= 0.35: 0.808, 0.911, 0.527, 0.939, strict precision 0.896) minus 3 points.
+#: people scoring >= 0.35: 0.808, 0.911, 0.527, 0.939, strict precision 0.896) minus 3 points;
+#: far with the cascade for small people, 2026-11-24: 0.832, 0.911, 0.652, 0.904, minus 3 points.
 MINIMA = {
     "fast": (0.14, 0.19, 0.0, 0.95),
-    "far": (0.77, 0.88, 0.49, 0.90),
+    "far": (0.80, 0.88, 0.62, 0.87),
 }
 
 
