@@ -63,6 +63,22 @@ def sequences(samples: Path, only: str | None):
             yield f"mot17/{folder.name}", write, gt
 
 
+def budgeted_backend(args, config):
+    """A stream backend with ``--stream-budget`` units per frame, or None (run_recording makes its own)."""
+    if args.detection != "stream" or args.stream_budget is None:
+        return None
+    from dataclasses import replace
+
+    from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.models import backend_options
+    from pedenv.pose.tiling import DetectionConfig
+
+    detection = DetectionConfig.named("stream")
+    detection = replace(detection, stream=replace(detection.stream, budget_units=args.stream_budget))
+    return create_pose_backend("onnx", **backend_options("onnx", None, None, detection,
+                                                         config.tracking.pose_score_threshold))
+
+
 def duplicate_pairs(boxes: np.ndarray, threshold: float = 0.5) -> int:
     """Pairs of boxes (N, 4) px overlapping by IoU > ``threshold``."""
     from pedenv.boxes import iou_matrix
@@ -99,7 +115,11 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
     parser.add_argument("--only", choices=["kitti", "mot17"], default=None)
-    parser.add_argument("--detection", default="far", choices=["far", "fast"])
+    parser.add_argument("--detection", default="far", choices=["far", "fast", "stream"])
+    parser.add_argument("--stream-budget", type=float, default=None,
+                        help="stream: network units per frame (default: StreamConfig's).")
+    parser.add_argument("--configs", default="paper,fused,fused-image",
+                        help="Comma-separated configs to run (paper, fused, fused-image).")
     parser.add_argument("--json", type=Path, default=None, help="Also write the figures here.")
     args = parser.parse_args(argv)
 
@@ -113,6 +133,7 @@ def main(argv=None) -> int:
     # the preset without the steps that need a true camera (ground gate, memory): for MOT17's guess
     image_only = fused.replace(tracking={"ground_gate": 0.0, "memory_s": 0.0})
     configs = {"paper": Config(method="paper"), "fused": fused, "fused-image": image_only}
+    configs = {k: v for k, v in configs.items() if k in args.configs.split(",")}
     totals: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, write, gt in sequences(args.samples, args.only):
@@ -121,11 +142,13 @@ def main(argv=None) -> int:
                 out = Path(tmp) / name / cname
                 t0 = time.perf_counter()
                 summary = run_recording(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
-                                        images=rec / "images", output=out, detection=args.detection, config=config)
+                                        images=rec / "images", output=out, detection=args.detection, config=config,
+                                        backend=budgeted_backend(args, config))
                 seconds = time.perf_counter() - t0
                 acc, counts = score_run(out / "environment.jsonl", gt)
                 counts["seconds"] = seconds
                 counts["crops"] = summary["pose_backend"].get("redetect", {}).get("crops", 0)
+                counts["units"] = summary["pose_backend"].get("stream", {}).get("units_per_frame")
                 totals.setdefault((name.split("/")[0], cname), []).append((name, acc, counts))
                 print(f"  {name} {cname}: {counts}", file=sys.stderr)
     print(f"pedenv run --detection {args.detection} on the real samples (MOT17: guessed camera, standing ego)")

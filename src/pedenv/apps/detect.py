@@ -8,10 +8,12 @@ from pedenv.errors import InputError
 from pedenv.images import image_size, read_image_rgb, write_image
 from pedenv.outputs.detections import detections_to_dict, unique_names, write_detections
 from pedenv.outputs.output_dir import prepare_output_dir
+from pedenv.pose.tiling import CameraGeometry
 from pedenv.visualize.overlay import draw_detections
 
 
-def annotate_images(images, output: str | Path, backend, *, overwrite: bool = False, prepare: bool = True) -> Path:
+def annotate_images(images, output: str | Path, backend, *, camera=None, overwrite: bool = False,
+                    prepare: bool = True) -> Path:
     """Run a pose ``backend`` on image files; write ``output/detections.json`` and the drawn images.
 
     images: image paths. Each drawn image is ``output/<stem>_pose.png`` (``<stem>-2_pose.png``
@@ -22,6 +24,8 @@ def annotate_images(images, output: str | Path, backend, *, overwrite: bool = Fa
     names the failed files. Every image's header is read before ``output`` is prepared
     (``prepare``: :func:`~pedenv.outputs.output_dir.prepare_output_dir` with ``overwrite``),
     so when no image can be read an earlier run there is left as it was. Returns the JSON path.
+    ``camera``: a :class:`~pedenv.records.Camera` (``--calibration``) that places the ``far``
+    band as ``pedenv run`` does (vehicle level); an image of another size than it is failed.
     """
     paths = [Path(p) for p in images]
     if not paths:
@@ -42,7 +46,7 @@ def annotate_images(images, output: str | Path, backend, *, overwrite: bool = Fa
         if i in failed:
             continue
         try:
-            records.append(_annotate(path, output / name, backend))
+            records.append(_annotate(path, output / name, backend, camera))
         except InputError as exc:
             message = str(exc)
             failed[i] = message if str(path) in message else f"{path}: {message}"
@@ -55,10 +59,17 @@ def annotate_images(images, output: str | Path, backend, *, overwrite: bool = Fa
     return target
 
 
-def _annotate(path: Path, drawn_path: Path, backend) -> dict:
-    """One image's record: read, detected, drawn to ``drawn_path``."""
+def _annotate(path: Path, drawn_path: Path, backend, camera) -> dict:
+    """One image's record: read, detected (the far band placed by ``camera`` when given), drawn
+    to ``drawn_path``."""
     image = read_image_rgb(path)
-    det = backend.detect(image)
+    if camera is None:
+        det = backend.detect(image)
+    elif (image.shape[1], image.shape[0]) != (camera.width, camera.height):
+        raise InputError(f"{path}: image is {image.shape[1]}x{image.shape[0]} px, the calibration says "
+                         f"{camera.width}x{camera.height}")
+    else:
+        det = backend.detect(image, CameraGeometry.of_camera(camera))
     drawn = write_image(drawn_path, draw_detections(image, det))
     return {"file": str(path), "width": image.shape[1], "height": image.shape[0], "backend": backend.name,
             "drawn": str(drawn), "persons": detections_to_dict(det)}

@@ -11,6 +11,9 @@ import json
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from pedenv.evaluation.detections import load_samples, match_detections, summarize
 from pedenv.evaluation.metrics import strict_json
@@ -24,17 +27,23 @@ def evaluate_detections(data_root: str | Path, detection="far", output: str | Pa
     DetectionConfig) on the samples under ``data_root``; written to ``output/detections_eval.json``
     when ``output`` is given. ``backend``: an OnnxPose to use instead of creating one.
     ``samples``: a list of DetectionSample to use instead of all under ``data_root``.
+    ``stream`` runs each sequence's samples as consecutive frames (:func:`stream_frame`).
     """
-    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.base import create_pose_backend
 
     samples = load_samples(data_root) if samples is None else samples
-    pose = backend or OnnxPose(model_path=model_path, detection=detection, threads=threads)
+    pose: Any = backend or create_pose_backend("onnx", model_path=model_path, detection=detection, threads=threads)
     images = [read_image_rgb(s.image_path) for s in samples]
     pose.detect(images[0], samples[0].geometry)  # warm-up: onnxruntime's first run allocates
     matches, ms, cpu_ms, units = [], [], [], []
+    previous = None
     for i, (sample, image) in enumerate(zip(samples, images)):
         start, cpu = time.perf_counter(), time.process_time()
-        dets = pose.detect(image, sample.geometry)
+        if hasattr(pose, "detect_frame"):  # stream: a sequence's samples in order, consecutive frames
+            dets = stream_frame(pose, image, sample, previous)
+            previous = (sample, dets)
+        else:
+            dets = pose.detect(image, sample.geometry)
         ms.append(1e3 * (time.perf_counter() - start))
         cpu_ms.append(1e3 * (time.process_time() - cpu))
         units.append(network_units(pose))
@@ -58,6 +67,18 @@ def evaluate_detections(data_root: str | Path, detection="far", output: str | Pa
         out.mkdir(parents=True, exist_ok=True)
         (out / "detections_eval.json").write_text(json.dumps(strict_json(report), indent=2) + "\n")
     return report
+
+
+def stream_frame(pose, image, sample, previous):
+    """``pose.detect_frame`` on one sample as the next frame of its sequence; the tracks stand-in
+    is the previous sample's persons where it is the frame before in the same sequence (not moved,
+    ``track_min_hits`` hits each); a sample of another sequence, or of none, restarts the stream."""
+    if previous is None or not sample.sequence or previous[0].sequence != sample.sequence:
+        pose.restart()
+        return pose.detect_frame(image, sample.geometry, sample.timestamp)
+    boxes = previous[1].boxes
+    hits = np.full(len(boxes), pose.config.stream.track_min_hits)
+    return pose.detect_frame(image, sample.geometry, sample.timestamp, (np.arange(len(boxes)), boxes, hits))
 
 
 def network_units(pose) -> float:

@@ -154,7 +154,7 @@ def evaluate(
                                "(its --parquet tables there too) and FILE-<method>.rrd / .mcap."),
     cues: str | None = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
     overwrite: bool = _OVERWRITE,
-    detection: str | None = typer.Option(None, "--detection", help="onnx backend: far or fast (default: far)."),
+    detection: str | None = typer.Option(None, "--detection", help="onnx backend: far, stream or fast (default: far)."),
     parquet: bool = _PARQUET,
     rerun: Path | None = _RERUN,
     mcap: Path | None = _MCAP,

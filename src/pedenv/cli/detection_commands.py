@@ -18,7 +18,9 @@ def evaluate_detections_command(
     data_root: Path = typer.Option(
         ..., "--data-root", help="Folder with kitti/, mot17/, nuscenes-0061/ (e.g. ../shared/samples/real)."
     ),
-    detection: str = typer.Option("far", "--detection", help="fast (one pass) or far (plus tiles over the far band)."),
+    detection: str = typer.Option(
+        "far", "--detection",
+        help="fast (one pass), far (plus tiles over the far band) or stream (each sequence's images in order)."),
     output: Path | None = typer.Option(None, "--output", help="Folder for detections_eval.json."),
     pose_model: Path | None = typer.Option(
         None, "--pose-model", help="ONNX file (default: the prepared dynamic model)."

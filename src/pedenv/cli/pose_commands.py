@@ -52,6 +52,8 @@ def detect(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
     device: str = DEVICE,
+    calibration: Path | None = typer.Option(
+        None, "--calibration", help="Calibration YAML (as for run): places the far band; default: fitted."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
@@ -60,7 +62,12 @@ def detect(
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection,
                                                                   device=device))
-    path = annotate_images(images=images, output=output, backend=backend, overwrite=overwrite)
+    camera = None
+    if calibration is not None:
+        from pedenv.recordings.footage import load_calibration
+
+        camera = load_calibration(calibration)
+    path = annotate_images(images=images, output=output, backend=backend, camera=camera, overwrite=overwrite)
     typer.echo(str(path))
 
 
@@ -93,7 +100,8 @@ def run(
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option(
-        "far", "--detection", help="onnx: far (whole frame + tiles over the far band) or fast (one pass, real time)."
+        "far", "--detection", help="onnx: far (whole frame + tiles over the far band), stream (far over "
+                                   "consecutive frames, within a budget) or fast (one pass)."
     ),
     parquet: bool = typer.Option(
         False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."

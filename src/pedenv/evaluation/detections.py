@@ -15,7 +15,7 @@ recall only (its README: annotations do not cover every visible person).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +33,8 @@ GOAL_BINS = (("<40", 0.0, 40.0), ("40-80", 40.0, 80.0), (">=80", 80.0, np.inf))
 #: Distance bins, metres (where 3D ground truth exists).
 DISTANCE_BINS = (("0-15", 0.0, 15.0), ("15-30", 15.0, 30.0), ("30-50", 30.0, 50.0), (">50", 50.0, np.inf))
 KITTI_CAMERA_HEIGHT_M = 1.65
+#: KITTI tracking's frame rate, Hz (the samples' timestamps: frame index / rate).
+KITTI_RATE_HZ = 10.0
 #: Fraction of a detection's box inside an unmatched optional (occluded) person's box that makes it that person.
 OCCLUDED_INSIDE = 0.7
 
@@ -44,6 +46,8 @@ class DetectionSample:
     boxes: (M, 4) px ``[u_min, v_min, u_max, v_max]`` clipped to the image. heights: (M,) px
     (the dataset's own box height: MOT17 amodal). distances: (M,) metres or NaN.
     required: (M,) bool. ignore: (K, 4) px regions. geometry: camera for the far band, or None.
+    sequence: name of the sequence whose consecutive frames the sample is one of ("" for a
+    single image); timestamp: its time in that sequence, seconds (``stream`` detection).
     """
 
     dataset: str
@@ -57,6 +61,8 @@ class DetectionSample:
     count_false_positives: bool = True
     iou_threshold: float = 0.5
     geometry: CameraGeometry | None = None
+    sequence: str = ""
+    timestamp: float = 0.0
 
 
 def kitti_samples(root: Path) -> list[DetectionSample]:
@@ -66,8 +72,9 @@ def kitti_samples(root: Path) -> list[DetectionSample]:
     for name in kitti.tracking_sequence_names(tracking):
         seq = kitti.read_tracking_sequence(tracking, name)
         for frame in seq.frames:
-            out.append(_kitti_sample(f"tracking {name}/{frame:06d}", seq.image_path(frame), seq.labels.in_frame(frame),
-                                     seq.calib))
+            sample = _kitti_sample(f"tracking {name}/{frame:06d}", seq.image_path(frame), seq.labels.in_frame(frame),
+                                   seq.calib)
+            out.append(replace(sample, sequence=f"kitti tracking {name}", timestamp=frame / KITTI_RATE_HZ))
     objects = root / "object_samples" / "training"
     for image in sorted((objects / "image_2").glob("*.png")):
         out.append(
@@ -101,7 +108,8 @@ def mot17_samples(root: Path) -> list[DetectionSample]:
             out.append(DetectionSample(
                 "mot17", f"{seq.info.name}/{frame:06d}", seq.image_path(frame), gt.clipped(w, h),
                 gt.boxes[:, 3] - gt.boxes[:, 1], np.full(len(gt), np.nan), gt.consider & (gt.visibility >= 0.5),
-                np.clip(seq.ignore_boxes(frame), 0, [w, h, w, h])))
+                np.clip(seq.ignore_boxes(frame), 0, [w, h, w, h]), sequence=seq.info.name,
+                timestamp=frame / seq.info.frame_rate))
     return out
 
 

@@ -36,12 +36,16 @@ def create_pose_backend(name: str, **options) -> PoseBackend:
     """Create the backend registered as ``name`` with its keyword ``options``.
 
     ``detector-model:<profile>`` (e.g. ``detector-model:yolo11n-pose-single``) is the
-    detector model with that named profile. Raises ValueError naming the valid backends
-    for an unknown name.
+    detector model with that named profile; ``onnx`` with ``detection="stream"`` (or a
+    config in mode ``stream``) is the stateful :class:`~pedenv.pose.stream.StreamPose`.
+    Raises ValueError naming the valid backends for an unknown name.
     """
     if name.startswith("detector-model:"):
         name, options = "detector-model", {"profile": name.split(":", 1)[1], **options}
     if name not in POSE_BACKENDS:
         raise InputError(f"unknown pose backend {name!r}; valid: {', '.join(POSE_BACKENDS)}")
     module, cls = POSE_BACKENDS[name].split(":")
+    detection = options.get("detection")
+    if name == "onnx" and getattr(detection, "mode", detection) == "stream":
+        module, cls = "pedenv.pose.stream", "StreamPose"
     return getattr(importlib.import_module(module), cls)(**options)

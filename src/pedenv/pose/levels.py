@@ -8,7 +8,8 @@ distances where a 1.5-2.2 m person has that height), or, without a usable calibr
 (none, or a camera looking down), from a :class:`HeightLine` fitted to the people the
 coarser levels found (on flat ground a person's height in px grows linearly with the row of
 their feet, and is zero at the horizon). With neither, a level covers the whole image if
-that costs at most ``whole_image_max_mpx`` network input megapixels, else it is skipped.
+that costs at most ``whole_image_max_mpx`` network input megapixels, else it is skipped; the
+finest level then covers the whole image at a scale lowered to ``whole_image_finest_mpx``.
 """
 
 from __future__ import annotations
@@ -112,22 +113,28 @@ def calibrated_rows(level: Level, geometry: CameraGeometry, width: int, height: 
 
 
 def plan_level(level: Level, width: int, height: int, config: DetectionConfig, geometry: CameraGeometry | None,
-               line: HeightLine | None) -> tuple[list[Pass], str]:
-    """The passes of one finer level and a note on how its rows were chosen (no passes: skipped)."""
+               line: HeightLine | None, finest: bool = False) -> tuple[list[Pass], str]:
+    """The passes of one finer level and a note on how its rows were chosen (no passes: skipped).
+    ``finest``: the pyramid's finest level, which covers the whole image when its rows are
+    unknown (at a scale lowered to ``whole_image_finest_mpx``) instead of being skipped."""
+    scale = level.scale
     if calibrated(geometry, width, height, config):
         assert geometry is not None
         band, how = calibrated_rows(level, geometry, width, height, config), "calibration"
     elif line is not None:
         margin = config.fit_margin * min(level.max_height_px, height) + config.band_margin_px
         band, how = line.rows(level.min_height_px, level.max_height_px, margin, height), f"fit to {line.people}"
-    elif width * height * level.scale**2 <= config.whole_image_max_mpx * 1e6:
+    elif width * height * scale**2 <= config.whole_image_max_mpx * 1e6:
         band, how = Band(0, height), "whole image: no calibration, no fit"
+    elif finest:
+        scale = min(scale, math.sqrt(config.whole_image_finest_mpx * 1e6 / (width * height)))
+        band, how = Band(0, height), "whole image at the finest level: no calibration, too few people to fit"
     else:
         return [], f"x{level.scale:g} skipped: no calibration, too few people to fit"
     if band is None:
         return [], f"x{level.scale:g} skipped: its people would stand outside the image ({how})"
     kind = "tile" if (band.top, band.bottom) == (0, height) else "band"
-    tiles, scale = tile_region((0, band.top, width, band.bottom), level.scale, config, kind)
+    tiles, scale = tile_region((0, band.top, width, band.bottom), scale, config, kind)
     return tiles, f"x{scale:.2f} rows {band.top}-{band.bottom} ({how}), {len(tiles)} tiles"
 
 
@@ -142,7 +149,7 @@ def plan_passes(width: int, height: int, config: DetectionConfig,
     notes = [] if calibrated(geometry, width, height, config) else [
         "no calibration" if geometry is None else "no usable calibration (camera looks down or up, or the band "
                                                   "misses the image)"]
-    for level in pyramid(width, height, config)[1:]:
+    for level in pyramid(width, height, config)[1:]:  # the finest level's whole-image fallback waits for the fit
         more, note = plan_level(level, width, height, config, geometry, None)
         passes += more
         notes.append(note)

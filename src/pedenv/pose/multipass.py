@@ -13,34 +13,20 @@ calibration each level's rows come from a line fitted to the people found so far
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
+from pedenv.pose.cascade import candidates, concat, verify
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.merge import MergeConfig, merge_detections
+from pedenv.pose.mosaic import DecodeSettings, cut_by_inner_edge
 from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
 #: The default merge settings (frozen, shared).
 DEFAULT_MERGE = MergeConfig()
-
-
-def cut_by_inner_edge(boxes: np.ndarray, region: tuple[int, int, int, int], image_size: tuple[int, int],
-                      margin_px: float) -> np.ndarray:
-    """(N,) bool: boxes (N, 4) px within ``margin_px`` of an edge of ``region`` that is not an image edge."""
-    x0, y0, x1, y1 = region
-    h, w = image_size
-    cut = np.zeros(len(boxes), bool)
-    if x0 > 0:
-        cut |= boxes[:, 0] <= x0 + margin_px
-    if y0 > 0:
-        cut |= boxes[:, 1] <= y0 + margin_px
-    if x1 < w:
-        cut |= boxes[:, 2] >= x1 - margin_px
-    if y1 < h:
-        cut |= boxes[:, 3] >= y1 - margin_px
-    return cut
 
 
 def spans_the_region(boxes: np.ndarray, region: tuple[int, int, int, int], image_size: tuple[int, int],
@@ -80,18 +66,30 @@ def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.nd
 Parts = list[tuple[Detections, np.ndarray]]
 
 
-def _run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, score_threshold: float,
-               iou_threshold: float, max_detections: int, config: DetectionConfig) -> Parts:
+def run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, settings: DecodeSettings,
+              config: DetectionConfig, low: list[Detections] | None = None) -> Parts:
+    """Run ``passes`` (``settings``: score threshold, NMS, max persons); with ``low`` a list, persons
+    scoring ``cascade.min_score`` up to the threshold (whole, not too tall for the level) are
+    appended to it for the cascade."""
+    score_threshold, iou_threshold, max_detections = (settings.score_threshold, settings.iou_threshold,
+                                                      settings.max_detections)
     parts = []
     image_size = (image.shape[0], image.shape[1])
+    floor = min(config.cascade.min_score, score_threshold) if low is not None else score_threshold
     for step in passes:
         size = fixed_input or step.input_size
-        dets = run_pass(infer, image, step, size, score_threshold, iou_threshold, max_detections)
+        dets = run_pass(infer, image, step, size, floor, iou_threshold, max_detections)
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
         margin = config.edge_margin_px / scale
         if len(dets):
-            dets = dets.take(level_filter(dets, step, config) & ~spans_the_region(dets.boxes, step.region, image_size,
-                                                                                  margin))
+            dets = dets.take(~spans_the_region(dets.boxes, step.region, image_size, margin))
+        if low is not None and len(dets):
+            weak = dets.take(dets.scores <= score_threshold)
+            tall = (weak.boxes[:, 3] - weak.boxes[:, 1]) * scale > config.max_person_px
+            low.append(weak.take(~tall & ~cut_by_inner_edge(weak.boxes, step.region, image_size, margin)))
+            dets = dets.take(dets.scores > score_threshold)
+        if len(dets):
+            dets = dets.take(level_filter(dets, step, config))
         parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, image_size, margin)))
     return parts
 
@@ -112,19 +110,30 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
     first = full_pass(width, height, config)
     if base_input is not None:
         first = Pass(first.region, base_input, "full")
-    parts = _run_level(infer, image, [first], fixed_input, score_threshold, iou_threshold, max_detections, config)
+    low: list[Detections] | None = [] if config.cascade.enabled and config.mode != "fast" else None
+    settings = DecodeSettings(score_threshold, iou_threshold, max_detections, config.edge_margin_px)
+    run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, config=config, low=low)
+    parts = run([first])
     passes, notes = [first], []
-    for level in pyramid(width, height, config)[1:]:
+    levels = pyramid(width, height, config)[1:]
+    for i, level in enumerate(levels):
         whole = [d.take(~c & (d.scores >= config.fit_min_score)) for d, c in parts if len(d)]
         boxes = np.concatenate([d.boxes for d in whole]) if whole else np.zeros((0, 4))
         line = HeightLine.fit(boxes, config.fit_min_people, height)
-        more, note = plan_level(level, width, height, config, geometry, line)
+        more, note = plan_level(level, width, height, config, geometry, line, finest=i == len(levels) - 1)
         notes.append(note)
-        parts += _run_level(infer, image, more, fixed_input, score_threshold, iou_threshold, max_detections, config)
+        parts += run(more)
         passes += more
-    if len(passes) == 1:
-        return parts[0][0], passes, "; ".join(notes) or "one pass"
-    return merge_detections(parts, merge, max_detections), passes, "; ".join(notes)
+    dets = parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)
+    if low is not None:
+        verified, more = verify(infer, image, candidates(concat(low), dets, config.cascade), config.cascade,
+                                config.stream.mosaic_size, settings)
+        if more:
+            notes.append(f"cascade: {len(verified)} confirmed in {len(more)} packed inputs")
+            passes += more
+            dets = merge_detections([(dets, np.zeros(len(dets), bool)), (verified, np.zeros(len(verified), bool))],
+                                    merge, max_detections)
+    return dets, passes, "; ".join(notes) or "one pass"
 
 
 def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass], *,
@@ -133,5 +142,6 @@ def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarra
     """Given passes over ``image`` (H, W, 3) uint8 RGB, merged, no level filter; ``fixed_input``
     forces every pass's input size."""
     config = DetectionConfig(edge_margin_px=int(edge_margin_px), max_person_px=4000.0, plausible_keypoint_conf=0.0)
-    parts = _run_level(infer, image, passes, fixed_input, score_threshold, iou_threshold, max_detections, config)
+    parts = run_level(infer, image, passes, fixed_input, DecodeSettings(score_threshold, iou_threshold, max_detections),
+                      config)
     return parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)

@@ -168,7 +168,12 @@ class RedetectingPose:
 
 def with_redetection(backend, model: TrackPredictor, config: RedetectConfig):
     """``backend`` wrapped in a :class:`RedetectingPose` when ``config.enabled`` and the backend
-    can run crops (the ``onnx`` backend); otherwise ``backend`` itself."""
+    can run crops (the ``onnx`` backend); otherwise ``backend`` itself. A ``stream`` backend
+    (:class:`~pedenv.pose.stream.StreamPose`) searches missed tracks itself, in packed crops:
+    it is given the model and returned as it is."""
+    if hasattr(backend, "attach_model"):
+        backend.attach_model(model)
+        return backend
     if not config.enabled or not hasattr(backend, "_infer") or not hasattr(model, "predicted_boxes"):
         return backend
     return RedetectingPose(backend, model, config)

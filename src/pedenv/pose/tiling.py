@@ -16,9 +16,10 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.pose.stream_config import CascadeConfig, StreamConfig, section_of
 from pedenv.validation import check_below, check_choice, check_count, check_number, shown
 
-MODES = ("fast", "far")
+MODES = ("fast", "far", "stream")
 STRIDE = 32
 #: Most levels of the pyramid (``level_scales``): each costs at least one network pass per frame.
 MAX_LEVELS = 8
@@ -27,7 +28,8 @@ _COUNTS = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "band_margi
            "fit_min_people": (2, 100), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
 #: Number fields of :class:`DetectionConfig` -> their range.
 _NUMBERS = {"tile_overlap": (0.0, 0.5), "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
-            "whole_image_max_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0), "far_m": (0.5, 1000.0),
+            "whole_image_max_mpx": (0.1, 50.0), "whole_image_finest_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0),
+            "far_m": (0.5, 1000.0),
             "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "fit_min_score": (0.0, 1.0),
             "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0),
             "max_pitch_down_deg": (1.0, 89.0), "max_pitch_up_deg": (1.0, 89.0)}
@@ -46,7 +48,8 @@ class DetectionConfig:
     distances where such people stand) or, without a usable calibration, from a line fitted
     to the heights and foot rows of the people the coarser levels found.
 
-    mode: ``fast`` (one pass) or ``far`` (the levels).
+    mode: ``fast`` (one pass), ``far`` (the levels) or ``stream`` (consecutive frames: the
+        levels' tiles in rotation, :mod:`pedenv.pose.stream`; on a single image as ``far``).
     base_long_side: long side of the whole-frame pass's input, px (multiple of 32, 160..2048);
         the short side follows the frame's aspect. Raising it finds smaller people, costs more.
     tile_width: longest side of one tile's network input, px (multiple of 32, 160..4096); a
@@ -63,7 +66,11 @@ class DetectionConfig:
         (100..4000): a fragment of someone too large for that level (whole-frame pass exempt).
     whole_image_max_mpx: a level whose rows are unknown (no usable calibration, too few
         people found to fit them) runs over the whole image when that costs at most this many
-        network input megapixels (0.1..50); else it is skipped.
+        network input megapixels (0.1..50); else it is skipped. The finest level is not skipped:
+    whole_image_finest_mpx: the finest level with unknown rows runs over the whole image, at its
+        scale lowered so that costs at most this many network input megapixels (0.1..50; 6 holds
+        a 1600x900 image at x2: about 23 units). So a street photo with only small people in it
+        (none found to fit the rows) is still searched at the finest level.
     near_m, far_m: distances bounding every band, metres (0.5 <= near < far <= 1000).
     top_m: height above the ground the band reaches, metres (0.5..5; a tall person 2 m); the
         tallest person assumed when heights in px are turned into distances.
@@ -83,6 +90,8 @@ class DetectionConfig:
     max_pitch_up_deg: a camera tilted up more than this sees sky, no ground: fitted rows (1..89).
     max_tiles: at most this many tiles per level; the level's scale is lowered to fit (1..64).
     edge_margin_px: a detection within this many input px of an inner tile edge counts as cut (0..64).
+    cascade: low-scoring small persons verified at a higher zoom (``far``, ``stream``): :class:`CascadeConfig`.
+    stream: the ``stream`` mode's budget and rotation: :class:`StreamConfig`.
     """
 
     mode: str = "far"
@@ -93,6 +102,7 @@ class DetectionConfig:
     min_person_px: float = 80.0
     max_person_px: float = 480.0
     whole_image_max_mpx: float = 2.1
+    whole_image_finest_mpx: float = 6.0
     near_m: float = 5.0
     far_m: float = 150.0
     top_m: float = 2.2
@@ -107,9 +117,13 @@ class DetectionConfig:
     max_pitch_up_deg: float = 30.0
     max_tiles: int = 12
     edge_margin_px: int = 16
+    cascade: CascadeConfig = CascadeConfig()
+    stream: StreamConfig = StreamConfig()
 
     def __post_init__(self) -> None:
         check_choice("detection.mode", self.mode, MODES)
+        object.__setattr__(self, "cascade", section_of(CascadeConfig, "cascade", self.cascade))
+        object.__setattr__(self, "stream", section_of(StreamConfig, "stream", self.stream))
         for name, (low, high) in _COUNTS.items():
             check_count(f"detection.{name}", getattr(self, name), low, high)
         for name, (lo, hi) in _NUMBERS.items():
@@ -130,12 +144,13 @@ class DetectionConfig:
 
     @classmethod
     def named(cls, mode: str, **changes) -> DetectionConfig:
-        """The config of a mode (``fast`` or ``far``) with some fields changed."""
+        """The config of a mode (``fast``, ``far`` or ``stream``) with some fields changed."""
         check_choice("detection mode", mode, MODES)
         return replace(cls(mode=mode), **changes)
 
     def to_dict(self) -> dict:
-        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else
+                         v.to_dict() if hasattr(v, "to_dict") else v) for f in fields(self)}
 
 
 def _round32(value: float) -> int:
@@ -171,6 +186,12 @@ class CameraGeometry:
         pitch = np.array([[1, 0, 0], [0, cp, sp], [0, -sp, cp]])  # about x: forward axis goes down
         roll = np.array([[cr, 0, sr], [0, 1, 0], [-sr, 0, cr]])  # about the forward axis
         return cls(np.asarray(K, float), pitch @ roll @ base, float(height_m))
+
+    @classmethod
+    def of_camera(cls, camera) -> CameraGeometry:
+        """From a :class:`~pedenv.records.Camera` on a level vehicle (its mount's rotation and height)."""
+        mount = camera.cam_to_vehicle
+        return cls(np.asarray(camera.intrinsics, float), mount[:3, :3], float(mount[2, 3]))
 
     @classmethod
     def from_frame(cls, frame) -> CameraGeometry:

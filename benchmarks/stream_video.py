@@ -1,0 +1,103 @@
+"""``stream`` against ``far`` on a real street video with no ground truth: how many of the people
+``far`` reports does ``stream`` also report, frame by frame, and at what cost?
+
+    PYTHONPATH=src python benchmarks/stream_video.py [--video /usr/share/doc/opencv-doc/examples/data/vtest.avi]
+        [--frames 200] [--json out.json]
+
+The video (Debian's ``opencv-doc``: ``examples/data/vtest.avi``, 768x576, a pedestrian
+street seen from above; ``apt-get install opencv-doc``) is written as a recording of its first
+``--frames`` frames at the video's rate, with a GUESSED calibration (focal = image width, 5 m
+up, 30 deg down: no usable calibration for the band, so the rows come from the fit) and a
+standing ego, and run by :func:`pedenv.apps.run.run_recording` (what ``pedenv run`` calls)
+with ``--detection far`` and ``--detection stream`` (default config, the ``fused`` preset).
+For every frame, the people far reports (confirmed tracks) are matched to stream's by
+IoU >= 0.5: the share found is the figure; stream's units come from its ``run.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+DEFAULT_VIDEO = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
+CALIBRATION = """width: {w}
+height: {h}
+intrinsics: [[{f}, 0, {cx}], [0, {f}, {cy}], [0, 0, 1]]
+cam_to_vehicle:
+  rotation: [[0, -0.5, 0.8660254037844387], [-1, 0, 0], [0, -0.8660254037844387, -0.5]]
+  translation: [0, 0, 5.0]
+"""
+
+
+def write_recording(video: Path, frames: int, out: Path) -> tuple[Path, float]:
+    """The first ``frames`` frames of ``video`` as images (and their rate, Hz), a guessed calibration,
+    a standing ego."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(video))
+    rate = cap.get(cv2.CAP_PROP_FPS) or 10.0
+    (out / "images").mkdir(parents=True)
+    stamps = []
+    for i in range(frames):
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        cv2.imwrite(str(out / "images" / f"{i:06d}.jpg"), bgr, [cv2.IMWRITE_JPEG_QUALITY, 95])
+        stamps.append(i / rate)
+    cap.release()
+    h, w = bgr.shape[:2]
+    (out / "calibration.yaml").write_text(CALIBRATION.format(w=w, h=h, f=float(w), cx=w / 2, cy=h / 2))
+    (out / "ego_poses.csv").write_text(f"timestamp,x,y,yaw\n0,0,0,0\n{stamps[-1] + 1.0},0,0,0\n")
+    return out, rate
+
+
+def reported(environment: Path) -> list[np.ndarray]:
+    """Per frame the (N, 4) px boxes of the people a run reported."""
+    from pedenv.outputs.jsonl import read_environment
+
+    return [np.array([p["box"] for p in line["pedestrians"]], float).reshape(-1, 4)
+            for line in read_environment(environment)]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
+    parser.add_argument("--frames", type=int, default=200)
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args(argv)
+
+    from pedenv.apps.run import run_recording
+    from pedenv.boxes import iou_matrix
+
+    results: dict = {"video": str(args.video), "load_at_start": os.getloadavg()[0]}
+    with tempfile.TemporaryDirectory() as tmp:
+        rec, rate = write_recording(args.video, args.frames, Path(tmp) / "recording")
+        boxes = {}
+        for mode in ("far", "stream"):
+            t0 = time.perf_counter()
+            summary = run_recording(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
+                                    images=rec / "images", fps=rate, output=Path(tmp) / mode, detection=mode)
+            results[mode] = {"seconds_per_frame": (time.perf_counter() - t0) / max(summary["frames_done"], 1),
+                             "stream": summary["pose_backend"].get("stream")}
+            boxes[mode] = reported(Path(tmp) / mode / "environment.jsonl")
+    far_n = found = 0
+    for a, b in zip(boxes["far"], boxes["stream"]):
+        far_n += len(a)
+        if len(a) and len(b):
+            found += int((iou_matrix(a, b).max(axis=1) >= 0.5).sum())
+    results.update(frames=len(boxes["far"]), far_reported=far_n, stream_reported=sum(len(b) for b in boxes["stream"]),
+                   far_also_in_stream=found / max(far_n, 1), load_at_end=os.getloadavg()[0])
+    print(json.dumps(results, indent=2))
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

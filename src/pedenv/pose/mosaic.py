@@ -1,0 +1,180 @@
+"""Several small crops packed into one network input (a mosaic), and the persons found mapped back.
+
+Ten far people cost one pass, not ten: each crop (a region around a predicted box or a
+low-scoring candidate) is scaled so its person has the height the network sees best,
+placed on shelves of a ``mosaic_size`` canvas (grey between the crops), and every person
+the network finds in the canvas goes back to the crop holding its box centre, then to the
+image's pixels: ``image = (input - offset) / scale + region origin``. A person touching an
+edge of its crop that is not an image edge is marked cut (it may belong to a neighbour).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pedenv.pose.postprocess import PAD_VALUE, Letterbox, decode, to_input_tensor
+from pedenv.pose.tiling import Pass
+from pedenv.records import Detections
+
+#: Grey input px left between two crops of a mosaic.
+GAP_PX = 4
+
+
+@dataclass(frozen=True)
+class Crop:
+    """An image region ``(x0, y0, x1, y1)`` px (end exclusive) and its ``scale`` (input px per image px)."""
+
+    region: tuple[int, int, int, int]
+    scale: float
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(height, width) in the mosaic, input px."""
+        x0, y0, x1, y1 = self.region
+        return max(1, int(round((y1 - y0) * self.scale))), max(1, int(round((x1 - x0) * self.scale)))
+
+
+@dataclass(frozen=True)
+class Placement:
+    """Crop number ``item`` of the packed list, placed in mosaic number ``mosaic`` with its
+    top-left corner at ``offset`` (x, y) input px."""
+
+    crop: Crop
+    mosaic: int
+    offset: tuple[int, int]
+    item: int
+
+
+def cut_by_inner_edge(boxes: np.ndarray, region: tuple[int, int, int, int], image_size: tuple[int, int],
+                      margin_px: float) -> np.ndarray:
+    """(N,) bool: boxes (N, 4) px within ``margin_px`` of an edge of ``region`` that is not an image edge."""
+    x0, y0, x1, y1 = region
+    h, w = image_size
+    cut = np.zeros(len(boxes), bool)
+    if x0 > 0:
+        cut |= boxes[:, 0] <= x0 + margin_px
+    if y0 > 0:
+        cut |= boxes[:, 1] <= y0 + margin_px
+    if x1 < w:
+        cut |= boxes[:, 2] >= x1 - margin_px
+    if y1 < h:
+        cut |= boxes[:, 3] >= y1 - margin_px
+    return cut
+
+
+def crop_around(box: np.ndarray, image_size: tuple[int, int], person_px: float, margin: float, max_zoom: float,
+                mosaic_size: tuple[int, int]) -> Crop:
+    """The crop for a person's ``box`` (4,) px in an image of ``image_size`` (height, width):
+    ``margin`` times the box height on every side, clipped to the image; scaled so the box is
+    ``person_px`` tall (at most ``max_zoom``, and so the crop fits in ``mosaic_size``)."""
+    h, w = image_size
+    box = np.asarray(box, float)
+    height = max(float(box[3] - box[1]), 1.0)
+    x0, y0 = max(0, int(math.floor(box[0] - margin * height))), max(0, int(math.floor(box[1] - margin * height)))
+    x1, y1 = min(w, int(math.ceil(box[2] + margin * height))), min(h, int(math.ceil(box[3] + margin * height)))
+    x1, y1 = max(x1, x0 + 1), max(y1, y0 + 1)
+    fit = min((mosaic_size[0] - 2 * GAP_PX) / (y1 - y0), (mosaic_size[1] - 2 * GAP_PX) / (x1 - x0))
+    return Crop((x0, y0, x1, y1), float(min(person_px / height, max_zoom, fit)))
+
+
+def pack(crops: list[Crop], mosaic_size: tuple[int, int], max_mosaics: int | None = None) -> list[Placement]:
+    """Shelf packing in the given order (first fit): crops that do not fit in ``max_mosaics``
+    mosaics are left out (the list is shorter). A crop larger than a mosaic is left out."""
+    height, width = mosaic_size
+    shelves: list[list[list[int]]] = []  # per mosaic: [top, shelf height, next x] per shelf
+    placed = []
+    for item, crop in enumerate(crops):
+        ch, cw = crop.size
+        if ch + 2 * GAP_PX > height or cw + 2 * GAP_PX > width:
+            continue
+        spot = _find_spot(shelves, ch, cw, height, width)
+        if spot is None and (max_mosaics is None or len(shelves) < max_mosaics):
+            shelves.append([[GAP_PX, ch, GAP_PX]])  # a new mosaic, its first shelf
+            spot = (len(shelves) - 1, 0)
+        if spot is None:
+            continue
+        m, s = spot
+        shelf = shelves[m][s]
+        placed.append(Placement(crop, m, (shelf[2], shelf[0]), item))
+        shelf[2] += cw + GAP_PX
+    return placed
+
+
+def _find_spot(shelves, ch: int, cw: int, height: int, width: int) -> tuple[int, int] | None:
+    for m, mosaic in enumerate(shelves):
+        for s, (_, shelf_h, x) in enumerate(mosaic):
+            if ch <= shelf_h and x + cw + GAP_PX <= width:
+                return m, s
+        top, shelf_h, _ = mosaic[-1]
+        if top + shelf_h + GAP_PX + ch + GAP_PX <= height and cw + 2 * GAP_PX <= width:
+            mosaic.append([top + shelf_h + GAP_PX, ch, GAP_PX])
+            return m, len(mosaic) - 1
+    return None
+
+
+def render(image: np.ndarray, placements: list[Placement], mosaic_size: tuple[int, int]) -> np.ndarray:
+    """(H, W, 3) uint8 canvas of ``mosaic_size`` with the placements' crops of ``image`` (H, W, 3) uint8 RGB."""
+    canvas = np.full((*mosaic_size, 3), PAD_VALUE, np.uint8)
+    for p in placements:
+        x0, y0, x1, y1 = p.crop.region
+        ch, cw = p.crop.size
+        ox, oy = p.offset
+        canvas[oy:oy + ch, ox:ox + cw] = cv2.resize(image[y0:y1, x0:x1], (cw, ch), interpolation=cv2.INTER_LINEAR)
+    return canvas
+
+
+def unpack(dets: Detections, placements: list[Placement], image_size: tuple[int, int],
+           edge_margin_px: float) -> list[tuple[Detections, np.ndarray]]:
+    """Per placement: the persons of ``dets`` (mosaic input px) whose box centre lies in its crop,
+    in image px, and (N,) bool: cut by an inner crop edge (within ``edge_margin_px`` input px)."""
+    centres = 0.5 * (dets.boxes[:, :2] + dets.boxes[:, 2:]) if len(dets) else np.zeros((0, 2))
+    out = []
+    for p in placements:
+        ch, cw = p.crop.size
+        ox, oy = p.offset
+        inside = ((centres[:, 0] >= ox) & (centres[:, 0] < ox + cw) & (centres[:, 1] >= oy) & (centres[:, 1] < oy + ch))
+        part = dets.take(inside)
+        shift_in, shift_out = np.array([ox, oy], float), np.array(p.crop.region[:2], float)
+        kps = (part.keypoints - shift_in) / p.crop.scale + shift_out
+        boxes = (part.boxes - np.tile(shift_in, 2)) / p.crop.scale + np.tile(shift_out, 2)
+        part = Detections(kps, part.confidences, boxes, part.scores)
+        out.append((part, cut_by_inner_edge(part.boxes, p.crop.region, image_size, edge_margin_px / p.crop.scale)))
+    return out
+
+
+@dataclass(frozen=True)
+class DecodeSettings:
+    """How a pass's raw output is decoded: score threshold, NMS IoU, max persons, cut margin (input px)."""
+
+    score_threshold: float = 0.25
+    iou_threshold: float = 0.7
+    max_detections: int = 300
+    edge_margin_px: float = 16.0
+
+
+def run_mosaics(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, placements: list[Placement],
+                mosaic_size: tuple[int, int],
+                settings: DecodeSettings) -> tuple[list[tuple[Detections, np.ndarray]], list[Pass]]:
+    """Run every mosaic of ``placements`` over ``image`` (H, W, 3) uint8 RGB; per placement (in
+    order) its persons in image px and their cut flags, and the passes run (kind ``mosaic``)."""
+    results: list[tuple[Detections, np.ndarray] | None] = [None] * len(placements)
+    passes = []
+    identity = Letterbox(1.0, 0, 0, mosaic_size, mosaic_size)
+    image_size = (image.shape[0], image.shape[1])
+    for m in sorted({p.mosaic for p in placements}):
+        rows = [i for i, p in enumerate(placements) if p.mosaic == m]
+        group = [placements[i] for i in rows]
+        canvas = render(image, group, mosaic_size)
+        dets = decode(infer(to_input_tensor(canvas)), identity, settings.score_threshold, settings.iou_threshold,
+                      settings.max_detections)
+        for i, part in zip(rows, unpack(dets, group, image_size, settings.edge_margin_px)):
+            results[i] = part
+        regions = np.array([p.crop.region for p in group])
+        bound = (int(regions[:, 0].min()), int(regions[:, 1].min()), int(regions[:, 2].max()), int(regions[:, 3].max()))
+        passes.append(Pass(bound, mosaic_size, "mosaic"))
+    return [r for r in results if r is not None], passes

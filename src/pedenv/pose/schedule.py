@@ -1,0 +1,125 @@
+"""The ``stream`` scheduler: which network passes a frame gets within its budget (pure functions).
+
+Costs are network units (one 384x640 input). Every frame pays the whole-frame pass. Then,
+in order of what matters most:
+
+1. the packed inputs of the tracks at risk (live tracks the whole-frame pass missed, the
+   longest unseen first), as long as they leave the band rotation its share: the units per
+   frame that visit every band tile once per ``scan_period_s`` (``reserve``);
+2. the band tiles not looked at for longest, while they fit in the budget; a tile that would
+   be older than ``scan_period_s`` by the next frame runs even past the budget, once per frame,
+   so the budget is never exceeded by more than one pass.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from pedenv.boxes import iou_matrix
+from pedenv.pose.levels import HeightLine, plan_level, pyramid
+from pedenv.pose.stream_config import StreamConfig
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
+
+#: A predicted box shorter than this (px, clipped to the image) or mostly outside it is not searched.
+MIN_TRACK_PX = 8.0
+MIN_VISIBLE_SHARE = 0.5
+#: Units of one network input of ``(height, width)`` px.
+UNIT_PX = 384 * 640
+
+
+def units(input_size: tuple[int, int]) -> float:
+    """Network units of one input of ``(height, width)`` px."""
+    return input_size[0] * input_size[1] / UNIT_PX
+
+
+@dataclass(frozen=True)
+class Tile:
+    """One band tile of the rotation: ``key`` (level, tile) stays the same while the band does."""
+
+    key: tuple[int, int]
+    step: Pass
+
+    @property
+    def units(self) -> float:
+        return units(self.step.input_size)
+
+
+def band_tiles(width: int, height: int, config: DetectionConfig, geometry: CameraGeometry | None,
+               line: HeightLine | None) -> tuple[list[Tile], str]:
+    """The finer levels' tiles of a ``width`` x ``height`` frame, each at most one packed input
+    (``stream.mosaic_width`` px wide), over the rows from the calibration, the fitted ``line``
+    or the whole image (:func:`pedenv.pose.levels.plan_level`), and a note per level."""
+    small = replace(config, tile_width=config.stream.mosaic_width, max_tiles=64)
+    tiles, notes = [], []
+    levels = pyramid(width, height, config)[1:]
+    for li, level in enumerate(levels):
+        passes, note = plan_level(level, width, height, small, geometry, line, finest=li == len(levels) - 1)
+        tiles += [Tile((li, ti), p) for ti, p in enumerate(passes)]
+        notes.append(note)
+    return tiles, "; ".join(notes)
+
+
+def tracks_at_risk(predicted: np.ndarray, hits: np.ndarray, unseen_s: np.ndarray, found: np.ndarray,
+                   image_size: tuple[int, int], config: StreamConfig) -> np.ndarray:
+    """Rows of the tracks to look for in crops, most at risk first.
+
+    predicted: (T, 4) px, the tracks' expected boxes; hits: (T,) detections so far;
+    unseen_s: (T,) seconds since each was last detected; found: (N, 4) px, the whole-frame
+    pass's boxes; image_size: (height, width). A track is looked for when detected at least
+    ``track_min_hits`` times, mostly inside the image, and overlapped by no found box by
+    more than ``missed_iou``. Order: longest unseen first, then most hits.
+    """
+    predicted = np.asarray(predicted, float).reshape(-1, 4)
+    if not len(predicted):
+        return np.zeros(0, np.int64)
+    h, w = image_size
+    clipped = np.clip(predicted, 0.0, [w, h, w, h])
+    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
+    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
+    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= MIN_TRACK_PX)
+    usable &= np.asarray(hits) >= config.track_min_hits
+    if len(found):
+        usable &= iou_matrix(predicted, np.asarray(found, float).reshape(-1, 4)).max(axis=1) <= config.missed_iou
+    rows = np.flatnonzero(usable)
+    return rows[np.lexsort((-np.asarray(hits)[rows], -np.asarray(unseen_s, float)[rows]))]
+
+
+@dataclass(frozen=True)
+class FramePlan:
+    """What a frame runs beyond the whole-frame pass: ``mosaics`` packed inputs for the tracks,
+    the rows of the band tiles (oldest first), the units the rotation needs per frame, and
+    whether a tile ran past the budget (it was due)."""
+
+    mosaics: int
+    tiles: list[int]
+    reserve_units: float
+    over_budget: bool
+
+
+def plan_frame(full_units: float, mosaic_units: float, mosaics_wanted: int, tile_units: np.ndarray,
+               tile_age_s: np.ndarray, dt_s: float, config: StreamConfig) -> FramePlan:
+    """The passes of one frame (module doc). tile_units, tile_age_s: (N,) per band tile (age:
+    seconds since it was last looked at, inf if never); dt_s: the time to the next frame, s."""
+    tile_units = np.asarray(tile_units, float)
+    tile_age_s = np.asarray(tile_age_s, float)
+    budget = config.budget_units
+    reserve = float(tile_units.sum()) * min(dt_s / config.scan_period_s, 1.0)
+    spent, mosaics = full_units, 0
+    while mosaics < mosaics_wanted:
+        room = budget if mosaics == 0 else budget - reserve  # the most at risk before the rotation
+        if spent + mosaic_units > room + 1e-9:
+            break
+        spent += mosaic_units
+        mosaics += 1
+    chosen, over = [], False
+    for i in np.argsort(-tile_age_s, kind="stable"):
+        if spent + tile_units[i] <= budget + 1e-9:
+            spent += tile_units[i]
+        elif not over and tile_age_s[i] + dt_s > config.scan_period_s:
+            spent, over = spent + tile_units[i], True
+        else:
+            break
+        chosen.append(int(i))
+    return FramePlan(mosaics, chosen, reserve, over)

@@ -1,0 +1,183 @@
+"""``stream`` detection: far-seeing over consecutive frames for about the cost of one pass.
+
+A stateful pose backend that sees each frame's model state (the tracks' predicted boxes,
+:meth:`~pedenv.model.PedestrianEnvironmentModel.predicted_boxes`). Every frame: the
+whole-frame pass; the live tracks it missed, in crops around their predicted boxes packed
+several to one input (:mod:`pedenv.pose.mosaic`); the far band's tiles in rotation, the
+oldest first (:mod:`pedenv.pose.schedule`); the cascade's low-scoring candidates in the
+room left in the packed inputs (:mod:`pedenv.pose.cascade`). A time step longer than
+``max_gap_s`` (or backwards) or a new frame size restarts the state; the first frame after
+a (re)start scans the whole band when ``cold_start``. :meth:`StreamPose.describe` (saved in
+``run.json``) says how the budget was spent.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+
+import numpy as np
+
+from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
+from pedenv.pose.levels import HeightLine
+from pedenv.pose.merge import merge_detections
+from pedenv.pose.mosaic import DecodeSettings, crop_around, pack, run_mosaics
+from pedenv.pose.multipass import run_level
+from pedenv.pose.postprocess import frame_image
+from pedenv.pose.schedule import band_tiles, plan_frame, tracks_at_risk, units
+from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, full_pass
+from pedenv.records import Detections, Frame
+
+#: Boxes of the latest people found (all passes) kept to fit the band's rows without a calibration.
+FIT_MEMORY = 60
+
+
+class StreamPose:
+    """The ``onnx`` backend in ``stream`` mode (``create_pose_backend("onnx", detection="stream")``).
+
+    options: those of :class:`~pedenv.pose.onnx_backend.OnnxPose`; ``detection`` ``"stream"``
+    or a :class:`DetectionConfig` in mode ``stream`` (its ``stream`` and ``cascade`` fields).
+    The tracks come from the model given to :meth:`attach_model` (``pedenv run`` and
+    ``evaluate`` attach theirs); without one only the band rotation and the cascade run.
+    """
+
+    name = "onnx"
+
+    def __init__(self, **options) -> None:
+        from pedenv.pose.onnx_backend import OnnxPose
+
+        detection = options.pop("detection", "stream")
+        config = DetectionConfig.named("stream") if detection == "stream" else detection
+        if not isinstance(config, DetectionConfig) or config.mode != "stream":
+            raise ValueError(f"StreamPose needs detection 'stream' or a DetectionConfig in mode stream, "
+                             f"got {detection!r}")
+        self.backend = OnnxPose(detection=config, **options)
+        self.config: DetectionConfig = config
+        self.model = None
+        self.finder = TrackFinder()
+        self.accounts = StreamAccounts()
+        self.last_passes: list = []
+        self.last_note = ""
+        self._reset(None)
+
+    def attach_model(self, model) -> None:
+        """Take the tracks' predicted boxes from ``model`` (anything with ``predicted_boxes(frame)``)."""
+        self.model = model
+
+    def restart(self) -> None:
+        """Forget the stream: the next frame is a first frame (a cold start)."""
+        self._reset(None)
+
+    def _reset(self, size) -> None:
+        self._size = size
+        self._last_t: float | None = None
+        self._tile_seen: dict[tuple[int, int], float] = {}
+        self._fit_boxes = np.zeros((0, 4))
+        self._dt = 0.1
+        self.finder = TrackFinder()
+
+    def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
+        """One image on its own (no stream): as ``far`` (the whole band), the cascade included."""
+        dets = self.backend.detect(image_rgb, geometry)
+        self.last_passes, self.last_note = self.backend.last_passes, self.backend.last_note
+        return dets
+
+    def __call__(self, frame: Frame) -> Detections:
+        tracks = None
+        if self.model is not None:
+            ids, boxes, hits = self.model.predicted_boxes(frame)
+            tracks = (ids, boxes, hits)
+        return self.detect_frame(frame_image(frame), CameraGeometry.from_frame(frame), frame.timestamp, tracks)
+
+    def _restart_if_needed(self, size: tuple[int, int], timestamp: float) -> bool:
+        gap = None if self._last_t is None else timestamp - self._last_t
+        restart = size != self._size or gap is None or not 0.0 < gap <= self.config.stream.max_gap_s
+        if restart:
+            if self._size is not None and self.accounts.frames:
+                self.accounts.restarts += 1
+            self._reset(size)
+        else:
+            assert gap is not None
+            self._dt = 0.7 * self._dt + 0.3 * gap if self.accounts.frames else gap
+        self._last_t = timestamp
+        return restart
+
+    def detect_frame(self, image: np.ndarray, geometry: CameraGeometry | None, timestamp: float,
+                     tracks: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> Detections:
+        """The persons in ``image`` (H, W, 3) uint8 RGB, px of that image, at ``timestamp`` s.
+
+        tracks: ``(ids (T,), predicted boxes (T, 4) px, hits (T,))`` of the live tracks in this
+        frame (the model's prediction); None: no tracks.
+        """
+        b, cfg = self.backend, self.config
+        height, width = image.shape[:2]
+        cold = self._restart_if_needed((height, width), float(timestamp)) and cfg.stream.cold_start
+        first = full_pass(width, height, cfg)
+        low: list[Detections] = []
+        settings = DecodeSettings(b.score_threshold, b.iou_threshold, b.max_detections, cfg.edge_margin_px)
+        fixed = None if b.dynamic else b.input_size
+        run = partial(run_level, b._infer, image, fixed_input=fixed, settings=settings, config=cfg,
+                      low=low if cfg.cascade.enabled else None)
+        parts = run([first])
+        line = HeightLine.fit(self._fit_boxes, cfg.fit_min_people, height)
+        tiles, note = band_tiles(width, height, cfg, geometry, line)
+        ids, predicted, hits = tracks if tracks is not None else (np.zeros(0, np.int64), np.zeros((0, 4)),
+                                                                 np.zeros(0, np.int64))
+        unseen = self.finder.unseen_s(ids, timestamp)
+        rows = tracks_at_risk(predicted, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
+        mosaic = cfg.stream.mosaic_size
+        track_crops = [crop_around(predicted[r], (height, width), cfg.stream.track_person_px, cfg.stream.track_margin,
+                                   cfg.cascade.max_zoom, mosaic) for r in rows]
+        early = candidates(concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled else Detections.empty()
+        early_crops = candidate_placements(early, (height, width), cfg.cascade, mosaic)
+        wanted = len({p.mosaic for p in pack(track_crops, mosaic)})
+        wanted = max(wanted, len({p.mosaic for p in pack(track_crops + early_crops, mosaic,
+                                                          max_mosaics=wanted + cfg.cascade.max_units)}))
+        ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])
+        plan = plan_frame(units(first.input_size), units(mosaic), wanted, np.array([t.units for t in tiles]),
+                          ages, self._dt, cfg.stream)
+        chosen = list(range(len(tiles))) if cold else plan.tiles
+        steps = [tiles[i].step for i in chosen]
+        parts += run(steps)
+        for i in chosen:
+            self._tile_seen[tiles[i].key] = timestamp
+        dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, max_detections=b.max_detections)
+        extra, passes, found_tracks, verified = self._packed(image, dets, low, predicted, rows, track_crops,
+                                                             plan.mosaics + (cfg.cascade.max_units if cold else 0),
+                                                             settings)
+        if len(extra):
+            dets = merge_detections([(dets, np.zeros(len(dets), bool)), (extra, np.zeros(len(extra), bool))],
+                                    max_detections=b.max_detections)
+        self.finder.update(ids, predicted, dets.boxes, timestamp, cfg.stream.missed_iou)
+        self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= cfg.fit_min_score]])[-FIT_MEMORY:]
+        self.last_passes = [first, *steps, *passes]
+        self.last_note = ("cold start, whole band; " if cold else "") + note
+        late = sum(1 for i, a in enumerate(ages) if i not in chosen and cfg.stream.scan_period_s < a < math.inf)
+        self.accounts.add((first, steps, passes), plan, cold, (len(rows), found_tracks, verified), late)
+        return dets
+
+    def _packed(self, image, dets, low, predicted, rows, track_crops, limit: int, settings):
+        """At most ``limit`` packed inputs: the tracks' crops first, then the cascade's candidates
+        in the room left (best score first)."""
+        cfg = self.config
+        mosaic = cfg.stream.mosaic_size
+        cands = candidates(concat(low), dets, cfg.cascade) if cfg.cascade.enabled else Detections.empty()
+        cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), cfg.cascade, mosaic)
+        tracks = pack(track_crops, mosaic, max_mosaics=limit)
+        placements = pack([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
+        if not placements:
+            return Detections.empty(), [], 0, 0
+        results, passes = run_mosaics(self.backend._infer, image, placements, mosaic, settings)
+        n = len(tracks)
+        track_parts = [(p, r) for p, r in zip(placements, results) if p.item < n]
+        found = self.finder.pick(predicted, [rows[tracks[p.item].item] for p, _ in track_parts],
+                                 [r for _, r in track_parts])
+        cand_parts = [(p, r) for p, r in zip(placements, results) if p.item >= n]
+        verified = confirmed(cands, [p.item - n for p, _ in cand_parts], [p for p, _ in cand_parts],
+                             [r for _, r in cand_parts], cfg.cascade)
+        return concat([found, verified]), passes, len(found), len(verified)
+
+    def describe(self) -> dict:
+        """The backend's description with the stream's accounts: how the budget was spent."""
+        return {**self.backend.describe(), "stream": self.accounts.to_dict()}

@@ -1,0 +1,113 @@
+"""What the ``stream`` detection remembers of tracks, and how it spent its budget (for ``run.json``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from pedenv.boxes import iou_matrix
+from pedenv.config import RedetectConfig
+from pedenv.pose.cascade import concat
+from pedenv.pose.redetect import nearest_person, nearest_track
+from pedenv.pose.schedule import units
+from pedenv.records import Detections
+
+#: A person found in a track's crop scoring below this needs a plausible skeleton (mean keypoint
+#: confidence at least PLAUSIBLE_KEYPOINT_CONF): a person, not a pole.
+SURE_SCORE = 0.5
+PLAUSIBLE_KEYPOINT_CONF = 0.5
+
+
+class TrackFinder:
+    """When each track was last detected, and which person in its crop is the track.
+
+    A person found in a track's crop re-detects it when whole, sure or plausible, nearest the
+    predicted box (within :class:`~pedenv.config.RedetectConfig`'s ``match_distance`` and
+    ``match_height_ratio``) and nearer it than any other track's.
+    """
+
+    def __init__(self, match: RedetectConfig | None = None) -> None:
+        self.match = match or RedetectConfig()
+        self._seen: dict[int, float] = {}
+
+    def unseen_s(self, ids: np.ndarray, timestamp: float) -> np.ndarray:
+        """(T,) seconds since each track of ``ids`` was last detected (0 for a new one)."""
+        return np.array([timestamp - self._seen.setdefault(int(i), timestamp) for i in ids], float)
+
+    def update(self, ids: np.ndarray, predicted: np.ndarray, boxes: np.ndarray, timestamp: float,
+               iou: float) -> None:
+        """Tracks whose predicted box (T, 4) px some detected box (N, 4) px overlaps by more than ``iou`` were seen."""
+        if not len(ids) or not len(boxes):
+            return
+        seen = iou_matrix(np.asarray(predicted, float), np.asarray(boxes, float)).max(axis=1) > iou
+        for i in np.asarray(ids)[seen]:
+            self._seen[int(i)] = timestamp
+
+    def pick(self, predicted: np.ndarray, rows: list[int], results: list[tuple[Detections, np.ndarray]]) -> Detections:
+        """Per searched track (``rows`` of ``predicted`` (T, 4) px) the person of its crop's
+        ``results`` (image px, cut flags) that is that track, if any."""
+        kept = []
+        for row, (found, cut) in zip(rows, results):
+            if not len(found):
+                continue
+            sure = (found.scores >= SURE_SCORE) | (found.confidences.mean(axis=1) >= PLAUSIBLE_KEYPOINT_CONF)
+            pick = found.take(nearest_person(predicted[row], found.boxes, ~cut & sure, self.match))
+            if len(pick) and nearest_track(pick.boxes[0], predicted) == row:
+                kept.append(pick)
+        return concat(kept)
+
+
+@dataclass
+class StreamAccounts:
+    """Counts over the frames a :class:`~pedenv.pose.stream.StreamPose` saw; units are 384x640 inputs."""
+
+    frames: int = 0
+    restarts: int = 0
+    cold_starts: int = 0
+    units: dict[str, float] = field(default_factory=lambda: {"whole_frame": 0.0, "band_tiles": 0.0, "packed": 0.0})
+    max_units: float = 0.0
+    max_units_warm: float = 0.0
+    frames_over_budget: int = 0
+    tracks_at_risk: int = 0
+    tracks_found: int = 0
+    cascade_confirmed: int = 0
+    tile_visits: int = 0
+    tiles_late: int = 0
+    band_reserve_units: float = 0.0
+
+    def add(self, ran: tuple, plan, cold: bool, counts: tuple[int, int, int], late: int) -> None:
+        """One frame: ``ran`` (its whole-frame pass, band tiles, packed inputs), its plan, whether a
+        cold start, ``counts`` (tracks searched, found in crops, cascade confirmations) and the
+        tiles it left older than the scan period."""
+        first, steps, passes = ran
+        at_risk, found, verified = counts
+        spent = [units(first.input_size), sum(units(s.input_size) for s in steps),
+                 sum(units(p.input_size) for p in passes)]
+        for key, value in zip(self.units, spent):
+            self.units[key] += value
+        total = sum(spent)
+        self.frames += 1
+        self.cold_starts += int(cold)
+        self.max_units = max(self.max_units, total)
+        if not cold:
+            self.max_units_warm = max(self.max_units_warm, total)
+        self.frames_over_budget += int(plan.over_budget and not cold)
+        self.tracks_at_risk += at_risk
+        self.tracks_found += found
+        self.cascade_confirmed += verified
+        self.tile_visits += len(steps)
+        self.tiles_late += late
+        self.band_reserve_units = plan.reserve_units
+
+    def to_dict(self) -> dict:
+        n = max(self.frames, 1)
+        return {"frames": self.frames, "restarts": self.restarts, "cold_starts": self.cold_starts,
+                "units_per_frame": sum(self.units.values()) / n,
+                "units_per_frame_by_use": {k: v / n for k, v in self.units.items()},
+                "max_units_per_frame": self.max_units, "max_units_per_frame_after_cold_start": self.max_units_warm,
+                "frames_past_budget_for_a_due_tile": self.frames_over_budget,
+                "band_units_per_frame_needed": self.band_reserve_units,
+                "tracks_at_risk_searched": self.tracks_at_risk, "tracks_found_in_crops": self.tracks_found,
+                "cascade_confirmed": self.cascade_confirmed, "tile_visits": self.tile_visits,
+                "tiles_older_than_scan_period": self.tiles_late}

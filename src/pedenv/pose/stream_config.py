@@ -1,0 +1,144 @@
+"""Settings of the ``stream`` detection and of the cascade for small people (validated).
+
+Both sit inside :class:`pedenv.pose.tiling.DetectionConfig` (fields ``stream`` and
+``cascade``); a bad value raises :class:`~pedenv.errors.InputError` naming
+``detection.<section>.<field>``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from pedenv.errors import InputError
+from pedenv.validation import check_below, check_bool, check_count, check_number
+
+
+def section_of(kind: type, name: str, value):
+    """``value`` as the nested section ``kind`` (a dict from ``config.json`` is built into it,
+    naming ``detection.<name>`` and its valid fields when a field is unknown)."""
+    if isinstance(value, kind):
+        return value
+    if not isinstance(value, dict):
+        raise InputError(f"detection.{name} must be an object of fields, got {type(value).__name__}")
+    valid = {f.name for f in fields(kind)}
+    unknown = sorted(str(k)[:40] for k in set(value) - valid)
+    if unknown:
+        raise InputError(f"unknown field(s) in detection.{name}: {', '.join(unknown[:5])}; "
+                         f"valid: {', '.join(sorted(valid))}")
+    return kind(**value)
+
+
+@dataclass(frozen=True)
+class CascadeConfig:
+    """Persons the network scores below its threshold, verified at a higher zoom (``far``, ``stream``).
+
+    A pass keeps persons scoring at least the backend's ``score_threshold``. Those scoring
+    ``min_score`` up to it whose box is ``min_height_px``..``max_height_px`` tall become
+    candidates: each is cropped with ``margin`` times its height of context on every side,
+    scaled so the person is ``person_px`` tall in the network input (at most ``max_zoom``
+    times the image), packed several to one input (:mod:`pedenv.pose.mosaic`), and kept only
+    when that zoomed pass finds a whole person there (not cut by the crop's edges) overlapping
+    the candidate's box by IoU at least ``match_iou``, scoring at least ``verify_score``, with
+    a plausible skeleton (mean keypoint confidence at least ``plausible_keypoint_conf``).
+
+    enabled: run the cascade.
+    min_score: lowest network score of a candidate (0.01..0.5). Lowering it verifies more, at more cost.
+    min_height_px, max_height_px: candidates' box heights, image px (8..400; min below max).
+    person_px: a candidate's height in the zoomed input, px (32..384).
+    max_zoom: at most this many input px per image px (1..8).
+    margin: context on every side, a share of the candidate's height (0..1).
+    match_iou: the zoomed person's box must overlap the candidate's by at least this IoU (0..1).
+    verify_score: the zoomed person must score at least this (0..1). Raising it keeps fewer, surer ones.
+    plausible_keypoint_conf: and average at least this keypoint confidence (0..1).
+    max_units: at most this many network units (384x640 inputs) per frame for the cascade (1..16);
+        the best-scoring candidates go first.
+
+    The defaults were chosen on the real samples (``benchmarks/cascade_real.py``, docs/detection.md):
+    ``far`` 40-80 px recall 53 -> 65 %, precision 94 -> 90 %, about 1 unit per image more.
+    """
+
+    enabled: bool = True
+    min_score: float = 0.05
+    min_height_px: float = 16.0
+    max_height_px: float = 160.0
+    person_px: float = 96.0
+    max_zoom: float = 3.5
+    margin: float = 0.3
+    match_iou: float = 0.6
+    verify_score: float = 0.28
+    plausible_keypoint_conf: float = 0.6
+    max_units: int = 3
+
+    def __post_init__(self) -> None:
+        check_bool("detection.cascade.enabled", self.enabled)
+        ranges = {"min_score": (0.01, 0.5), "min_height_px": (8.0, 400.0), "max_height_px": (8.0, 400.0),
+                  "person_px": (32.0, 384.0), "max_zoom": (1.0, 8.0), "margin": (0.0, 1.0), "match_iou": (0.0, 1.0),
+                  "verify_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0)}
+        for name, (low, high) in ranges.items():
+            check_number(f"detection.cascade.{name}", getattr(self, name), low, high)
+        check_count("detection.cascade.max_units", self.max_units, 1, 16)
+        check_below("detection.cascade.min_height_px", self.min_height_px,
+                    "detection.cascade.max_height_px", self.max_height_px)
+
+    def to_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+@dataclass(frozen=True)
+class StreamConfig:
+    """The ``stream`` detection over consecutive frames (:mod:`pedenv.pose.stream`).
+
+    Every frame: the whole-frame pass; the live tracks it missed, cropped around their
+    predicted boxes and packed several to one input; the far band's tiles in rotation; the
+    cascade's candidates in the free room of those inputs. Costs are in network units (one
+    384x640 input).
+
+    budget_units: network units per frame (1..64; at least one whole-frame pass). The whole-frame
+        pass always runs; a frame never spends more than this plus one pass (cold starts aside).
+    scan_period_s: every band tile is looked at at least once this often, seconds (0.05..60), as
+        far as the budget allows (``run.json`` says when it did not): a new person far away is
+        found within this time. Lowering it spends more of the budget on the band.
+    track_person_px: a track's height in its crop's network input, px (32..384).
+    track_margin: context around a predicted box, a share of its height on every side (0..2).
+        Raising it tolerates worse predictions, with fewer input px per person.
+    track_min_hits: only tracks detected at least this many times are looked for (1..1000). A new
+        track (one hit) is looked for at once: a person the band rotation found once is kept.
+    missed_iou: a track whose predicted box overlaps no whole-frame detection by more than this
+        IoU (0..1) is looked for in a crop.
+    max_gap_s: a time step longer than this (or backwards) restarts the stream state (0.1..3600):
+        tracks' crops and tile ages no longer apply.
+    cold_start: on the first frame after a (re)start, scan the whole band (``far``'s cost) so
+        far people are found at once; off: the rotation finds them within ``scan_period_s``.
+    mosaic_height, mosaic_width: the packed input's size, px (multiples of 32, 128..1280).
+    """
+
+    budget_units: float = 3.0
+    scan_period_s: float = 1.0
+    track_person_px: float = 96.0
+    track_margin: float = 0.35
+    track_min_hits: int = 1
+    missed_iou: float = 0.3
+    max_gap_s: float = 2.0
+    cold_start: bool = True
+    mosaic_height: int = 384
+    mosaic_width: int = 640
+
+    def __post_init__(self) -> None:
+        for name, (low, high) in {"budget_units": (1.0, 64.0), "scan_period_s": (0.05, 60.0),
+                                  "track_person_px": (32.0, 384.0), "track_margin": (0.0, 2.0),
+                                  "missed_iou": (0.0, 1.0), "max_gap_s": (0.1, 3600.0)}.items():
+            check_number(f"detection.stream.{name}", getattr(self, name), low, high)
+        check_count("detection.stream.track_min_hits", self.track_min_hits, 1, 1000)
+        for name in ("mosaic_height", "mosaic_width"):
+            check_count(f"detection.stream.{name}", getattr(self, name), 128, 1280)
+            if getattr(self, name) % 32:
+                raise InputError(f"detection.stream.{name} must be a multiple of 32, got {getattr(self, name)}")
+        check_bool("detection.stream.cold_start", self.cold_start)
+
+    @property
+    def mosaic_size(self) -> tuple[int, int]:
+        """(height, width) of one packed input, px."""
+        return self.mosaic_height, self.mosaic_width
+
+    def to_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}

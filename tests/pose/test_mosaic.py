@@ -1,0 +1,76 @@
+"""Packed crops: packing, rendering, and persons found in a mosaic landing at the right image pixels."""
+
+import numpy as np
+import pytest
+
+from pedenv.pose.mosaic import GAP_PX, Crop, crop_around, pack, render, unpack
+from pedenv.records import Detections
+
+MOSAIC = (384, 640)
+
+
+def person_in_mosaic(box_image: np.ndarray, placement) -> np.ndarray:
+    """Where the image box (4,) px lies in the mosaic, input px."""
+    x0, y0 = placement.crop.region[:2]
+    ox, oy = placement.offset
+    s = placement.crop.scale
+    return np.array([(box_image[0] - x0) * s + ox, (box_image[1] - y0) * s + oy,
+                     (box_image[2] - x0) * s + ox, (box_image[3] - y0) * s + oy])
+
+
+def test_ten_far_people_fit_one_input_without_overlapping():
+    boxes = [np.array([100.0 + 140 * i, 400, 118 + 140 * i, 445]) for i in range(10)]  # 45 px tall people
+    crops = [crop_around(b, (900, 1600), 96.0, 0.35, 3.5, MOSAIC) for b in boxes]
+    placed = pack(crops, MOSAIC)
+    assert len(placed) == 10 and {p.mosaic for p in placed} == {0}
+    rects = [(p.offset[0], p.offset[1], p.offset[0] + p.crop.size[1], p.offset[1] + p.crop.size[0]) for p in placed]
+    for i, a in enumerate(rects):
+        assert a[0] >= GAP_PX and a[1] >= GAP_PX and a[2] <= MOSAIC[1] and a[3] <= MOSAIC[0]
+        for b in rects[i + 1:]:
+            assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1]
+    assert all(p.crop.scale == pytest.approx(96.0 / 45.0) for p in placed)  # the person is 96 px tall there
+
+
+def test_pack_keeps_order_and_limits_the_mosaics():
+    crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(12)]  # 300x200 input px each: 3 per mosaic
+    placed = pack(crops, MOSAIC, max_mosaics=2)
+    assert [p.item for p in placed] == list(range(6)) and [p.mosaic for p in placed] == [0, 0, 0, 1, 1, 1]
+    assert pack([Crop((0, 0, 700, 100), 1.0)], MOSAIC) == []  # larger than the input: left out
+
+
+def test_a_person_found_in_a_packed_crop_lands_at_the_right_image_pixels():
+    image_boxes = np.array([[100.0, 400, 118, 445], [900, 380, 930, 450], [1400, 500, 1412, 530]])
+    crops = [crop_around(b, (900, 1600), 112.0, 0.4, 3.5, MOSAIC) for b in image_boxes]
+    placed = pack(crops, MOSAIC)
+    in_mosaic = np.array([person_in_mosaic(image_boxes[p.item], p) for p in placed])
+    kps = np.repeat(0.5 * (in_mosaic[:, None, :2] + in_mosaic[:, None, 2:]), 17, axis=1)
+    found = Detections(kps, np.full((3, 17), 0.9), in_mosaic, np.array([0.9, 0.8, 0.7]))
+    parts = unpack(found, placed, (900, 1600), 16.0)
+    for p, (dets, cut) in zip(placed, parts):
+        assert len(dets) == 1 and not cut[0]
+        np.testing.assert_allclose(dets.boxes[0], image_boxes[p.item], atol=1e-6)
+        np.testing.assert_allclose(dets.keypoints[0, 0], 0.5 * (image_boxes[p.item, :2] + image_boxes[p.item, 2:]))
+
+
+def test_a_person_at_an_inner_crop_edge_is_cut():
+    crop = Crop((100, 100, 200, 300), 1.0)
+    placed = pack([crop], MOSAIC)
+    ox, oy = placed[0].offset
+    box = np.array([[ox + 1.0, oy + 50, ox + 30, oy + 150]])  # touching the crop's left edge (x 100, not the image's)
+    dets, cut = unpack(Detections(np.zeros((1, 17, 2)) + box[:, None, :2], np.ones((1, 17)), box, np.ones(1)),
+                       placed, (900, 1600), 16.0)[0]
+    assert cut.tolist() == [True]
+
+
+def test_render_puts_each_crop_scaled_at_its_offset():
+    image = np.zeros((900, 1600, 3), np.uint8)
+    image[400:445, 100:118] = 255
+    crop = crop_around(np.array([100.0, 400, 118, 445]), (900, 1600), 90.0, 0.4, 3.5, MOSAIC)
+    placed = pack([crop], MOSAIC)
+    canvas = render(image, placed, MOSAIC)
+    bright = np.argwhere(canvas[..., 0] > 200)
+    ox, oy = placed[0].offset
+    x0, y0 = crop.region[:2]
+    assert bright[:, 0].min() == pytest.approx(oy + (400 - y0) * crop.scale, abs=2)
+    assert bright[:, 1].min() == pytest.approx(ox + (100 - x0) * crop.scale, abs=2)
+    assert bright[:, 0].max() - bright[:, 0].min() == pytest.approx(90, abs=3)

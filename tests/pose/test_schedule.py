@@ -1,0 +1,90 @@
+"""The stream scheduler: band tiles in rotation within the scan period, tracks at risk first, the budget."""
+
+import numpy as np
+import pytest
+
+from pedenv.pose.schedule import band_tiles, plan_frame, tracks_at_risk
+from pedenv.pose.stream_config import StreamConfig
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig
+
+
+def simulate(config: StreamConfig, tile_units: np.ndarray, wanted: list[int], dt: float, frames: int):
+    """Run the scheduler over ``frames`` frames; the visit times per tile and the units per frame."""
+    seen = np.full(len(tile_units), -np.inf)
+    visits = [[] for _ in tile_units]
+    spent = []
+    for f in range(frames):
+        t = f * dt
+        plan = plan_frame(1.0, 1.0, wanted[f % len(wanted)], tile_units, t - seen, dt, config)
+        for i in plan.tiles:
+            seen[i] = t
+            visits[i].append(t)
+        spent.append(1.0 + plan.mosaics + tile_units[plan.tiles].sum())
+    return visits, np.array(spent)
+
+
+@pytest.mark.parametrize("budget, period, n_tiles, wanted", [
+    (3.0, 1.0, 8, [0]),  # nuScenes-like: 8 tiles, 10 Hz
+    (3.0, 1.0, 8, [2, 0, 3, 1]),  # tracks asking for packed inputs every frame
+    (2.0, 0.5, 4, [1]),
+    (4.0, 2.0, 30, [3]),  # a whole image in rotation
+])
+def test_every_band_tile_is_visited_within_the_scan_period(budget, period, n_tiles, wanted):
+    config = StreamConfig(budget_units=budget, scan_period_s=period)
+    units = np.linspace(0.6, 1.0, n_tiles)
+    visits, spent = simulate(config, units, wanted, 0.1, 120)
+    for times in visits:
+        gaps = np.diff([0.0, *times, 11.9])  # from the start to the end, at most one period apart
+        assert gaps.max() <= period + 1e-9
+    assert spent.max() <= budget + units.max() + 1e-9  # never more than one pass past the budget
+
+
+def test_the_budget_is_never_exceeded_by_more_than_one_pass():
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        config = StreamConfig(budget_units=float(rng.uniform(1, 8)), scan_period_s=float(rng.uniform(0.05, 3)))
+        units = rng.uniform(0.2, 1.7, rng.integers(0, 40))
+        ages = np.where(rng.random(len(units)) < 0.2, np.inf, rng.uniform(0, 5, len(units)))
+        plan = plan_frame(1.0, 1.0, int(rng.integers(0, 6)), units, ages, float(rng.uniform(0.03, 0.5)), config)
+        spent = 1.0 + plan.mosaics + units[plan.tiles].sum()
+        assert spent <= config.budget_units + max([1.0, *units]) + 1e-9
+        assert len(set(plan.tiles)) == len(plan.tiles)
+
+
+def test_tracks_at_risk_come_first_then_the_oldest_tiles():
+    config = StreamConfig(budget_units=3.0, scan_period_s=10.0)
+    ages = np.array([0.5, 3.0, np.inf, 1.0])
+    plan = plan_frame(1.0, 1.0, 1, np.ones(4), ages, 0.1, config)
+    assert plan.mosaics == 1  # the at-risk tracks' packed input before any tile
+    assert plan.tiles == [2]  # then the tile never seen
+    plan = plan_frame(1.0, 1.0, 0, np.ones(4), ages, 0.1, config)
+    assert plan.tiles == [2, 1]  # no tracks: the two oldest tiles
+    # a budget of one pass: only the whole-frame pass and the one tile that is due
+    due = plan_frame(1.0, 1.0, 2, np.ones(4), np.array([0.1, 9.95, 0.2, 0.3]), 0.1, StreamConfig(1.0, 10.0))
+    assert (due.mosaics, due.tiles, due.over_budget) == (0, [1], True)
+
+
+@pytest.mark.parametrize("unseen, hits, found, expected", [
+    # longest unseen first, then most hits; the track the whole-frame pass found is not searched
+    ([0.1, 0.5, 0.0], [3, 3, 9], [], [1, 0, 2]),
+    ([0.2, 0.2, 0.2], [3, 8, 5], [[300, 100, 340, 200]], [2, 0]),
+    # a one-hit track is not searched with track_min_hits 2
+    ([0.1, 0.1, 0.1], [1, 2, 2], [], [1, 2]),
+])
+def test_tracks_at_risk_order(unseen, hits, found, expected):
+    predicted = np.array([[100, 100, 140, 200], [300, 100, 340, 200], [500, 100, 540, 200]], float)
+    rows = tracks_at_risk(predicted, np.array(hits), np.array(unseen), np.array(found, float).reshape(-1, 4),
+                          (480, 640), StreamConfig(track_min_hits=2))
+    assert rows.tolist() == expected
+
+
+def test_band_tiles_cover_the_calibrated_band_in_packed_input_sized_tiles():
+    K = np.array([[1266.0, 0, 800], [0, 1266.0, 450], [0, 0, 1]])
+    config = DetectionConfig.named("stream")
+    tiles, note = band_tiles(1600, 900, config, CameraGeometry.level(K, 1.5), None)
+    assert "calibration" in note and len(tiles) >= 4
+    assert all(max(t.step.input_size) <= config.stream.mosaic_width for t in tiles)
+    assert len({t.key for t in tiles}) == len(tiles)
+    for level in {t.key[0] for t in tiles}:  # each level's tiles span the image's width
+        regions = np.array([t.step.region for t in tiles if t.key[0] == level])
+        assert regions[:, 0].min() == 0 and regions[:, 2].max() == 1600

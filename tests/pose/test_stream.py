@@ -1,0 +1,68 @@
+"""``stream`` detection with the real network on KITTI tracking 0016's real consecutive frames."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pedenv.boxes import iou_matrix
+from pedenv.evaluation.detections import kitti_samples
+from pedenv.images import read_image_rgb
+from pedenv.pose.tiling import DetectionConfig
+
+pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model]
+KITTI = Path(__file__).resolve().parents[2].parent / "shared" / "samples" / "real" / "kitti"
+
+
+@pytest.fixture(scope="module")
+def frames():
+    """KITTI tracking 0016 frames 2, 7 and 12 (0.5 s apart): images, ground-truth samples."""
+    if not KITTI.is_dir():
+        pytest.fail(f"{KITTI}: the real samples are missing (see /work/shared/samples/real/README.md)")
+    samples = [s for s in kitti_samples(KITTI) if s.name.startswith("tracking 0016")]
+    return [read_image_rgb(s.image_path) for s in samples], samples
+
+
+@pytest.fixture
+def stream(pose_cache):
+    from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.models import find_onnx_model
+
+    return create_pose_backend("onnx", model_path=find_onnx_model(None, cache=pose_cache), detection="stream")
+
+
+def test_tracks_the_whole_frame_pass_misses_are_found_in_packed_crops_within_the_budget(stream, frames):
+    images, samples = frames
+    budget = stream.config.stream.budget_units
+    found = []
+    for i, (image, sample) in enumerate(zip(images, samples)):
+        truth = sample.boxes[sample.required]
+        tracks = (np.arange(len(truth)), truth + np.array([2.0, 1.0, 2.0, 1.0]), np.full(len(truth), 5))
+        dets = stream.detect_frame(image, sample.geometry, 0.5 * i, tracks if i else None)
+        units = sum(p.input_size[0] * p.input_size[1] for p in stream.last_passes) / (384 * 640)
+        if i:  # after the cold start: the budget plus at most one pass
+            assert units <= budget + max(p.input_size[0] * p.input_size[1] for p in stream.last_passes) / (384 * 640)
+            assert [p.kind for p in stream.last_passes].count("full") == 1
+        found.append(int((iou_matrix(truth, dets.boxes).max(axis=1) >= 0.5).sum()) if len(dets) else 0)
+    accounts = stream.describe()["stream"]
+    assert accounts["frames"] == 3 and accounts["cold_starts"] == 1 and accounts["restarts"] == 0
+    assert accounts["tracks_found_in_crops"] >= 10  # measured: 12 of the 14 searched
+    assert found[1] >= 6 and found[2] >= 6  # measured: 6 and 7 of the 8 pedestrians (far: 7 and 7)
+
+
+def test_a_time_gap_or_a_new_frame_size_restarts_the_stream(stream, frames):
+    images, samples = frames
+    config = stream.config
+    stream.detect_frame(images[0], samples[0].geometry, 0.0)
+    stream.detect_frame(images[1], samples[1].geometry, 0.1)
+    stream.detect_frame(images[2], samples[2].geometry, 0.1 + 2 * config.stream.max_gap_s)  # seconds later
+    stream.detect_frame(images[2][:300, :1000].copy(), None, 10.0)  # another frame size
+    accounts = stream.describe()["stream"]
+    assert (accounts["restarts"], accounts["cold_starts"]) == (2, 3)
+
+
+def test_a_single_image_is_seen_as_far_sees_it(stream, frames):
+    images, samples = frames
+    dets = stream.detect(images[0], samples[0].geometry)
+    assert stream.config == DetectionConfig.named("stream") and len(dets) >= 7
+    assert {p.kind for p in stream.last_passes} >= {"full", "band"}
