@@ -11,6 +11,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from pedenv.behaviour.config import BehaviourConfig
 from pedenv.errors import InputError, read_text
 
 
@@ -371,7 +372,7 @@ METHOD_PRESETS: dict[str, dict[str, dict]] = {
     "paper": {},
     "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
                            "ground_gate": 4.0, "memory_s": 2.0},
-              "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}},
+              "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}, "behaviour": {"enabled": True}},
 }
 
 
@@ -464,6 +465,7 @@ class Config:
     kalman: KalmanConfig = None  # type: ignore[assignment]
     fused: FusedConfig = None  # type: ignore[assignment]
     redetect: RedetectConfig = None  # type: ignore[assignment]
+    behaviour: BehaviourConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method:
@@ -534,4 +536,4 @@ class Config:
 
 #: Section name -> its class.
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
-                             "fused": FusedConfig, "redetect": RedetectConfig}
+                             "fused": FusedConfig, "redetect": RedetectConfig, "behaviour": BehaviourConfig}

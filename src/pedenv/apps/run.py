@@ -82,7 +82,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
                 sinks.write(state, frame)
                 if frame.image is None:
                     raise InputError(f"{rec.name}: frame {frame.index} has no image")
-                drawn = draw_environment(frame.image, state)
+                drawn = draw_environment(frame.image, state, frame)
                 if video_out:
                     writer_video = writer_video or _open_video(out / "overlay.mp4", rec, drawn.shape)
                     writer_video.write(drawn[..., ::-1].copy())

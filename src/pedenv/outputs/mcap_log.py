@@ -7,6 +7,7 @@ Topics (Foxglove schemas unless said otherwise), frames ``world`` -> ``ego`` -> 
 * ``/pedestrians``: ``SceneUpdate`` in ``world``, one entity ``ped-<track id>`` per pedestrian:
   a sphere at the position, a velocity arrow, the 3D skeleton (line list), the 2-sigma
   ellipse on the ground (line loop) and the id as text; each update first deletes all;
+  with behaviour: a heading arrow, the predicted path with its ellipses (red in conflict);
 * ``/ground_truth``: ``SceneUpdate`` with the true positions (where the frame is labelled);
 * ``/ego``: ``SceneUpdate`` with the ego's path so far;
 * ``/camera/calibration``: ``CameraCalibration``; ``/camera/image``: ``CompressedImage`` (JPEG, when
@@ -28,9 +29,11 @@ import numpy as np
 from foxglove import channels as fc
 from foxglove import messages as fm
 
+from pedenv.outputs.mcap_behaviour import ego_path_line, pedestrian_primitives
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES
 from pedenv.state import EnvironmentState
+from pedenv.visualize.behaviour_shapes import behaviour_shapes
 from pedenv.visualize.shapes import covariance_ellipses
 
 _RED, _BLUE, _BLACK, _GREEN = (fm.Color(r=0.9, g=0.25, b=0.15, a=1.0), fm.Color(r=0.15, g=0.4, b=0.9, a=1.0),
@@ -91,14 +94,16 @@ class McapWriter:
         ns = int(round(t * 1e9))
         stamp = fm.Timestamp.from_epoch_secs(t)
         self._log_transforms(state, frame, stamp, ns)
+        shapes = behaviour_shapes(state.pedestrians)
         self._peds.log(fm.SceneUpdate(deletions=[_delete_all(stamp)], entities=[
-            _pedestrian(state, i, stamp) for i in range(len(state.pedestrians))]), log_time=ns)
+            _pedestrian(state, i, stamp, shapes) for i in range(len(state.pedestrians))]), log_time=ns)
         self._log_ground_truth(frame, stamp, ns)
         self._trajectory.append(np.asarray(state.ego.translation, float))
         self._ego.log(fm.SceneUpdate(entities=[fm.SceneEntity(
             timestamp=stamp, frame_id="world", id="ego-path",
             lines=[fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineStrip, thickness=0.15, color=_GREEN,
-                                    points=[_p3(p) for p in self._trajectory])])]), log_time=ns)
+                                    points=[_p3(p) for p in self._trajectory])]
+            + ego_path_line(shapes, float(state.ego.translation[2])))]), log_time=ns)
         self._log_camera(state, frame, stamp, ns)
         record = state.to_dict()
         record["log_time"] = t
@@ -166,8 +171,10 @@ def _delete_all(stamp) -> fm.SceneEntityDeletion:
     return fm.SceneEntityDeletion(timestamp=stamp, type=fm.SceneEntityDeletionType.All)
 
 
-def _pedestrian(state: EnvironmentState, i: int, stamp) -> fm.SceneEntity:
-    """Pedestrian ``i`` as one entity: sphere, velocity arrow, skeleton, 2-sigma ellipse, id text."""
+def _pedestrian(state: EnvironmentState, i: int, stamp, shapes=None) -> fm.SceneEntity:
+    """Pedestrian ``i`` as one entity: sphere, velocity arrow, skeleton, 2-sigma ellipse, id text,
+    and with behaviour (``shapes``) the heading arrow and predicted path (:mod:`pedenv.outputs.mcap_behaviour`)."""
+    extra_arrows, extra_lines = pedestrian_primitives(state, shapes, i)
     p = state.pedestrians
     pos, vel = p.positions[i], p.velocities[i]
     speed = float(np.hypot(vel[0], vel[1]))
@@ -180,8 +187,8 @@ def _pedestrian(state: EnvironmentState, i: int, stamp) -> fm.SceneEntity:
     return fm.SceneEntity(
         timestamp=stamp, frame_id="world", id=f"ped-{int(p.track_ids[i])}",
         spheres=[fm.SpherePrimitive(pose=_pose(pos + [0, 0, 0.2]), size=fm.Vector3(x=0.4, y=0.4, z=0.4), color=_RED)],
-        arrows=arrows,
-        lines=[fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineList, thickness=0.04, color=_BLUE,
+        arrows=arrows + extra_arrows,
+        lines=extra_lines + [fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineList, thickness=0.04, color=_BLUE,
                                 points=[_p3(p.keypoints_3d[i, k]) for k in bones]),
                fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.03, color=_RED,
                                 points=[_p3((x, y, pos[2] + 0.02)) for x, y in ring])],

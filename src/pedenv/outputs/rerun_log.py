@@ -9,6 +9,8 @@ Entities, on the timelines ``frame`` (the frame index) and ``time`` (seconds):
 * ``world/ego_trajectory``: the ego's path so far;
 * ``world/pedestrians``: ``positions`` (labelled with the track ids), ``velocities`` (arrows),
   ``ellipses`` (2-sigma outlines on the ground), ``skeletons/<track id>`` (3D keypoints);
+* ``world/behaviour``: heading arrows, predicted paths with ellipses, conflict in red
+  (:mod:`pedenv.outputs.rerun_behaviour`);
 * ``world/ground_truth/positions`` and ``world/ego/camera/image/ground_truth`` (boxes) where labelled.
 
 Skeleton lines come from the annotation context logged at ``/``: class 0 "person" with the
@@ -27,6 +29,7 @@ import numpy as np
 import pyarrow as pa
 import rerun as rr
 
+from pedenv.outputs.rerun_behaviour import log_behaviour
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES, KEYPOINT_NAMES
 from pedenv.state import EnvironmentState
@@ -87,6 +90,7 @@ class RerunWriter:
         self._log_ego(rec, state, frame)
         self._log_image(rec, state, frame)
         self._log_world(rec, state)
+        log_behaviour(rec, state)
         self._log_ground_truth(rec, frame)
         rec.flush(blocking=True)
 
