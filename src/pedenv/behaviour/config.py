@@ -54,6 +54,8 @@ class BehaviourConfig:
     ego_window_s: the ego's speed and yaw rate are fitted over its poses this far back.
     max_ego_gap_s: a gap between two frames longer than this forgets the ego's motion.
     max_yaw_rate_radps: a fitted ego yaw rate is clipped to this (a spike is not followed).
+    max_ego_acceleration_mps2: the ego's fitted acceleration (or braking) is clipped to this;
+        0 predicts at constant speed.
     ego_speed_std_mps, ego_yaw_rate_std_radps: the spread of the ego's speed and yaw rate over
         the horizon (the driver may brake or steer); with no motion known, 5 times as much.
     corridor_half_width_m: half the width of the corridor around the ego's path (half the
@@ -87,6 +89,7 @@ class BehaviourConfig:
     ego_window_s: float = 0.5
     max_ego_gap_s: float = 1.0
     max_yaw_rate_radps: float = 1.0
+    max_ego_acceleration_mps2: float = 4.0
     ego_speed_std_mps: float = 0.5
     ego_yaw_rate_std_radps: float = 0.05
     corridor_half_width_m: float = 1.5
@@ -125,7 +128,7 @@ _RANGES = (
     ("heading_random_walk_deg", 0.0, 360.0), ("available_std_deg", 1.0, 90.0), ("facing_half_angle_deg", 1.0, 90.0),
     ("walk_enter_mps", 0.0, 5.0), ("walk_exit_mps", 0.0, 5.0), ("run_enter_mps", 0.0, 15.0),
     ("run_exit_mps", 0.0, 15.0), ("ego_window_s", 0.05, 5.0), ("max_ego_gap_s", 0.05, 30.0),
-    ("max_yaw_rate_radps", 0.01, 5.0), ("ego_speed_std_mps", 0.0, 10.0), ("ego_yaw_rate_std_radps", 0.0, 2.0),
+    ("max_yaw_rate_radps", 0.01, 5.0), ("max_ego_acceleration_mps2", 0.0, 15.0), ("ego_speed_std_mps", 0.0, 10.0), ("ego_yaw_rate_std_radps", 0.0, 2.0),
     ("corridor_half_width_m", 0.1, 10.0), ("corridor_front_m", 0.0, 20.0), ("conflict_horizon_s", 0.1, 10.0),
     ("conflict_step_s", 0.01, 1.0), ("conflict_probability", 0.01, 0.99),
 )

@@ -3,7 +3,7 @@
 The ego's path (:mod:`pedenv.behaviour.ego_path`) is a circular arc (or a straight line), so
 each point has a closed-form arc length ``s`` along it and offset ``d`` across it. The corridor
 is the band ``|d| < corridor_half_width_m`` for ``0 <= s <= L + corridor_front_m`` (L: the
-distance the ego covers within the horizon; the extension is its front). At each time step
+distance the ego covers within the horizon, accelerating or braking; the extension is its front). At each time step
 the pedestrian's predicted position (a Gaussian) lies inside with probability
 ``P(|d| < w)`` (its spread across the path plus the path's own). The probability of entering
 within the horizon is the largest of these (a lower bound of the union); the entry time's
@@ -39,13 +39,11 @@ def path_coordinates(path: EgoPath, points: np.ndarray) -> tuple[np.ndarray, np.
     """Arc length ``s`` (...) metres along the path from the ego now (in its direction of travel),
     offset ``d`` (...) metres across it (left positive) and the unit normal (..., 2) there, of
     points (..., 2) world x-y."""
-    e0, yaw0 = path.xy[0], path.yaw[0]
-    direction = -1.0 if path.motion.speed < 0 else 1.0
-    heading = np.array([np.cos(yaw0), np.sin(yaw0)]) * direction
+    e0 = path.xy[0]
+    heading = np.array([np.cos(path.yaw[0]), np.sin(path.yaw[0])]) * path.direction
     normal0 = np.array([-heading[1], heading[0]])
     rel = points - e0
-    speed = abs(path.motion.speed)
-    curvature = path.motion.yaw_rate / speed if speed > 1e-3 else 0.0
+    curvature = path.curvature
     if abs(curvature) < 1e-4:
         s, d = rel @ heading, rel @ normal0
         return s, d, np.broadcast_to(normal0, points.shape)
@@ -68,7 +66,7 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     """
     n, k = positions.shape[:2]
     s, d, normal = path_coordinates(path, positions)
-    length = abs(path.motion.speed) * path.times[-1] + front_m
+    length = path.length + front_m
     var = np.einsum("nki,nkij,nkj->nk", normal, covariances, normal) + path.lateral_std[None, :] ** 2
     sd = np.sqrt(np.maximum(var, 1e-8))
     inside = ndtr((half_width_m - d) / sd) - ndtr((-half_width_m - d) / sd)

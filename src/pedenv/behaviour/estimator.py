@@ -38,17 +38,24 @@ class TrackStore:
 
     def rows(self, ids: np.ndarray, now: float) -> np.ndarray:
         """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now``."""
-        new = np.setdiff1d(ids, self.ids)
-        if len(new):
+        index = np.searchsorted(self.ids, ids)
+        found = index < len(self.ids)
+        found[found] = self.ids[index[found]] == ids[found]
+        if not found.all():
+            new = np.unique(ids[~found])
             self.ids = np.concatenate([self.ids, new])
             self.p = np.concatenate([self.p, heading_filter.uniform(len(new), self.bins)])
             self.state = np.concatenate([self.state, np.zeros(len(new), np.int8)])
             self.time = np.concatenate([self.time, np.full(len(new), now)])
             self._take(np.argsort(self.ids, kind="stable"))
-        return np.searchsorted(self.ids, ids)
+            index = np.searchsorted(self.ids, ids)
+        return index
 
     def keep(self, live_ids: np.ndarray) -> None:
-        """Forget every track not in ``live_ids``."""
+        """Forget every track not in ``live_ids`` (checked once the store holds more rows than there
+        are live tracks: a dropped track may wait a few frames)."""
+        if len(self.ids) <= len(live_ids):
+            return
         mask = np.isin(self.ids, live_ids)
         if not mask.all():
             self._take(mask)
@@ -70,6 +77,7 @@ class BehaviourEstimator:
         self.horizons = np.asarray(config.horizons_s, float)
         k = int(round(config.conflict_horizon_s / config.conflict_step_s))
         self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
+        self.path_times = np.concatenate([self.conflict_times, self.horizons])  # one prediction for both
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
 
     def reset(self) -> None:
@@ -114,7 +122,7 @@ class BehaviourEstimator:
         p = heading_filter.predict(store.p[rows], t - store.time[rows], np.radians(cfg.heading_random_walk_deg))
         origin = frame.cam_to_world[:3, 3]
         rays = pixel_rays(peds.keypoints, frame.camera.intrinsics, frame.cam_to_world)
-        cue = skeleton_cue(rays, np.nan_to_num(peds.confidences), peds.positions, origin,
+        cue = skeleton_cue(rays, peds.confidences, peds.positions, origin,
                            float(frame.camera.intrinsics[0, 0]), cfg)
         velocity, velocity_cov = x[:, [1, 3]], P[:, [1, 3]][:, :, [1, 3]]
         moving, _ = motion_likelihood(velocity, velocity_cov, self.cells, cfg)
@@ -125,9 +133,11 @@ class BehaviourEstimator:
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
         half = np.radians(cfg.facing_half_angle_deg)
-        ahead, ahead_cov = predict_path(x, P, self.conflict_times, self.acceleration_std)
-        conflict = corridor_conflict(path, ahead, ahead_cov, cfg.corridor_half_width_m, cfg.corridor_front_m)
-        positions, covariances = predict_path(x, P, self.horizons, self.acceleration_std)
+        ahead, ahead_cov = predict_path(x, P, self.path_times, self.acceleration_std)
+        k = len(self.conflict_times)
+        conflict = corridor_conflict(path, ahead[:, :k], ahead_cov[:, :k], cfg.corridor_half_width_m,
+                                     cfg.corridor_front_m)
+        positions, covariances = ahead[:, k:], ahead_cov[:, k:]
         return Behaviour(yaw, yaw_std, available, facing.body_facing(p, cue.toward, half),
                          facing.head_facing(cue, half), state, speed, speed_std, self.horizons, positions,
                          covariances, conflict.probability, conflict.time_s, conflict.time_std_s,
@@ -136,12 +146,12 @@ class BehaviourEstimator:
 
 def _finite_cov4(cov: np.ndarray) -> np.ndarray:
     """Position covariances (N, 2, 2) with non-finite ones replaced by 100 m^2 each way."""
-    return np.where(np.isfinite(cov).reshape(len(cov), -1).all(axis=1)[:, None, None], cov, 100.0 * np.eye(2))
+    return np.where(np.isfinite(cov).reshape(len(cov), 4).all(axis=1)[:, None, None], cov, 100.0 * np.eye(2))
 
 
 def _finite_cov(P: np.ndarray) -> np.ndarray:
     """Covariances (N, 4, 4) with any non-finite row replaced by a wide one (100 m, 10 m/s)."""
-    bad = ~np.isfinite(P).reshape(len(P), -1).all(axis=1)
+    bad = ~np.isfinite(P).reshape(len(P), 16).all(axis=1)
     if not bad.any():
         return P
     P = P.copy()

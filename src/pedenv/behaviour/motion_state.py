@@ -17,9 +17,10 @@ def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> t
     speed = np.linalg.norm(velocities, axis=1)
     unit = velocities / np.maximum(speed, 1e-9)[:, None]
     along = np.einsum("ni,nij,nj->n", unit, velocity_covariances, unit)
-    largest = np.linalg.eigvalsh(velocity_covariances)[:, -1] if len(velocities) else np.zeros(0)
+    a, b, d = velocity_covariances[:, 0, 0], velocity_covariances[:, 0, 1], velocity_covariances[:, 1, 1]
+    largest = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
     var = np.where(speed > 1e-6, along, largest)
-    return speed, np.sqrt(np.maximum(np.nan_to_num(var, nan=1e6, posinf=1e6), 0.0))
+    return speed, np.sqrt(np.maximum(var, 0.0))
 
 
 def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, config: BehaviourConfig) -> np.ndarray:

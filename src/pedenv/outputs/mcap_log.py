@@ -188,10 +188,10 @@ def _pedestrian(state: EnvironmentState, i: int, stamp, shapes=None) -> fm.Scene
         timestamp=stamp, frame_id="world", id=f"ped-{int(p.track_ids[i])}",
         spheres=[fm.SpherePrimitive(pose=_pose(pos + [0, 0, 0.2]), size=fm.Vector3(x=0.4, y=0.4, z=0.4), color=_RED)],
         arrows=arrows + extra_arrows,
-        lines=extra_lines + [fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineList, thickness=0.04, color=_BLUE,
+        lines=[fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineList, thickness=0.04, color=_BLUE,
                                 points=[_p3(p.keypoints_3d[i, k]) for k in bones]),
                fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.03, color=_RED,
-                                points=[_p3((x, y, pos[2] + 0.02)) for x, y in ring])],
+                                points=[_p3((x, y, pos[2] + 0.02)) for x, y in ring])] + extra_lines,
         texts=[fm.TextPrimitive(pose=_pose(pos + [0, 0, 2.1]), billboard=True, font_size=0.4, color=_RED,
                                 text=str(int(p.track_ids[i])))])
 
