@@ -106,13 +106,18 @@ def real_orientation(samples: Path, detections: Path, config: Config) -> list[di
         yaw, std, available = heading_filter.summary(p, np.radians(cfg.available_std_deg))
         camera_yaw = np.arctan2(cue.toward[:, 1], cue.toward[:, 0])
         for d, g in pairs:
-            err = lambda a: float(np.degrees(abs(wrap_angle(a - gt_yaw[g]))))  # noqa: E731
+            err = _error_deg(gt_yaw[g])
             rows.append({"key": key, "distance_m": float(np.hypot(*(xy[d] - origin[:2]))),
                          "height_px": float(gt_boxes[g, 3] - gt_boxes[g, 1]), "pedenv": err(yaw[d]),
                          "available": int(available[d]), "std_deg": float(np.degrees(std[d])),
                          "facing_camera": err(camera_yaw[d]),
                          "walking": err(gt_walk[g]) if np.isfinite(gt_walk[g]) else None})
     return rows
+
+
+def _error_deg(truth: float):
+    """A function: estimated yaw (radians) -> absolute error against ``truth`` in degrees."""
+    return lambda a: float(np.degrees(abs(wrap_angle(a - truth))))
 
 
 def summarise(errors: list[float]) -> str:

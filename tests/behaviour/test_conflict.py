@@ -11,8 +11,8 @@ from pedenv.records import EgoPose
 TIMES = np.linspace(0.0, 2.0, 21)
 
 
-def _conflict(motion, states, std=0.3, pose=EgoPose.from_xy_yaw(0.0, 0.0, 0.0)):
-    path = predict_ego_path(pose, motion, TIMES)
+def _conflict(motion, states, std=0.3):
+    path = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), motion, TIMES)
     x = np.asarray(states, float)
     P = np.repeat(np.diag([std**2, 0.05, std**2, 0.05])[None], len(x), axis=0)
     pos, cov = predict_path(x, P, TIMES, 0.5)

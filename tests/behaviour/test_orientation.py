@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
+from tests.behaviour.people import seen
 
 from pedenv.behaviour import heading_filter as hf
 from pedenv.behaviour.config import BehaviourConfig
 from pedenv.behaviour.orientation import motion_likelihood, skeleton_cue, skeleton_likelihood
 from pedenv.geometry import wrap_angle
-from tests.behaviour.people import seen
 
 CFG = BehaviourConfig(enabled=True)
 CELLS = hf.cell_centres(CFG.orientation_bins)

@@ -77,7 +77,7 @@ class BehaviourConfig:
     left_right_swap_probability: float = 0.1
     walking_direction_std_deg: float = 20.0
     min_walking_speed_mps: float = 0.5
-    speed_sigmas: float = 2.0
+    speed_sigmas: float = 1.5
     heading_random_walk_deg: float = 45.0
     available_std_deg: float = 40.0
     facing_half_angle_deg: float = 60.0
@@ -128,7 +128,8 @@ _RANGES = (
     ("heading_random_walk_deg", 0.0, 360.0), ("available_std_deg", 1.0, 90.0), ("facing_half_angle_deg", 1.0, 90.0),
     ("walk_enter_mps", 0.0, 5.0), ("walk_exit_mps", 0.0, 5.0), ("run_enter_mps", 0.0, 15.0),
     ("run_exit_mps", 0.0, 15.0), ("ego_window_s", 0.05, 5.0), ("max_ego_gap_s", 0.05, 30.0),
-    ("max_yaw_rate_radps", 0.01, 5.0), ("max_ego_acceleration_mps2", 0.0, 15.0), ("ego_speed_std_mps", 0.0, 10.0), ("ego_yaw_rate_std_radps", 0.0, 2.0),
+    ("max_yaw_rate_radps", 0.01, 5.0),
+    ("max_ego_acceleration_mps2", 0.0, 15.0), ("ego_speed_std_mps", 0.0, 10.0), ("ego_yaw_rate_std_radps", 0.0, 2.0),
     ("corridor_half_width_m", 0.1, 10.0), ("corridor_front_m", 0.0, 20.0), ("conflict_horizon_s", 0.1, 10.0),
     ("conflict_step_s", 0.01, 1.0), ("conflict_probability", 0.01, 0.99),
 )

@@ -5,9 +5,8 @@ Speeds are signed along the ego's heading (negative: reversing); yaw in radians,
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import math
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -94,7 +94,8 @@ class BehaviourEstimator:
         the tracker still holds.
         """
         start = time.perf_counter()
-        x, P = np.nan_to_num(x), _finite_cov(P)
+        x = x if np.isfinite(x).all() else np.nan_to_num(x)
+        P = _finite_cov(P)
         if not started.all():
             x, P, fresh = x.copy(), P.copy(), ~started
             x[fresh] = np.column_stack([peds.positions[fresh, 0], np.zeros(fresh.sum()), peds.positions[fresh, 1],

@@ -35,7 +35,7 @@ def predict(p: np.ndarray, dt: np.ndarray, random_walk_rad: float) -> np.ndarray
     """Spread distributions p (N, B) over dt (N,) seconds (heading random walk, rad / sqrt(s))."""
     if not len(p):
         return p
-    var = random_walk_rad**2 * np.maximum(np.nan_to_num(dt, nan=1e3, posinf=1e3), 0.0)
+    var = random_walk_rad**2 * np.clip(np.where(np.isnan(dt), 1e3, dt), 0.0, 1e3)
     k = np.arange(p.shape[1] // 2 + 1)
     damp = np.exp(-0.5 * np.minimum(var, 1e3)[:, None] * k[None, :] ** 2)
     out = np.fft.irfft(np.fft.rfft(p, axis=1) * damp, n=p.shape[1], axis=1)
@@ -63,7 +63,7 @@ def summary(p: np.ndarray, available_std_rad: float) -> tuple[np.ndarray, np.nda
     cells = cell_centres(bins)
     best = p.argmax(axis=1)
     near = (best[:, None] + np.arange(-3, 4)[None, :]) % bins
-    w = np.take_along_axis(p, near, axis=1)
+    w = p[np.arange(n)[:, None], near]
     yaw = np.arctan2((w * np.sin(cells[near])).sum(1), (w * np.cos(cells[near])).sum(1))
     diff = _wrap(cells[None, :] - yaw[:, None])
     std = np.sqrt((p * diff**2).sum(axis=1))

@@ -89,7 +89,7 @@ def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarra
     face, face_std, face_ok = _face_offset(lateral, ok, pixel_m, config)
     face_seen = confidences[:, [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE]].min(axis=1)
     return SkeletonCue(toward, right, width, width_std, width_ok, face, face_std, face_ok,
-                       np.clip(np.nan_to_num(face_seen), 0.0, 1.0))
+                       np.clip(np.where(np.isnan(face_seen), 0.0, face_seen), 0.0, 1.0))
 
 
 def _face_offset(lateral: np.ndarray, ok: np.ndarray, pixel_m: np.ndarray,

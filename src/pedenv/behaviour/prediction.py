@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+_EYE2 = np.eye(2)
+
 
 def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleration_std: float
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -20,5 +22,5 @@ def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleratio
     vv = P[:, [1, 3]][:, :, [1, 3]]
     tt = t[..., None, None]
     cov = (pp[:, None] + tt * (pv + np.transpose(pv, (0, 2, 1)))[:, None] + tt**2 * vv[:, None]
-           + (acceleration_std**2 * tt**4 / 4.0) * np.eye(2))
+           + (acceleration_std**2 * tt**4 / 4.0) * _EYE2)
     return positions, cov
