@@ -1,6 +1,6 @@
 """The behaviour cues in the MCAP file (:mod:`pedenv.outputs.mcap_log` adds these primitives to
 each pedestrian's entity): a heading arrow (orange), the predicted path (purple; red in conflict
-with the ego's path) with a 2-sigma ellipse at each horizon, and the ego's predicted path."""
+with the ego's path) with a 1-sigma ellipse at each horizon, and the ego's predicted path."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 Entities under ``world/behaviour``: ``headings`` (arrows on the ground, orange), ``paths``
 (the predicted path of each pedestrian, purple; red in conflict with the ego's path),
-``ellipses`` (2-sigma outlines at each horizon) and ``ego_path`` (the ego's predicted path).
+``ellipses`` (1-sigma outlines at each horizon) and ``ego_path`` (the ego's predicted path).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 by :func:`pedenv.visualize.overlay.draw_environment`) and in the bird's-eye video
 (:func:`draw_behaviour_birds_eye`, called by :class:`pedenv.visualize.birds_eye_video.BirdsEyeVideo`).
 
-Heading arrows orange, predicted paths purple with their 2-sigma ellipses, both red for a
+Heading arrows orange, predicted paths purple with their 1-sigma ellipses, both red for a
 pedestrian in conflict with the ego's path; the ego's predicted path purple.
 """
 

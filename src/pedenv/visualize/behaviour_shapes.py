@@ -24,7 +24,7 @@ class BehaviourShapes:
     """World x-y shapes (metres) of N pedestrians: heading arrows ``arrow_origins`` (M, 2) and
     ``arrow_vectors`` (M, 2) for the M with an orientation (available or sign unknown); ``paths``
     (N, H + 1, 2) from the position through the predicted positions; ``ellipses`` (N, H, S, 2),
-    the 2-sigma outline at each horizon; ``conflict`` (N,) bool; ``ego_path`` (K, 2)."""
+    the 1-sigma outline at each horizon (2 sigma at 3 s covers most of a street); ``conflict`` (N,) bool; ``ego_path`` (K, 2)."""
 
     arrow_origins: np.ndarray
     arrow_vectors: np.ndarray
@@ -45,6 +45,6 @@ def behaviour_shapes(peds: Pedestrians, segments: int = 24) -> BehaviourShapes |
     vectors = HEADING_ARROW_M * np.column_stack([np.cos(b.yaw[rows]), np.sin(b.yaw[rows])])
     paths = np.concatenate([peds.positions[:, None, :2], b.predicted_positions], axis=1)
     rings = covariance_ellipses(b.predicted_positions.reshape(-1, 2), b.predicted_covariances.reshape(-1, 2, 2),
-                                sigma=2.0, segments=segments).reshape(n, h, segments + 1, 2)
+                                sigma=1.0, segments=segments).reshape(n, h, segments + 1, 2)
     return BehaviourShapes(peds.positions[rows, :2], vectors, rows, paths, rings,
                            b.conflict_probability >= CONFLICT_DRAW_PROBABILITY, b.ego_path)
