@@ -62,11 +62,36 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     """The conflict of N pedestrians with the corridor of ``path`` (K times).
 
     positions: (N, K, 2) world x-y metres at the path's times; covariances: (N, K, 2, 2) m^2
-    (zeros for exact positions, as the ground truth).
+    (zeros for exact positions, as the ground truth). A pedestrian whose predicted positions stay
+    more than :data:`GATE_SIGMAS` standard deviations beyond the corridor's reach (its length
+    plus half width, from the ego now) gets probability 0 without the per-step computation.
     """
-    n, k = positions.shape[:2]
+    n = positions.shape[0]
+    sep = positions - path.xy[None]
+    dist = np.linalg.norm(sep, axis=2)
+    j = dist.argmin(axis=1)
+    rows = np.arange(n)
+    u = sep[rows, j] / np.maximum(dist[rows, j], 1e-9)[:, None]
+    closest_var = np.einsum("ni,nij,nj->n", u, covariances[rows, j], u) + path.lateral_std[j] ** 2
+    horizon = path.times[-1]
+    prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
+    reach = path.length + front_m + half_width_m
+    spread_max = np.sqrt((covariances[..., 0, 0] + covariances[..., 1, 1]).max(axis=1) + path.lateral_std[-1] ** 2)
+    near = np.linalg.norm(positions - path.xy[0], axis=2).min(axis=1) < reach + GATE_SIGMAS * spread_max
+    if near.any():
+        prob[near], mean[near], spread[near] = _entry(path, positions[near], covariances[near], half_width_m,
+                                                      path.length + front_m)
+    return Conflict(prob, mean, spread, dist[rows, j], np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
+
+
+#: Pedestrians farther than this many standard deviations beyond the corridor's reach are not in conflict.
+GATE_SIGMAS = 6.0
+
+
+def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
+           length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s."""
     s, d, normal = path_coordinates(path, positions)
-    length = path.length + front_m
     var = np.einsum("nki,nkij,nkj->nk", normal, covariances, normal) + path.lateral_std[None, :] ** 2
     sd = np.sqrt(np.maximum(var, 1e-8))
     inside = ndtr((half_width_m - d) / sd) - ndtr((-half_width_m - d) / sd)
@@ -78,11 +103,4 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     some = prob > 1e-3
     mean = np.where(some, (rise * t).sum(1) / np.maximum(prob, 1e-12), path.times[-1])
     spread = np.sqrt(np.maximum((rise * (t - mean[:, None]) ** 2).sum(1) / np.maximum(prob, 1e-12), 0.0))
-    sep = positions - path.xy[None]
-    dist = np.linalg.norm(sep, axis=2)
-    j = dist.argmin(axis=1)
-    rows = np.arange(n)
-    u = sep[rows, j] / np.maximum(dist[rows, j], 1e-9)[:, None]
-    closest_var = np.einsum("ni,nij,nj->n", u, covariances[rows, j], u) + path.lateral_std[j] ** 2
-    return Conflict(prob, mean, np.where(some, spread, 0.0), dist[rows, j],
-                    np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
+    return prob, mean, np.where(some, spread, 0.0)
