@@ -3,7 +3,8 @@
 #   make test  installs everything (every extra: ultralytics/torch to export the pose network
 #              to ONNX offline, nuscenes-devkit, the viz writers) and prepares the ONNX models.
 #   make test-fast  the tests without the slow end-to-end runs and the pose network.
-#   make lint  ruff and mypy (CI runs it after the tests).
+#   make lint  ruff, mypy and the code-shape report (CI runs it after the tests).
+#   make docs  the API reference from the docstrings into docs/api/ (CI builds it).
 
 PYTHON ?= python3
 VENV   := .venv
@@ -11,7 +12,7 @@ BIN    := $(VENV)/bin
 CORE   := $(VENV)/.pedenv-core
 FULL   := $(VENV)/.pedenv-full
 
-.PHONY: setup setup-all demo test test-fast lint bench clean
+.PHONY: setup setup-all demo test test-fast lint docs bench clean
 
 $(CORE): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -37,11 +38,15 @@ test-fast: $(FULL)
 	$(BIN)/python -m pytest -q -m "not slow and not ultralytics and not onnx_model"
 
 lint: $(FULL)
-	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks tools
 	$(BIN)/mypy
+	$(BIN)/python tools/code_shape.py
+
+docs: $(FULL)
+	$(BIN)/python tools/api_docs.py docs/api
 
 bench: $(FULL)
 	$(BIN)/pedenv bench
 
 clean:
-	rm -rf $(VENV) output
+	rm -rf $(VENV) output docs/api

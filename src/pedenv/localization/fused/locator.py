@@ -130,7 +130,7 @@ class FusedLocator:
         if "ground" in cfg.cues:
             cues.append(ground_cue(frame, skel, cfg))
         if "height" in cfg.cues:
-            cues.append(height_cue(skel, focal, cfg, reference_range=last_range))
+            cues.append(height_cue(skel, cfg, reference_range=last_range))
         terms, dots = ray_terms(rays, origin)
         # where each keypoint was: the track's last skeleton, moved onto this frame's rays
         last_skel = h.skeletons[rows]
