@@ -24,7 +24,8 @@ class BehaviourShapes:
     """World x-y shapes (metres) of N pedestrians: heading arrows ``arrow_origins`` (M, 2) and
     ``arrow_vectors`` (M, 2) for the M with an orientation (available or sign unknown); ``paths``
     (N, H + 1, 2) from the position through the predicted positions; ``ellipses`` (N, H, S, 2),
-    the 1-sigma outline at each horizon (2 sigma at 3 s covers most of a street); ``conflict`` (N,) bool; ``ego_path`` (K, 2)."""
+    the 1-sigma outline at each horizon (2 sigma at 3 s covers most of a street); ``conflict``
+    (N,) bool; ``ego_path`` (K, 2)."""
 
     arrow_origins: np.ndarray
     arrow_vectors: np.ndarray
