@@ -265,6 +265,10 @@ def bench(
         except (ImportError, InputError) as exc:
             console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
     _out.print(format_bench(rows, pose_rows))
+    from pedenv.apps.bench import format_behaviour_cost
+    from pedenv.config import Config
+
+    _out.print(format_behaviour_cost(bench_core(n_frames=frames, config=Config())))
     if pose and pose_rows:
         from pedenv.apps.bench import bench_detection_modes, format_detection_modes
 
