@@ -52,3 +52,17 @@ def test_a_gap_of_seconds_widens_the_orientation(frames):
     assert np.median(after.yaw_std) >= np.median(before.yaw_std)
     assert after.ego_speed == 0.0  # the ego's motion is forgotten, not extrapolated over the gap
     assert all(np.isfinite(np.asarray(getattr(after, f), float)).all() for f in after.__dataclass_fields__)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, 1e300])
+def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
+    model = PedestrianEnvironmentModel(Config())
+    state = model.update(frames[0])
+    n = len(state.pedestrians)
+    x, P = np.full((n, 4), bad), np.full((n, 4, 4), bad)
+    model.behaviour.reset()
+    peds = model.behaviour.update(frames[1], dataclasses.replace(state.pedestrians, behaviour=None), x, P,
+                                  np.ones(n, bool), state.pedestrians.track_ids)
+    b = peds.behaviour
+    assert all(np.isfinite(np.asarray(getattr(b, f), float)).all() for f in b.__dataclass_fields__)
+    assert np.allclose(b.predicted_positions[:, 0], state.pedestrians.positions[:, :2])  # standing where reported

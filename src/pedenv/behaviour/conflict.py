@@ -76,7 +76,8 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     horizon = path.times[-1]
     prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
     reach = path.length + front_m + half_width_m
-    spread_max = np.sqrt((covariances[..., 0, 0] + covariances[..., 1, 1]).max(axis=1) + path.lateral_std[-1] ** 2)
+    trace = (covariances[..., 0, 0] + covariances[..., 1, 1]).max(axis=1)
+    spread_max = np.sqrt(np.maximum(trace, 0.0) + path.lateral_std[-1] ** 2)
     near = np.linalg.norm(positions - path.xy[0], axis=2).min(axis=1) < reach + GATE_SIGMAS * spread_max
     if near.any():
         prob[near], mean[near], spread[near] = _entry(path, positions[near], covariances[near], half_width_m,

@@ -90,14 +90,14 @@ class BehaviourEstimator:
 
         x (N, 4), P (N, 4, 4): the pedestrians' Kalman states ``[x, vx, y, vy]`` (world, m and
         m/s) and covariances; started (N,) bool: the filter holds a state (elsewhere the
-        reported position, standing, with a 2 m/s velocity spread); live_ids: every track id
-        the tracker still holds.
+        reported position, standing, with a 2 m/s velocity spread; so is a row whose state is not
+        finite or beyond :data:`STATE_LIMIT`); live_ids: every track id the tracker still holds.
         """
         start = time.perf_counter()
-        x = x if np.isfinite(x).all() else np.nan_to_num(x)
-        P = _finite_cov(P)
-        if not started.all():
-            x, P, fresh = x.copy(), P.copy(), ~started
+        usable = (started & (np.abs(x) < STATE_LIMIT[0]).all(axis=1)
+                  & (np.abs(P) < STATE_LIMIT[1]).reshape(len(P), 16).all(axis=1))  # False for NaN, inf
+        if not usable.all():
+            x, P, fresh = x.copy(), P.copy(), ~usable
             x[fresh] = np.column_stack([peds.positions[fresh, 0], np.zeros(fresh.sum()), peds.positions[fresh, 1],
                                         np.zeros(fresh.sum())])
             prior = np.repeat(np.diag([1.0, 4.0, 1.0, 4.0])[None], fresh.sum(), axis=0)
@@ -145,16 +145,11 @@ class BehaviourEstimator:
                          conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s)
 
 
+#: A filter state (m, m/s) or covariance entry (m^2, ...) beyond these is not used (an overflowed track).
+STATE_LIMIT = (1e6, 1e8)
+
+
 def _finite_cov4(cov: np.ndarray) -> np.ndarray:
-    """Position covariances (N, 2, 2) with non-finite ones replaced by 100 m^2 each way."""
-    return np.where(np.isfinite(cov).reshape(len(cov), 4).all(axis=1)[:, None, None], cov, 100.0 * np.eye(2))
-
-
-def _finite_cov(P: np.ndarray) -> np.ndarray:
-    """Covariances (N, 4, 4) with any non-finite row replaced by a wide one (100 m, 10 m/s)."""
-    bad = ~np.isfinite(P).reshape(len(P), 16).all(axis=1)
-    if not bad.any():
-        return P
-    P = P.copy()
-    P[bad] = np.diag([1e4, 1e2, 1e4, 1e2])
-    return P
+    """Position covariances (N, 2, 2) with non-finite or absurd ones replaced by 100 m^2 each way."""
+    good = (np.abs(cov) < STATE_LIMIT[1]).reshape(len(cov), 4).all(axis=1)
+    return np.where(good[:, None, None], cov, 100.0 * np.eye(2))
