@@ -79,7 +79,7 @@ def compare_methods(
 def outputs_per_method(extra: ExtraOutputs, methods: Sequence[str], output_dir: str | Path) -> dict[str, ExtraOutputs]:
     """``extra`` for each method of a comparison: the Parquet tables and the video in that
     method's folder (``output_dir/<method>/environment.parquet``, ``matches.parquet``), the
-    Rerun and MCAP files with the method in their name (``run.rrd`` -> ``run-paper.rrd``).
+    Rerun, MCAP and ROS files with the method in their name (``run.rrd`` -> ``run-paper.rrd``).
     """
     def in_folder(path: Path | None, method: str) -> Path | None:
         return None if path is None else Path(output_dir) / method / path.name
@@ -89,7 +89,7 @@ def outputs_per_method(extra: ExtraOutputs, methods: Sequence[str], output_dir: 
 
     return {m: replace(extra, parquet=in_folder(extra.parquet, m), matches_parquet=in_folder(extra.matches_parquet, m),
                        birds_eye_video=in_folder(extra.birds_eye_video, m), rerun=tagged(extra.rerun, m),
-                       mcap=tagged(extra.mcap, m))
+                       mcap=tagged(extra.mcap, m), ros=tagged(extra.ros, m))
             for m in methods}
 
 

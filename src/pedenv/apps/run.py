@@ -26,11 +26,12 @@ from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
 
-def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None, static=False,
+def run_recording(*, calibration=None, ego_poses=None, output, images=None, video=None, fps=None, start_time=None,
+                  static=False,
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
                   video_out: bool = False, overwrite: bool = False, progress=None,
                   detection: str | None = "far", extra_outputs: ExtraOutputs | None = None,
-                  method: str | None = None, backend: PoseBackend | None = None) -> dict:
+                  method: str | None = None, backend: PoseBackend | None = None, bag=None, bag_options=None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
@@ -53,14 +54,17 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     the one ``pose_backend``, ``pose_model``, ``pose_input_size`` and ``detection`` describe.
     ``static``: the camera is fixed to the ground (``mount: static``, whatever the calibration
     says); ``ego_poses`` may then be None (:func:`pedenv.recordings.footage.load_recording`).
+    ``bag``: a ROS bag instead of images/video + calibration + ego poses, read with
+    ``bag_options`` (:func:`pedenv.recordings.bag.load_bag_recording`).
     Returns the summary also saved as ``run.json``.
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
     cfg = configure(cfg, method) if method else cfg
     extra = extra_outputs or ExtraOutputs()
     extra.check()
-    rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
-                         start_time=start_time, static=static)
+    rec = _load_bag(bag, bag_options) if bag is not None else load_recording(
+        calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps, start_time=start_time,
+        static=static)
     if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
     if backend is None:
@@ -107,6 +111,12 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
         summary["files"] = [str(p) for p in sinks.files]
         (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
+
+
+def _load_bag(bag, options):
+    from pedenv.recordings.bag import load_bag_recording
+
+    return load_bag_recording(bag, options)
 
 
 def _open_video(path: Path, rec: Recording, shape):

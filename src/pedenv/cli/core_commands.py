@@ -30,13 +30,14 @@ def _config(path: Path | None, method: str | None = None, **paper) -> Config:
 
 
 def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path | None, *,
-                   matches: bool = False, video_scene: str | None = None):
-    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap`` flags (and the bird's-eye video)."""
+                   matches: bool = False, video_scene: str | None = None, ros: Path | None = None):
+    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap``, ``--ros-out`` flags (and the bird's-eye
+    video)."""
     from pedenv.outputs.sinks import ExtraOutputs
 
     return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
                         matches_parquet=output / "matches.parquet" if parquet and matches else None,
-                        rerun=rerun, mcap=mcap,
+                        rerun=rerun, mcap=mcap, ros=ros,
                         birds_eye_video=output / "birds_eye.mp4" if video_scene else None, birds_eye_scene=video_scene)
 
 
@@ -46,6 +47,8 @@ _PARQUET = typer.Option(
 )
 _RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several).")
 _MCAP = typer.Option(None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap).")
+_ROS_OUT = typer.Option(None, "--ros-out", help="Write ROS 2 messages as a rosbag2 FILE.mcap (FILE-<method>.mcap "
+                                                 "with --method both).")
 _OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output.")
 _EXECUTOR = typer.Option("serial", "--executor", help="serial (in this process) or ray (one task per scene).")
 _ADDRESS = typer.Option(None, "--address", help="Ray cluster HOST:PORT (`ray start --head`); default: a local Ray.")
@@ -75,6 +78,7 @@ def demo(
     parquet: bool = _PARQUET,
     rerun: Path | None = _RERUN,
     mcap: Path | None = _MCAP,
+    ros_out: Path | None = _ROS_OUT,
 ) -> None:
     """Run the paper's and the fused method on the built-in synthetic scenes; print them side by side, write plots."""
     from pedenv.apps.compare import comparison_by_scene_table, comparison_summary_table
@@ -82,7 +86,7 @@ def demo(
     from pedenv.outputs.output_dir import prepare_output_dir
 
     cfg = _config(config, method)
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE)
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE, ros=ros_out)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
     result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
     methods = result.extras["methods"]
@@ -146,6 +150,7 @@ def evaluate(
     parquet: bool = _PARQUET,
     rerun: Path | None = _RERUN,
     mcap: Path | None = _MCAP,
+    ros_out: Path | None = _ROS_OUT,
     executor: str = _EXECUTOR,
     address: str | None = _ADDRESS,
     workers: int | None = _WORKERS,
@@ -183,12 +188,13 @@ def evaluate(
         _evaluate_distributed(data, executor=executor, address=address, workers=workers, scenes=names, config=cfg,
                               pose_backend=onnx or pose_backend, output=output, resume=resume, overwrite=overwrite,
                               refused={"--method both": method == "both", "--ablation": ablation, "--parquet": parquet,
-                                       "--rerun": rerun is not None, "--mcap": mcap is not None})
+                                       "--rerun": rerun is not None, "--mcap": mcap is not None,
+                                       "--ros-out": ros_out is not None})
         return
     backend: str | PoseBackend | None = onnx() if onnx else pose_backend
     from pedenv.outputs.output_dir import prepare_output_dir
 
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True)
+    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, ros=ros_out)
     prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
     if method == "both":
         from pedenv.apps.compare import (

@@ -103,6 +103,20 @@ def run(
     address: str | None = typer.Option(None, "--address", help="Ray cluster HOST:PORT; default: a local Ray."),
     workers: int | None = typer.Option(None, "--workers", help="Ray: local CPUs, or most tasks at once on a cluster."),
     resume: bool = typer.Option(False, "--resume", help="With --manifest: keep the recordings already complete."),
+    bag: Path | None = typer.Option(
+        None, "--bag", help="A ROS bag instead of images + calibration + ego poses: rosbag2 folder, .mcap or .bag."),
+    image_topic: str | None = typer.Option(None, "--image-topic", help="--bag: the Image/CompressedImage topic."),
+    camera_info_topic: str | None = typer.Option(None, "--camera-info-topic", help="--bag: the CameraInfo topic."),
+    odometry_topic: str | None = typer.Option(
+        None, "--odometry-topic", help="--bag: nav_msgs/Odometry for the ego poses instead of /tf."),
+    world_frame: str | None = typer.Option(None, "--world-frame", help="--bag: the tf world frame (map, odom)."),
+    vehicle_frame: str | None = typer.Option(None, "--vehicle-frame", help="--bag: the tf vehicle frame."),
+    ros_out: Path | None = typer.Option(
+        None, "--ros-out", help="Write ROS 2 messages (vision_msgs, RViz markers, /tf, Autoware) as a rosbag2 "
+                                "FILE.mcap."),
+    live: bool = typer.Option(
+        False, "--live", help="Serve the model as it runs to Foxglove over WebSocket on 127.0.0.1 (--live-port)."),
+    live_port: int = typer.Option(8765, "--live-port", help="--live: the TCP port (0: any free one)."),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
     or on every recording of a --manifest."""
@@ -117,34 +131,64 @@ def run(
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
         if parquet or rerun or mcap:
             raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
-        _run_manifest(manifest, output, executor=executor, address=address, workers=workers, resume=resume,
-                      overwrite=overwrite, pose_backend=pose_backend, pose_model=pose_model,
-                      pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
-                      method=method)
+        _run_manifest(manifest, output, single=(ros_out, bag, live), executor=executor, address=address,
+                      workers=workers, resume=resume, overwrite=overwrite, pose_backend=pose_backend,
+                      pose_model=pose_model, pose_input_size=pose_input_size, config=config, detection=detection,
+                      video_out=video_out, method=method)
         return
-    if calibration is None or (ego_poses is None and not static):
-        raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
-                         "(or a --manifest of recordings)")
+    bag_options = _bag_options(bag, (images, video, calibration, ego_poses, static),
+                               (image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame))
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
     from pedenv.outputs.sinks import ExtraOutputs
 
-    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap)
+    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap,
+                         ros=ros_out, live=live_port if live else None)
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(
             images=images, video=video, calibration=calibration, ego_poses=ego_poses, static=static, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            extra_outputs=extra, progress=progress, method=method)
+            extra_outputs=extra, progress=progress, method=method, bag=bag, bag_options=bag_options)
     typer.echo(f"{summary['frames_done']} frames -> {summary['environment']}")
 
 
-def _run_manifest(manifest: Path, output: Path, **options) -> None:
-    """``pedenv run --manifest``: every recording; failed ones listed, exit code 1."""
+def _bag_options(bag: Path | None, recording: tuple, flags: tuple):
+    """The BagOptions of ``--bag`` and its topic and frame flags (None without a bag). ``recording``:
+    --images, --video, --calibration, --ego-poses, --static; ``flags``: --image-topic, --camera-info-topic,
+    --odometry-topic, --world-frame, --vehicle-frame."""
+    from pedenv.errors import InputError
+
+    names = ("image_topic", "camera_info_topic", "odometry_topic", "world_frame", "vehicle_frame")
+    choices = dict(zip(names, flags))
+
+    if bag is None:
+        given = [f"--{k.replace('_', '-')}" for k, v in choices.items() if v is not None]
+        if given:
+            raise InputError(f"{', '.join(given)} apply to --bag")
+        if recording[2] is None or (recording[3] is None and not recording[4]):
+            raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
+                             "(or a --bag, or a --manifest of recordings)")
+        return None
+    if any(v is not None for v in recording[:4]) or recording[4]:
+        raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, "
+                         "--ego-poses and --static")
+    from pedenv.recordings.bag_topics import BagOptions
+
+    return BagOptions(**choices)
+
+
+def _run_manifest(manifest: Path, output: Path, single: tuple = (), **options) -> None:
+    """``pedenv run --manifest``: every recording; failed ones listed, exit code 1. ``single``: the
+    values of --ros-out, --bag and --live, which a manifest run refuses."""
     from pedenv.apps.batch import run_manifest
+    from pedenv.errors import InputError
+
+    if any(single):
+        raise InputError("--ros-out, --live and --bag are for single-recording runs, not --manifest runs")
 
     summary = run_manifest(manifest, output, progress=True, **options)
     for rec in summary["recordings"]:

@@ -42,7 +42,7 @@ class Sinks:
         """Close every sink, even when one of them fails (the first failure is raised)."""
         first = None
         for sink in self.sinks:
-            self.files.extend(getattr(sink, "files", None) or [sink.path])
+            self.files.extend(getattr(sink, "files", None) or ([] if getattr(sink, "port", None) else [sink.path]))
             try:
                 sink.close()
             except Exception as exc:  # noqa: BLE001 - close the others first
@@ -70,6 +70,8 @@ class ExtraOutputs:
     matches_parquet: evaluation only, the matched prediction/ground-truth pairs (pyarrow).
     rerun: a Rerun ``.rrd`` recording (rerun-sdk); several scenes give ``<stem>-<scene>.rrd``.
     mcap: a Foxglove MCAP file (foxglove-sdk).
+    ros: a rosbag2 MCAP file of ROS 2 messages (rosbags; :mod:`pedenv.outputs.ros_bag`).
+    live: a TCP port on 127.0.0.1 to serve the model on as it runs (foxglove-sdk's WebSocket server).
     birds_eye_video: an mp4 of every frame from above (OpenCV, always installed).
     birds_eye_scene: the one scene the video shows (None: every scene, one after the other).
     """
@@ -80,6 +82,8 @@ class ExtraOutputs:
     mcap: Path | None = None
     birds_eye_video: Path | None = None
     birds_eye_scene: str | None = None
+    ros: Path | None = None
+    live: int | None = None
 
     def check(self) -> None:
         """Refuse missing extras before the run starts (one line each, see :func:`require_extra`)."""
@@ -89,6 +93,10 @@ class ExtraOutputs:
             require_extra("rerun", "viz", "--rerun")
         if self.mcap:
             require_extra("foxglove", "viz", "--mcap")
+        if self.ros:
+            require_extra("rosbags", "ros", "--ros-out")
+        if self.live is not None:
+            require_extra("foxglove", "viz", "--live")
 
     def open(self) -> Sinks:
         """The sinks for the frame-by-frame outputs (all but ``matches_parquet``)."""
@@ -107,6 +115,14 @@ class ExtraOutputs:
                 from pedenv.outputs.mcap_log import McapWriter
 
                 sinks.append(McapWriter(self.mcap))
+            if self.ros:
+                from pedenv.outputs.ros_bag import RosBagWriter
+
+                sinks.append(RosBagWriter(self.ros))
+            if self.live is not None:
+                from pedenv.outputs.live_view import LiveViewer
+
+                sinks.append(LiveViewer(self.live))
             if self.birds_eye_video:
                 from pedenv.visualize.birds_eye_video import BirdsEyeVideo
 

@@ -1,0 +1,58 @@
+"""``pedenv run --live [PORT]``: the environment model served while the run goes on, over
+Foxglove's WebSocket protocol (foxglove-sdk's server), so Foxglove shows pedestrians as they appear.
+
+The topics and messages are those of the Foxglove MCAP file (:mod:`pedenv.outputs.mcap_log`);
+connect Foxglove to ``ws://HOST:PORT``. The server listens on ``127.0.0.1`` unless another host
+is given (listening on every interface exposes the model to the network).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import foxglove
+from foxglove import channels as fc
+
+from pedenv.errors import InputError
+from pedenv.outputs.mcap_log import McapWriter
+
+DEFAULT_PORT = 8765
+DEFAULT_HOST = "127.0.0.1"
+
+
+class LiveViewer(McapWriter):
+    """A :class:`pedenv.outputs.sinks.FrameSink` logging to a WebSocket server instead of a file.
+
+    port: TCP port, 0 for any free one (``self.port`` says which), at most 65535.
+    """
+
+    def __init__(self, port: int = DEFAULT_PORT, host: str = DEFAULT_HOST) -> None:
+        if not 0 <= int(port) <= 65535:
+            raise InputError(f"--live port must be in [0, 65535], got {port}")
+        self._context = foxglove.Context()
+        try:
+            self._server = foxglove.start_server(name="pedenv", host=host, port=int(port), context=self._context)
+        except Exception as exc:  # noqa: BLE001 - a port in use, a host not found
+            raise InputError(f"--live: cannot serve on {host}:{port}: {exc}") from None
+        self.port = self._server.port
+        self.path = Path(f"ws://{host}:{self.port}")
+        self.files: list[Path] = []
+        self._writer = None
+        ctx = self._context
+        self._tf = fc.FrameTransformsChannel("/tf", context=ctx)
+        self._peds = fc.SceneUpdateChannel("/pedestrians", context=ctx)
+        self._truth = fc.SceneUpdateChannel("/ground_truth", context=ctx)
+        self._ego = fc.SceneUpdateChannel("/ego", context=ctx)
+        self._calibration = fc.CameraCalibrationChannel("/camera/calibration", context=ctx)
+        self._image = fc.CompressedImageChannel("/camera/image", context=ctx)
+        self._annotations = fc.ImageAnnotationsChannel("/camera/annotations", context=ctx)
+        self._environment = foxglove.Channel("/environment", message_encoding="json", context=ctx)
+        self._scene: str | None = None
+        self._offset = 0.0
+        self._last = float("-inf")
+        self._trajectory: list = []
+
+    def close(self) -> None:
+        if self._server is not None:
+            self._server.stop()
+            self._server = None
