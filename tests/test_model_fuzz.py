@@ -60,6 +60,9 @@ def fuzz_run(method: str, seed: int, frames: int = 40) -> tuple[int, int]:
         p = state.pedestrians
         for name in FIELDS:
             assert np.isfinite(getattr(p, name)).all(), (method, seed, i, name)
+        if p.behaviour is not None:  # the behaviour cues (fused) are never NaN either
+            for name in p.behaviour.__dataclass_fields__:
+                assert np.isfinite(np.asarray(getattr(p.behaviour, name), float)).all(), (method, seed, i, name)
         origin = model.tracks.filter  # the filter's own state must stay finite too
         assert np.isfinite(origin.x).all() and np.isfinite(origin.P).all(), (method, seed, i)
         cam_xy = (ego.matrix @ CAMERA.cam_to_vehicle)[:2, 3]

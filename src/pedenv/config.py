@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pedenv.behaviour.config import BehaviourConfig
 from pedenv.config_position import FUSED_CUES, INITIAL_ESTIMATES, FusedConfig, PaperConfig
 from pedenv.config_tracking import KalmanConfig, TrackingConfig
 from pedenv.errors import InputError
@@ -27,8 +28,8 @@ from pedenv.structured_text import load_json
 from pedenv.validation import check_below, check_bool, check_count, check_number, shown
 
 __all__ = ["DEFAULT_METHOD", "FUSED_CUES", "INITIAL_ESTIMATES", "METHOD_PRESETS", "SECTIONS", "Config",
-           "DetectionConfig", "FusedConfig", "KalmanConfig", "MergeConfig", "PaperConfig", "RedetectConfig",
-           "TrackingConfig"]
+           "BehaviourConfig", "DetectionConfig", "FusedConfig", "KalmanConfig", "MergeConfig", "PaperConfig",
+           "RedetectConfig", "TrackingConfig"]
 
 #: The position method of ``Config()`` and of every command without ``--method``: the
 #: most accurate one (``paper`` reproduces the paper's figures).
@@ -37,14 +38,15 @@ DEFAULT_METHOD = "fused"
 #: Per method, the fields whose defaults differ from the section classes' own defaults
 #: (which are the paper's values). ``fused`` turns on the tracker's height-ratio rule,
 #: low-score second pass, motion prediction, ground gate and track memory, and the
-#: filter's restart gate, and the re-detection of missed tracks in crops (onnx backend,
-#: :mod:`pedenv.pose.redetect`) (on the golden ``terrain2/fused/detector-model`` case 75 identity
+#: filter's restart gate, the re-detection of missed tracks in crops (onnx backend,
+#: :mod:`pedenv.pose.redetect`) and the behaviour cues (:mod:`pedenv.behaviour`) (on the golden
+#: ``terrain2/fused/detector-model`` case 75 identity
 #: switches with them, 200 without).
 METHOD_PRESETS: dict[str, dict[str, dict]] = {
     "paper": {},
     "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
                            "ground_gate": 4.0, "memory_s": 2.0},
-              "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}},
+              "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}, "behaviour": {"enabled": True}},
 }
 
 
@@ -126,6 +128,7 @@ class Config:
     a config to another method. A saved config without ``method`` (as written before the
     field existed) loads as ``fused``; the fields it names keep their values.
 
+    behaviour: the behaviour cues (:class:`pedenv.behaviour.config.BehaviourConfig`; on in ``fused``).
     detection, merge: the pose network's passes and their merge (``onnx`` backend,
     :class:`pedenv.pose.tiling.DetectionConfig`, :class:`pedenv.pose.merge.MergeConfig`),
     saved with the run so its detection is recorded; ``pedenv run --detection`` sets
@@ -142,6 +145,7 @@ class Config:
     redetect: RedetectConfig = None  # type: ignore[assignment]
     detection: DetectionConfig = None  # type: ignore[assignment]
     merge: MergeConfig = None  # type: ignore[assignment]
+    behaviour: BehaviourConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method or len(self.method) > 64:
@@ -217,4 +221,4 @@ def _names(names: Iterable[object]) -> str:
 #: Section name -> its class.
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
                              "fused": FusedConfig, "redetect": RedetectConfig, "detection": DetectionConfig,
-                             "merge": MergeConfig}
+                             "merge": MergeConfig, "behaviour": BehaviourConfig}

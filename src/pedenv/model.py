@@ -21,6 +21,7 @@ from functools import lru_cache
 import numpy as np
 
 from pedenv import kalman
+from pedenv.behaviour.estimator import BehaviourEstimator
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.localization import FrameGeometry, Locator, create_locator
@@ -48,12 +49,16 @@ class PedestrianEnvironmentModel:
         self.tracker = Tracker(self.config.tracking, table=self.tracks)
         self.timer = StageTimer()
         self._transition = lru_cache(maxsize=64)(self._make_transition)
+        self.behaviour = (BehaviourEstimator(self.config.behaviour, self.config.kalman.acceleration_std_mps2)
+                          if self.config.behaviour.enabled else None)
         self.reset()
 
     def reset(self) -> None:
         """Forget all tracks (start of a new scene); the stage timer keeps counting."""
         self.tracker.reset()
         self._last: Frame | None = None
+        if self.behaviour is not None:
+            self.behaviour.reset()
 
     def update(self, frame: Frame) -> EnvironmentState:
         """Add one frame and return the environment model at its timestamp.
@@ -76,6 +81,9 @@ class PedestrianEnvironmentModel:
             frame = dataclasses.replace(frame, detections=det)
         peds = self._locate(frame, det, rows) if len(det) else Pedestrians.empty()
         self.timer.add(t2 - t1, (t1 - t0) + (time.perf_counter() - t2), len(det))  # the filter counts as position
+        if self.behaviour is not None:  # beyond the paper: orientation, motion state, path, conflict
+            f = self.tracks.filter
+            peds = self.behaviour.update(frame, peds, f.x[rows], f.P[rows], f.started[rows], self.tracks.tracks.ids)
         self._last = frame
         return EnvironmentState(frame.index, frame.timestamp, frame.ego, peds, frame.scene)
 

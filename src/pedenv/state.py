@@ -2,12 +2,90 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from pedenv.records import EgoPose
 from pedenv.skeleton import KEYPOINT_NAMES
+
+
+@dataclass(frozen=True)
+class Behaviour:
+    """What the N pedestrians of one frame are about to do (``Config.behaviour``, :mod:`pedenv.behaviour`).
+
+    Per pedestrian (row i as in :class:`Pedestrians`):
+    yaw: (N,) radians, world frame, counter-clockwise from +x: the direction the body faces.
+    yaw_std: (N,) radians, the spread about it (1.81 when nothing is known).
+    orientation_availability: (N,) int8, 0 unavailable, 1 sign unknown (yaw or yaw + pi),
+        2 available (``pedenv.behaviour.heading_filter.AVAILABILITY_NAMES``).
+    facing_probability: (N,) probability that the body faces the ego camera.
+    head_facing_probability: (N,) the same for the head, from this frame's face keypoints.
+    motion_state: (N,) int8, 0 standing, 1 walking, 2 running. speed, speed_std: (N,) m/s.
+    predicted_positions: (N, H, 2) world x-y, metres, at ``horizons`` (H,) seconds ahead;
+        predicted_covariances: (N, H, 2, 2) m^2.
+    conflict_probability: (N,) probability of entering the corridor around the ego's path
+        within ``conflict_horizon`` s; conflict_time, conflict_time_std: (N,) s until then
+        (the horizon where it does not); closest_approach, closest_approach_std: (N,) metres
+        between pedestrian and ego at the same time; closest_approach_time: (N,) s ahead.
+    Per frame: ego_speed (m/s, negative reversing), ego_yaw_rate (rad/s), ego_path (K, 2)
+    world x-y metres, the ego's predicted path up to ``conflict_horizon`` s.
+    """
+
+    yaw: np.ndarray
+    yaw_std: np.ndarray
+    orientation_availability: np.ndarray
+    facing_probability: np.ndarray
+    head_facing_probability: np.ndarray
+    motion_state: np.ndarray
+    speed: np.ndarray
+    speed_std: np.ndarray
+    horizons: np.ndarray
+    predicted_positions: np.ndarray
+    predicted_covariances: np.ndarray
+    conflict_probability: np.ndarray
+    conflict_time: np.ndarray
+    conflict_time_std: np.ndarray
+    closest_approach: np.ndarray
+    closest_approach_std: np.ndarray
+    closest_approach_time: np.ndarray
+    conflict_horizon: float = 0.0
+    ego_speed: float = 0.0
+    ego_yaw_rate: float = 0.0
+    ego_path: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+    def __len__(self) -> int:
+        return len(self.yaw)
+
+    @classmethod
+    def empty(cls, horizons: np.ndarray) -> Behaviour:
+        z, h = np.zeros(0), len(horizons)
+        i8 = np.zeros(0, np.int8)
+        return cls(z, z, i8, z, z, i8, z, z, np.asarray(horizons, float), np.zeros((0, h, 2)),
+                   np.zeros((0, h, 2, 2)), z, z, z, z, z, z)
+
+    def row(self, i: int, decimals: int) -> dict:
+        """The JSON-ready fields of pedestrian ``i`` (see :meth:`EnvironmentState.to_dict`)."""
+        r = lambda a: np.round(a, decimals).tolist()  # noqa: E731
+        f = lambda a: round(float(a[i]), decimals)  # noqa: E731
+        return {
+            "yaw": f(self.yaw), "yaw_std": f(self.yaw_std),
+            "orientation_availability": AVAILABILITY[int(self.orientation_availability[i])],
+            "facing_probability": f(self.facing_probability),
+            "head_facing_probability": f(self.head_facing_probability),
+            "motion_state": MOTION_STATES[int(self.motion_state[i])], "speed": f(self.speed),
+            "speed_std": f(self.speed_std), "predicted_positions": r(self.predicted_positions[i]),
+            "predicted_covariances": r(self.predicted_covariances[i]),
+            "conflict": {"probability": f(self.conflict_probability), "time": f(self.conflict_time),
+                         "time_std": f(self.conflict_time_std), "closest_approach": f(self.closest_approach),
+                         "closest_approach_std": f(self.closest_approach_std),
+                         "closest_approach_time": f(self.closest_approach_time)},
+        }
+
+
+#: Names of ``Behaviour.orientation_availability`` and ``Behaviour.motion_state`` codes.
+AVAILABILITY = ("unavailable", "sign_unknown", "available")
+MOTION_STATES = ("standing", "walking", "running")
 
 
 @dataclass(frozen=True)
@@ -22,6 +100,8 @@ class Pedestrians:
     keypoints_3d: (N, 17, 3) world frame, metres, the skeleton in 3D.
     distances: (N,) metres from the camera to the person.
     sources: (N,) str, how the position was found (see ``pedenv.localization.paper``).
+    behaviour: what they are about to do (:class:`Behaviour`), or None where
+        ``Config.behaviour`` is off (``--method paper``).
     """
 
     track_ids: np.ndarray
@@ -35,6 +115,7 @@ class Pedestrians:
     keypoints_3d: np.ndarray
     distances: np.ndarray
     sources: np.ndarray
+    behaviour: Behaviour | None = None
 
     def __len__(self) -> int:
         return len(self.track_ids)
@@ -75,6 +156,7 @@ class EnvironmentState:
                     "confidence": r(p.confidences[i]),
                     "xyz": r(p.keypoints_3d[i]),
                 },
+                **({"behaviour": p.behaviour.row(i, decimals)} if p.behaviour is not None else {}),
             }
             for i in range(len(p))
         ]
@@ -89,4 +171,8 @@ class EnvironmentState:
             },
             "keypoint_names": list(KEYPOINT_NAMES),
             "pedestrians": peds,
+            **({"ego_motion": {"speed": round(p.behaviour.ego_speed, decimals),
+                               "yaw_rate": round(p.behaviour.ego_yaw_rate, decimals),
+                               "horizons": r(p.behaviour.horizons), "path": r(p.behaviour.ego_path)}}
+               if p.behaviour is not None else {}),
         }

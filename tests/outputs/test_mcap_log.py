@@ -63,7 +63,15 @@ def test_pedestrians_match_the_environment_model(evaluated):
             centre = entity.spheres[0].pose.position
             assert np.allclose([centre.x, centre.y, centre.z - 0.2], ped["position"], atol=1e-3)
             assert entity.texts[0].text == str(ped["track_id"])
-            assert len(entity.lines) == 2 and len(entity.lines[0].points) % 2 == 0
+            assert len(entity.lines[0].points) % 2 == 0
+            # skeleton, ellipse; with behaviour the predicted path and one ellipse per horizon
+            beh = ped.get("behaviour")
+            assert len(entity.lines) == 2 + (1 + len(beh["predicted_positions"]) if beh else 0)
+            if beh:
+                path = entity.lines[2].points
+                assert np.allclose([path[-1].x, path[-1].y], beh["predicted_positions"][-1], atol=1e-3)
+                assert len(entity.arrows) == (ped["velocity"] != [0, 0, 0]) + (beh["orientation_availability"]
+                                                                              != "unavailable")
 
 
 def test_transforms_image_and_annotations(evaluated):

@@ -74,7 +74,23 @@ def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config 
         wall = time.perf_counter() - t0
         ms = model.timer.per_stage_ms()
         rows.append({"pedestrians": n, **ms, "update_per_frame": 1e3 * wall / len(frames)})
+        if model.behaviour is not None:  # the behaviour cues' own clock, inside update (fused preset)
+            rows[-1]["behaviour_per_frame"] = 1e3 * model.behaviour.elapsed_s / len(frames)
     return rows
+
+
+def format_behaviour_cost(rows: list[dict]):
+    """A rich table: ``model.update`` of the fused preset per frame and the behaviour cues' share of it."""
+    from rich.table import Table
+
+    table = Table(title="pedenv bench, the fused preset: behaviour cues (orientation, path, conflict) in update")
+    for col in ("pedestrians", "update [ms]", "behaviour [ms]", "behaviour / rest of update"):
+        table.add_column(col, justify="right")
+    for r in rows:
+        extra = r.get("behaviour_per_frame", 0.0)
+        table.add_row(str(r["pedestrians"]), f"{r['update_per_frame']:.3f}", f"{extra:.3f}",
+                      f"{100 * extra / max(r['update_per_frame'] - extra, 1e-9):.1f} %")
+    return table
 
 
 def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):

@@ -190,7 +190,7 @@ class _Outputs:
         self.sinks.write(state, frame)
         if frame.image is None:
             raise InputError(f"{self.rec.name}: frame {frame.index} has no image")
-        drawn = draw_environment(frame.image, state)
+        drawn = draw_environment(frame.image, state, frame)
         if self.video_out:
             if self.video is None:
                 self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)

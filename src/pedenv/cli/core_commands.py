@@ -287,6 +287,10 @@ def bench(
     providers = sorted({r["provider"] for r in pose_rows if r.get("provider")})
     if providers:
         _out.print(f"pose networks ran on: {', '.join(providers)} (--device {device})", highlight=False)
+    from pedenv.apps.bench import format_behaviour_cost
+    from pedenv.config import Config
+
+    _out.print(format_behaviour_cost(bench_core(n_frames=frames, config=Config())))
     if pose and pose_rows:
         from pedenv.apps.bench import bench_detection_modes, format_detection_modes
 

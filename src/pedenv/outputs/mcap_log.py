@@ -7,6 +7,7 @@ Topics (Foxglove schemas unless said otherwise), frames ``world`` -> ``ego`` -> 
 * ``/pedestrians``: ``SceneUpdate`` in ``world``, one entity ``ped-<track id>`` per pedestrian:
   a sphere at the position, a velocity arrow, the 3D skeleton (line list), the 2-sigma
   ellipse on the ground (line loop) and the id as text; each update first deletes all;
+  with behaviour: a heading arrow, the predicted path with its ellipses (red in conflict);
 * ``/ground_truth``: ``SceneUpdate`` with the true positions (where the frame is labelled);
 * ``/ego``: ``SceneUpdate`` with the ego's path so far, entities ``ego-path-<piece>`` of 100
   positions each (:mod:`pedenv.outputs.ego_path`: the file grows linearly with the stream);
@@ -30,9 +31,11 @@ from foxglove import channels as fc
 from foxglove import messages as fm
 
 from pedenv.outputs.ego_path import EgoPath
+from pedenv.outputs.mcap_behaviour import ego_path_line, pedestrian_primitives
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES
 from pedenv.state import EnvironmentState
+from pedenv.visualize.behaviour_shapes import behaviour_shapes
 from pedenv.visualize.shapes import covariance_ellipses
 
 _RED, _BLUE, _BLACK, _GREEN = (fm.Color(r=0.9, g=0.25, b=0.15, a=1.0), fm.Color(r=0.15, g=0.4, b=0.9, a=1.0),
@@ -93,14 +96,17 @@ class McapWriter:
         ns = int(round(t * 1e9))
         stamp = fm.Timestamp.from_epoch_secs(t)
         self._log_transforms(state, frame, stamp, ns)
+        shapes = behaviour_shapes(state.pedestrians)
         self._peds.log(fm.SceneUpdate(deletions=[_delete_all(stamp)], entities=[
-            _pedestrian(state, i, stamp) for i in range(len(state.pedestrians))]), log_time=ns)
+            _pedestrian(state, i, stamp, shapes) for i in range(len(state.pedestrians))]), log_time=ns)
         self._log_ground_truth(frame, stamp, ns)
         piece, points = self._trajectory.add(state.ego.translation)
         self._ego.log(fm.SceneUpdate(entities=[fm.SceneEntity(
             timestamp=stamp, frame_id="world", id=f"ego-path-{piece}",
             lines=[fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineStrip, thickness=0.15, color=_GREEN,
-                                    points=[_p3(p) for p in points])])]), log_time=ns)
+                                    points=[_p3(p) for p in points])]),
+            fm.SceneEntity(timestamp=stamp, frame_id="world", id="ego-predicted-path",
+                           lines=ego_path_line(shapes, float(state.ego.translation[2])))]), log_time=ns)
         self._log_camera(state, frame, stamp, ns)
         record = state.to_dict()
         record["log_time"] = t
@@ -168,8 +174,10 @@ def _delete_all(stamp) -> fm.SceneEntityDeletion:
     return fm.SceneEntityDeletion(timestamp=stamp, type=fm.SceneEntityDeletionType.All)
 
 
-def _pedestrian(state: EnvironmentState, i: int, stamp) -> fm.SceneEntity:
-    """Pedestrian ``i`` as one entity: sphere, velocity arrow, skeleton, 2-sigma ellipse, id text."""
+def _pedestrian(state: EnvironmentState, i: int, stamp, shapes=None) -> fm.SceneEntity:
+    """Pedestrian ``i`` as one entity: sphere, velocity arrow, skeleton, 2-sigma ellipse, id text,
+    and with behaviour (``shapes``) the heading arrow and predicted path (:mod:`pedenv.outputs.mcap_behaviour`)."""
+    extra_arrows, extra_lines = pedestrian_primitives(state, shapes, i)
     p = state.pedestrians
     pos, vel = p.positions[i], p.velocities[i]
     speed = float(np.hypot(vel[0], vel[1]))
@@ -182,11 +190,11 @@ def _pedestrian(state: EnvironmentState, i: int, stamp) -> fm.SceneEntity:
     return fm.SceneEntity(
         timestamp=stamp, frame_id="world", id=f"ped-{int(p.track_ids[i])}",
         spheres=[fm.SpherePrimitive(pose=_pose(pos + [0, 0, 0.2]), size=fm.Vector3(x=0.4, y=0.4, z=0.4), color=_RED)],
-        arrows=arrows,
+        arrows=arrows + extra_arrows,
         lines=[fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineList, thickness=0.04, color=_BLUE,
                                 points=[_p3(p.keypoints_3d[i, k]) for k in bones]),
                fm.LinePrimitive(type=fm.LinePrimitiveLineType.LineLoop, thickness=0.03, color=_RED,
-                                points=[_p3((x, y, pos[2] + 0.02)) for x, y in ring])],
+                                points=[_p3((x, y, pos[2] + 0.02)) for x, y in ring])] + extra_lines,
         texts=[fm.TextPrimitive(pose=_pose(pos + [0, 0, 2.1]), billboard=True, font_size=0.4, color=_RED,
                                 text=str(int(p.track_ids[i])))])
 

@@ -50,7 +50,20 @@ ENVIRONMENT_SCHEMA = pa.schema([
     ("ego_x", pa.float64()), ("ego_y", pa.float64()), ("ego_yaw", pa.float64()),
     ("box", _vec(4)), ("keypoints_2d", _points(2)), ("keypoint_confidence", _vec(NUM_KEYPOINTS)),
     ("keypoints_3d", _points(3)),
+    *[(name, kind) for name, kind in (
+        ("yaw", _FLOAT64), ("yaw_std", _FLOAT64), ("orientation_availability", pa.string()),
+        ("facing_probability", _FLOAT64), ("head_facing_probability", _FLOAT64), ("motion_state", pa.string()),
+        ("speed", _FLOAT64), ("speed_std", _FLOAT64), ("horizons", pa.list_(_FLOAT64)),
+        ("predicted_xy", pa.list_(_vec(2))), ("predicted_cov", pa.list_(_vec(3))),
+        ("conflict_probability", _FLOAT64), ("conflict_time", _FLOAT64), ("conflict_time_std", _FLOAT64),
+        ("closest_approach", _FLOAT64), ("closest_approach_std", _FLOAT64), ("closest_approach_time", _FLOAT64),
+        ("ego_speed", _FLOAT64), ("ego_yaw_rate", _FLOAT64))],
 ])
+#: The behaviour columns (``Config.behaviour``, :class:`pedenv.state.Behaviour`; null with ``--method paper``):
+#: yaw and its std (rad, world), availability and motion state as names, probabilities, speed (m/s),
+#: horizons (s) with predicted x-y (m) and covariances ``[xx, xy, yy]`` (m^2), conflict time (s) and
+#: closest approach (m), the ego's speed (m/s) and yaw rate (rad/s).
+BEHAVIOUR_COLUMNS = tuple(ENVIRONMENT_SCHEMA.names[ENVIRONMENT_SCHEMA.get_field_index("yaw"):])
 
 #: Columns of ``matches.parquet``: predicted and true x-y (world, m), errors (m, %), distance ego-truth (m).
 MATCHES_SCHEMA = pa.schema([
@@ -154,7 +167,34 @@ class EnvironmentTableWriter(_IncrementalTable):
             "ego_yaw": [ego.yaw] * n,
             "box": p.boxes, "keypoints_2d": p.keypoints,
             "keypoint_confidence": p.confidences, "keypoints_3d": p.keypoints_3d,
+            **behaviour_columns(state),
         })
+
+
+def behaviour_columns(state: EnvironmentState) -> dict:
+    """The :data:`BEHAVIOUR_COLUMNS` of one frame's pedestrians (all null where behaviour is off)."""
+    p, n = state.pedestrians, len(state.pedestrians)
+    b = p.behaviour
+    if b is None:
+        return {name: [None] * n for name in BEHAVIOUR_COLUMNS}
+    from pedenv.state import AVAILABILITY, MOTION_STATES
+
+    cov = b.predicted_covariances
+    return {
+        "yaw": b.yaw.tolist(), "yaw_std": b.yaw_std.tolist(),
+        "orientation_availability": [AVAILABILITY[int(a)] for a in b.orientation_availability],
+        "facing_probability": b.facing_probability.tolist(),
+        "head_facing_probability": b.head_facing_probability.tolist(),
+        "motion_state": [MOTION_STATES[int(m)] for m in b.motion_state], "speed": b.speed.tolist(),
+        "speed_std": b.speed_std.tolist(), "horizons": [b.horizons.tolist()] * n,
+        "predicted_xy": b.predicted_positions.tolist(),
+        "predicted_cov": np.stack([cov[..., 0, 0], cov[..., 0, 1], cov[..., 1, 1]], axis=-1).tolist(),
+        "conflict_probability": b.conflict_probability.tolist(), "conflict_time": b.conflict_time.tolist(),
+        "conflict_time_std": b.conflict_time_std.tolist(), "closest_approach": b.closest_approach.tolist(),
+        "closest_approach_std": b.closest_approach_std.tolist(),
+        "closest_approach_time": b.closest_approach_time.tolist(),
+        "ego_speed": [b.ego_speed] * n, "ego_yaw_rate": [b.ego_yaw_rate] * n,
+    }
 
 
 class MatchesTableWriter(_IncrementalTable):

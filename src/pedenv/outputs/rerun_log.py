@@ -10,6 +10,8 @@ Entities, on the timelines ``frame`` (the frame index) and ``time`` (seconds):
   (:mod:`pedenv.outputs.ego_path`: the file grows linearly with the stream);
 * ``world/pedestrians``: ``positions`` (labelled with the track ids), ``velocities`` (arrows),
   ``ellipses`` (2-sigma outlines on the ground), ``skeletons/<track id>`` (3D keypoints);
+* ``world/behaviour``: heading arrows, predicted paths with ellipses, conflict in red
+  (:mod:`pedenv.outputs.rerun_behaviour`);
 * ``world/ground_truth/positions`` and ``world/ego/camera/image/ground_truth`` (boxes) where labelled.
 
 Skeleton lines come from the annotation context logged at ``/``: class 0 "person" with the
@@ -29,6 +31,7 @@ import pyarrow as pa
 import rerun as rr
 
 from pedenv.outputs.ego_path import EgoPath
+from pedenv.outputs.rerun_behaviour import log_behaviour
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES, KEYPOINT_NAMES
 from pedenv.state import EnvironmentState
@@ -89,6 +92,7 @@ class RerunWriter:
         self._log_ego(rec, state, frame)
         self._log_image(rec, state, frame)
         self._log_world(rec, state)
+        log_behaviour(rec, state)
         self._log_ground_truth(rec, frame)
         rec.flush(blocking=True)
 

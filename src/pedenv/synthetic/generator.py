@@ -89,6 +89,14 @@ def generate_scene(seed: int, name: str, *, frame_rate_hz: float, duration_s: fl
     return Scene(name, tuple(frames), f"{plan.description}; {relief}; seed {seed}")
 
 
+def scene_pedestrians(seed: int, name: str, duration_s: float | None = None) -> Pedestrians:
+    """The pedestrians of scene ``name`` generated with ``seed`` (the same plan :func:`generate_scene`
+    builds): ``.at(t)`` gives every one's true position and facing (``heading``) at any time ``t``
+    (seconds), before, during and after the scene; row ``i`` is ground-truth id ``i``."""
+    duration = default_duration(name) if duration_s is None else float(duration_s)
+    return build_scenario(name, scenario_rng(seed, name), duration).pedestrians
+
+
 def pedestrian_skeletons(peds: Pedestrians, ground: Terrain, t: float) -> tuple[np.ndarray, np.ndarray]:
     """Ground points (N, 3) and 3D skeletons (N, 17, 3), world frame, metres, at time ``t`` (s)."""
     state = peds.at(t)

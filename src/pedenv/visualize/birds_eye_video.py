@@ -20,6 +20,7 @@ import numpy as np
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 from pedenv.video_files import VideoOut
+from pedenv.visualize.behaviour_drawing import draw_behaviour_birds_eye
 from pedenv.visualize.overlay import ascii_text
 from pedenv.visualize.shapes import covariance_ellipses, field_of_view
 
@@ -112,6 +113,7 @@ class BirdsEyeVideo:
                 cv2.circle(img, tuple(int(x) for x in a), 5, _PED, -1, cv2.LINE_AA)
                 cv2.putText(img, str(int(tid)), (int(a[0]) + 7, int(a[1]) - 7), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
                             _PED, 1, cv2.LINE_AA)
+        draw_behaviour_birds_eye(img, state, to_vehicle, self._px)  # heading, predicted path, conflict
         if frame is not None and frame.ground_truth is not None and len(frame.ground_truth):
             for gid, p in zip(frame.ground_truth.ids, self._px(to_vehicle(frame.ground_truth.positions))):
                 cv2.drawMarker(img, (int(p[0]), int(p[1])), _TRUTH, cv2.MARKER_TILTED_CROSS, 10, 2, cv2.LINE_AA)

@@ -87,10 +87,18 @@ def draw_detections(image: np.ndarray, detections: Detections) -> np.ndarray:
     return draw_persons(image, detections.keypoints, detections.confidences, detections.boxes, labels)
 
 
-def draw_environment(image: np.ndarray, state) -> np.ndarray:
+def draw_environment(image: np.ndarray, state, frame=None) -> np.ndarray:
     """A copy of ``image`` with the tracked pedestrians of an ``EnvironmentState``:
-    skeleton, box, track id and distance from the camera in metres."""
+    skeleton, box, track id and distance from the camera in metres; with behaviour cues
+    (``Config.behaviour``) also motion state, facing and conflict in the label, and, given the
+    ``frame`` (its camera), the heading arrows and predicted paths
+    (:mod:`pedenv.visualize.behaviour_drawing`)."""
+    from pedenv.visualize.behaviour_drawing import behaviour_label, draw_behaviour_image
+
     peds = state.pedestrians
-    labels = [f"id {int(i)}" + (f"  {d:.1f} m" if np.isfinite(d) else "")
-              for i, d in zip(peds.track_ids, peds.distances)]
-    return draw_persons(image, peds.keypoints, peds.confidences, peds.boxes, labels, keys=peds.track_ids)
+    labels = [f"id {int(i)}" + (f"  {d:.1f} m" if np.isfinite(d) else "") + behaviour_label(state, k)
+              for k, (i, d) in enumerate(zip(peds.track_ids, peds.distances))]
+    out = draw_persons(image, peds.keypoints, peds.confidences, peds.boxes, labels, keys=peds.track_ids)
+    if frame is not None:
+        draw_behaviour_image(out, state, frame.camera.intrinsics, frame.cam_to_world)
+    return out

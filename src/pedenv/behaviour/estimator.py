@@ -1,0 +1,155 @@
+"""One frame of the behaviour cues: the model calls :meth:`BehaviourEstimator.update` after localisation.
+
+Per-track state (the heading distribution, the motion state, when it was last updated) lives
+in :class:`TrackStore`, keyed by track id; tracks the tracker has dropped are forgotten.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from pedenv.behaviour import facing, heading_filter, motion_state
+from pedenv.behaviour.config import BehaviourConfig
+from pedenv.behaviour.conflict import corridor_conflict
+from pedenv.behaviour.ego_path import EgoHistory, predict_ego_path
+from pedenv.behaviour.orientation import motion_likelihood, skeleton_cue, skeleton_likelihood
+from pedenv.behaviour.prediction import predict_path
+from pedenv.geometry import pixel_rays
+from pedenv.records import Frame
+from pedenv.state import Behaviour, Pedestrians
+
+
+class TrackStore:
+    """Per track id: ``p (T, B)`` heading distribution, ``state (T,)`` int8 motion state,
+    ``time (T,)`` seconds of its last update. Rows are kept sorted by id."""
+
+    def __init__(self, bins: int) -> None:
+        self.bins = bins
+        self.clear()
+
+    def clear(self) -> None:
+        self.ids = np.zeros(0, np.int64)
+        self.p = np.zeros((0, self.bins))
+        self.state = np.zeros(0, np.int8)
+        self.time = np.zeros(0)
+
+    def rows(self, ids: np.ndarray, now: float) -> np.ndarray:
+        """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now``."""
+        index = np.searchsorted(self.ids, ids)
+        found = index < len(self.ids)
+        found[found] = self.ids[index[found]] == ids[found]
+        if not found.all():
+            new = np.unique(ids[~found])
+            self.ids = np.concatenate([self.ids, new])
+            self.p = np.concatenate([self.p, heading_filter.uniform(len(new), self.bins)])
+            self.state = np.concatenate([self.state, np.zeros(len(new), np.int8)])
+            self.time = np.concatenate([self.time, np.full(len(new), now)])
+            self._take(np.argsort(self.ids, kind="stable"))
+            index = np.searchsorted(self.ids, ids)
+        return index
+
+    def keep(self, live_ids: np.ndarray) -> None:
+        """Forget every track not in ``live_ids`` (checked once the store holds more rows than there
+        are live tracks: a dropped track may wait a few frames)."""
+        if len(self.ids) <= len(live_ids):
+            return
+        mask = np.isin(self.ids, live_ids)
+        if not mask.all():
+            self._take(mask)
+
+    def _take(self, index: np.ndarray) -> None:
+        self.ids, self.p, self.state, self.time = self.ids[index], self.p[index], self.state[index], self.time[index]
+
+
+class BehaviourEstimator:
+    """The behaviour cues of every tracked pedestrian, frame by frame (``config``: ``Config.behaviour``;
+    ``acceleration_std``: the Kalman filter's, m/s^2, for the predicted path)."""
+
+    def __init__(self, config: BehaviourConfig, acceleration_std: float) -> None:
+        self.config = config
+        self.acceleration_std = acceleration_std
+        self.store = TrackStore(config.orientation_bins)
+        self.ego = EgoHistory(config)
+        self.cells = heading_filter.cell_centres(config.orientation_bins)
+        self.horizons = np.asarray(config.horizons_s, float)
+        k = int(round(config.conflict_horizon_s / config.conflict_step_s))
+        self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
+        self.path_times = np.concatenate([self.conflict_times, self.horizons])  # one prediction for both
+        self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
+
+    def reset(self) -> None:
+        self.store.clear()
+        self.ego.reset()
+
+    def update(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, started: np.ndarray,
+               live_ids: np.ndarray) -> Pedestrians:
+        """``peds`` with their :class:`~pedenv.state.Behaviour`.
+
+        x (N, 4), P (N, 4, 4): the pedestrians' Kalman states ``[x, vx, y, vy]`` (world, m and
+        m/s) and covariances; started (N,) bool: the filter holds a state (elsewhere the
+        reported position, standing, with a 2 m/s velocity spread; so is a row whose state is not
+        finite or beyond :data:`STATE_LIMIT`); live_ids: every track id the tracker still holds.
+        """
+        start = time.perf_counter()
+        usable = (started & (np.abs(x) < STATE_LIMIT[0]).all(axis=1)
+                  & (np.abs(P) < STATE_LIMIT[1]).reshape(len(P), 16).all(axis=1))  # False for NaN, inf
+        if not usable.all():
+            x, P, fresh = x.copy(), P.copy(), ~usable
+            x[fresh] = np.column_stack([peds.positions[fresh, 0], np.zeros(fresh.sum()), peds.positions[fresh, 1],
+                                        np.zeros(fresh.sum())])
+            prior = np.repeat(np.diag([1.0, 4.0, 1.0, 4.0])[None], fresh.sum(), axis=0)
+            cov = _finite_cov4(peds.covariances[fresh])
+            prior[:, 0, 0], prior[:, 0, 2], prior[:, 2, 0], prior[:, 2, 2] = (cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 0],
+                                                                              cov[:, 1, 1])
+            P[fresh] = prior
+        self.ego.add(frame.timestamp, frame.ego)
+        path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times)
+        self.store.keep(live_ids)
+        if len(peds) == 0:
+            beh = Behaviour.empty(self.horizons)
+        else:
+            beh = self._cues(frame, peds, x, P, path)
+        beh = dataclasses.replace(beh, conflict_horizon=float(self.conflict_times[-1]), ego_speed=path.motion.speed,
+                                  ego_yaw_rate=path.motion.yaw_rate, ego_path=path.xy)
+        self.elapsed_s, self.frames = self.elapsed_s + time.perf_counter() - start, self.frames + 1
+        return dataclasses.replace(peds, behaviour=beh)
+
+    def _cues(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, path) -> Behaviour:
+        cfg, t, store = self.config, frame.timestamp, self.store
+        rows = store.rows(peds.track_ids, t)
+        p = heading_filter.predict(store.p[rows], t - store.time[rows], np.radians(cfg.heading_random_walk_deg))
+        origin = frame.cam_to_world[:3, 3]
+        rays = pixel_rays(peds.keypoints, frame.camera.intrinsics, frame.cam_to_world)
+        cue = skeleton_cue(rays, peds.confidences, peds.positions, origin,
+                           float(frame.camera.intrinsics[0, 0]), cfg)
+        velocity, velocity_cov = x[:, [1, 3]], P[:, [1, 3]][:, :, [1, 3]]
+        moving, _ = motion_likelihood(velocity, velocity_cov, self.cells, cfg)
+        p = heading_filter.update(p, skeleton_likelihood(cue, self.cells, cfg) * moving)
+        store.p[rows], store.time[rows] = p, t
+        yaw, yaw_std, available = heading_filter.summary(p, np.radians(cfg.available_std_deg))
+        speed, speed_std = motion_state.speed_and_std(velocity, velocity_cov)
+        state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
+        store.state[rows] = state
+        half = np.radians(cfg.facing_half_angle_deg)
+        ahead, ahead_cov = predict_path(x, P, self.path_times, self.acceleration_std)
+        k = len(self.conflict_times)
+        conflict = corridor_conflict(path, ahead[:, :k], ahead_cov[:, :k], cfg.corridor_half_width_m,
+                                     cfg.corridor_front_m)
+        positions, covariances = ahead[:, k:], ahead_cov[:, k:]
+        return Behaviour(yaw, yaw_std, available, facing.body_facing(p, cue.toward, half),
+                         facing.head_facing(cue, half), state, speed, speed_std, self.horizons, positions,
+                         covariances, conflict.probability, conflict.time_s, conflict.time_std_s,
+                         conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s)
+
+
+#: A filter state (m, m/s) or covariance entry (m^2, ...) beyond these is not used (an overflowed track).
+STATE_LIMIT = (1e6, 1e8)
+
+
+def _finite_cov4(cov: np.ndarray) -> np.ndarray:
+    """Position covariances (N, 2, 2) with non-finite or absurd ones replaced by 100 m^2 each way."""
+    good = (np.abs(cov) < STATE_LIMIT[1]).reshape(len(cov), 4).all(axis=1)
+    return np.where(good[:, None, None], cov, 100.0 * np.eye(2))

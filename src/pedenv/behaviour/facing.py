@@ -1,0 +1,27 @@
+"""Facing the ego: is the body (and, where the face shows, the head) turned towards the ego camera?"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import ndtr
+
+from pedenv.behaviour import heading_filter
+from pedenv.behaviour.orientation import SkeletonCue
+
+
+def body_facing(p: np.ndarray, toward: np.ndarray, half_angle: float) -> np.ndarray:
+    """(N,) probability that the body faces the camera: the heading distribution p (N, B) within
+    ``half_angle`` radians of the direction to the camera ``toward`` (N, 2) world x-y."""
+    return heading_filter.probability_within(p, np.arctan2(toward[:, 1], toward[:, 0]), half_angle)
+
+
+def head_facing(cue: SkeletonCue, half_angle: float) -> np.ndarray:
+    """(N,) probability that the head faces the camera, from this frame's face keypoints.
+
+    How clearly the face is seen (the smallest confidence of nose and eyes) times the chance
+    that the nose's sideways offset ratio ``sin(a)`` lies within ``sin(half_angle)``; a face
+    not seen, or with no offset measured, is not turned towards the camera (0).
+    """
+    limit = np.sin(half_angle)
+    inside = ndtr((limit - cue.face) / cue.face_std) - ndtr((-limit - cue.face) / cue.face_std)
+    return np.where(cue.face_ok, np.clip(cue.face_seen * inside, 0.0, 1.0), 0.0)

@@ -1,0 +1,57 @@
+"""Conflict with the corridor around the ego's path, on constructed pedestrians."""
+
+import numpy as np
+import pytest
+
+from pedenv.behaviour.conflict import corridor_conflict, path_coordinates
+from pedenv.behaviour.ego_path import EgoMotion, predict_ego_path
+from pedenv.behaviour.prediction import predict_path
+from pedenv.records import EgoPose
+
+TIMES = np.linspace(0.0, 2.0, 21)
+
+
+def _conflict(motion, states, std=0.3):
+    path = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), motion, TIMES)
+    x = np.asarray(states, float)
+    P = np.repeat(np.diag([std**2, 0.05, std**2, 0.05])[None], len(x), axis=0)
+    pos, cov = predict_path(x, P, TIMES, 0.5)
+    return corridor_conflict(path, pos, cov, 1.5, 2.5)
+
+
+def test_a_pedestrian_crossing_in_front_of_a_driving_ego():
+    # ego at 8 m/s; a pedestrian 12 m ahead, 3 m to the left, walking right at 1.5 m/s: inside from 1.0 s
+    c = _conflict(EgoMotion(8.0, 0.0, 0.5, 0.05, True),
+                  [[12.0, 0.0, 3.0, -1.5], [12.0, 0.0, 6.0, 0.0], [-5.0, 0.0, 0.0, 0.0]])
+    # the ego's own sideways spread (0.8 m at 2 s) and the pedestrian's keep it below 1
+    assert c.probability[0] > 0.75 and c.time_s[0] == pytest.approx(1.1, abs=0.25)
+    assert c.probability[1] < 0.01 and c.probability[2] < 0.01  # on the sidewalk; behind the ego
+    assert c.time_s[1] == 2.0 and c.time_std_s[1] == 0.0
+    assert c.closest_m[0] < 5.0 and 0 <= c.closest_time_s[0] <= 2.0
+    assert all(np.isfinite(getattr(c, f)).all() for f in c.__dataclass_fields__)
+
+
+def test_a_standing_ego_only_its_front():
+    c = _conflict(EgoMotion(0.0, 0.0, 0.5, 0.05, True), [[1.5, 0.0, 0.2, 0.0], [8.0, 0.0, 0.0, 0.0]])
+    assert c.probability[0] > 0.9 and c.probability[1] < 0.01
+
+
+def test_a_reversing_ego_looks_behind():
+    c = _conflict(EgoMotion(-3.0, 0.0, 0.5, 0.05, True), [[-4.0, 0.0, 0.0, 0.0], [4.0, 0.0, 0.0, 0.0]])
+    assert c.probability[0] > 0.9 and c.probability[1] < 0.01
+
+
+def test_a_turning_ego_meets_the_pedestrian_on_its_arc():
+    motion = EgoMotion(8.0, 0.4, 0.5, 0.05, True)  # radius 20 m, turning left
+    on_arc = [20 * np.sin(0.6), 20 * (1 - np.cos(0.6))]
+    straight = [12.0, -1.0]
+    c = _conflict(motion, [[on_arc[0], 0, on_arc[1], 0], [straight[0], 0, straight[1], 0]])
+    assert c.probability[0] > 0.9 and c.probability[1] < 0.1
+    s, d, _ = path_coordinates(predict_ego_path(EgoPose.from_xy_yaw(0, 0, 0), motion, TIMES), np.array([on_arc]))
+    assert s[0] == pytest.approx(12.0, abs=0.01) and abs(d[0]) < 1e-6
+
+
+def test_wide_uncertainty_lowers_the_probability():
+    sure = _conflict(EgoMotion(8.0, 0.0, 0.5, 0.05, True), [[12.0, 0.0, 3.5, 0.0]], std=0.2)
+    unsure = _conflict(EgoMotion(8.0, 0.0, 0.5, 0.05, True), [[12.0, 0.0, 3.5, 0.0]], std=5.0)
+    assert sure.probability[0] < 0.1 and 0.15 < unsure.probability[0] < 0.6

@@ -1,0 +1,65 @@
+"""The ego's path from its recent poses: standing, reversing, turning, a yaw-rate spike, a gap."""
+
+import numpy as np
+import pytest
+
+from pedenv.behaviour.config import BehaviourConfig
+from pedenv.behaviour.ego_path import EgoHistory, predict_ego_path
+from pedenv.records import EgoPose
+
+CFG = BehaviourConfig(enabled=True)
+TIMES = np.linspace(0.0, 2.0, 21)
+
+
+def _history(poses, dt=0.1):
+    h = EgoHistory(CFG)
+    for k, (x, y, yaw) in enumerate(poses):
+        h.add(k * dt, EgoPose.from_xy_yaw(x, y, yaw))
+    return h
+
+
+@pytest.mark.parametrize("name, poses, speed, rate", [
+    ("driving", [(k, 0.0, 0.0) for k in range(6)], 10.0, 0.0),
+    ("standing", [(3.0, 1.0, 0.4)] * 6, 0.0, 0.0),
+    ("reversing", [(-0.2 * k, 0.0, 0.0) for k in range(6)], -2.0, 0.0),
+    ("turning", [(np.sin(0.03 * k) / 0.03, (1 - np.cos(0.03 * k)) / 0.03, 0.03 * k) for k in range(6)], 10.0, 0.3),
+])
+def test_speed_and_yaw_rate(name, poses, speed, rate):
+    m = _history(poses).motion()
+    assert m.known and m.speed == pytest.approx(speed, abs=0.02) and m.yaw_rate == pytest.approx(rate, abs=0.01)
+
+
+def test_a_turning_ego_path_follows_the_arc():
+    h = _history([(np.sin(0.03 * k) / 0.03, (1 - np.cos(0.03 * k)) / 0.03, 0.03 * k) for k in range(6)])
+    pose = EgoPose.from_xy_yaw(np.sin(0.15) / 0.03, (1 - np.cos(0.15)) / 0.03, 0.15)
+    path = predict_ego_path(pose, h.motion(), TIMES)
+    end = 0.15 + 0.3 * 2.0
+    assert np.allclose(path.xy[-1], [np.sin(end) / 0.03, (1 - np.cos(end)) / 0.03], atol=0.05)
+    assert path.lateral_std[0] == 0 and path.lateral_std[-1] > path.lateral_std[10] > 0
+
+
+def test_a_yaw_rate_spike_is_clipped_and_widens_the_spread():
+    m = _history([(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 0.0, 1.2)]).motion()
+    assert m.yaw_rate == CFG.max_yaw_rate_radps and m.yaw_rate_std > CFG.ego_yaw_rate_std_radps + 1.0
+
+
+def test_a_gap_of_seconds_forgets_the_motion():
+    h = _history([(k, 0.0, 0.0) for k in range(6)])
+    h.add(10.0, EgoPose.from_xy_yaw(30.0, 0.0, 0.0))
+    m = h.motion()
+    assert not m.known and m.speed == 0 and m.speed_std == 5 * CFG.ego_speed_std_mps
+    path = predict_ego_path(EgoPose.from_xy_yaw(30.0, 0.0, 0.0), m, TIMES)
+    assert np.isfinite(path.xy).all() and np.allclose(path.xy, [30.0, 0.0])
+
+
+def test_an_accelerating_ego_reaches_farther_and_a_braking_one_stops():
+    start = _history([(0.5 * 2.0 * (0.1 * k) ** 2, 0.0, 0.0) for k in range(6)])  # 2 m/s^2 from rest
+    m = start.motion()
+    assert m.acceleration == pytest.approx(2.0, abs=0.05) and m.speed == pytest.approx(1.0, abs=0.05)
+    path = predict_ego_path(EgoPose.from_xy_yaw(0.25, 0.0, 0.0), m, TIMES)
+    assert path.length == pytest.approx(1.0 * 2 + 0.5 * 2.0 * 4, abs=0.1)
+    brake = _history([(10 * 0.1 * k - 0.5 * 5.0 * (0.1 * k) ** 2, 0.0, 0.0) for k in range(6)])  # 10 m/s, -5 m/s^2
+    m = brake.motion()
+    path = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), m, TIMES)
+    assert m.acceleration == pytest.approx(-4.0)  # clipped to max_ego_acceleration_mps2
+    assert path.length == pytest.approx(m.speed**2 / 8.0, abs=0.05) and path.direction == 1.0

@@ -1,0 +1,68 @@
+"""The behaviour cues inside the model: every field finite on a synthetic scene, none with the
+paper's method, and a defined answer after a gap of seconds."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from pedenv.behaviour import heading_filter as hf
+from pedenv.config import Config
+from pedenv.model import PedestrianEnvironmentModel
+from pedenv.outputs.jsonl import environment_line
+from pedenv.synthetic import generate_scenes
+from pedenv.synthetic.detector import DetectorModel
+
+
+@pytest.fixture(scope="module")
+def frames():
+    scene = generate_scenes(0, ["red-light-crossing"], duration_s=4.0)[0]
+    detector = DetectorModel(0)
+    return [dataclasses.replace(f, detections=detector(f)) for f in scene.frames]
+
+
+def test_every_field_is_finite_and_shaped(frames):
+    model = PedestrianEnvironmentModel(Config())
+    for frame in frames:
+        state = model.update(frame)
+        b, n = state.pedestrians.behaviour, len(state.pedestrians)
+        assert b is not None and len(b) == n
+        assert b.predicted_positions.shape == (n, 4, 2) and b.predicted_covariances.shape == (n, 4, 2, 2)
+        for name in b.__dataclass_fields__:
+            assert np.isfinite(np.asarray(getattr(b, name), float)).all(), name
+    line = json.loads(environment_line(state))
+    assert line["pedestrians"][0]["behaviour"]["orientation_availability"] in hf.AVAILABILITY_NAMES
+    assert line["ego_motion"]["speed"] >= 0 and len(line["ego_motion"]["path"]) == 21
+
+
+def test_the_paper_method_has_no_behaviour(frames):
+    model = PedestrianEnvironmentModel(Config(method="paper"))
+    state = model.update(frames[0])
+    assert model.behaviour is None and state.pedestrians.behaviour is None
+    assert "behaviour" not in json.dumps(state.to_dict())
+
+
+def test_a_gap_of_seconds_widens_the_orientation(frames):
+    model = PedestrianEnvironmentModel(Config())
+    for frame in frames[:20]:
+        before = model.update(frame).pedestrians.behaviour
+    later = dataclasses.replace(frames[20], timestamp=frames[19].timestamp + 6.0)
+    after = model.update(later).pedestrians.behaviour
+    assert np.median(after.yaw_std) >= np.median(before.yaw_std)
+    assert after.ego_speed == 0.0  # the ego's motion is forgotten, not extrapolated over the gap
+    assert all(np.isfinite(np.asarray(getattr(after, f), float)).all() for f in after.__dataclass_fields__)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, 1e300])
+def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
+    model = PedestrianEnvironmentModel(Config())
+    state = model.update(frames[0])
+    n = len(state.pedestrians)
+    x, P = np.full((n, 4), bad), np.full((n, 4, 4), bad)
+    model.behaviour.reset()
+    peds = model.behaviour.update(frames[1], dataclasses.replace(state.pedestrians, behaviour=None), x, P,
+                                  np.ones(n, bool), state.pedestrians.track_ids)
+    b = peds.behaviour
+    assert all(np.isfinite(np.asarray(getattr(b, f), float)).all() for f in b.__dataclass_fields__)
+    assert np.allclose(b.predicted_positions[:, 0], state.pedestrians.positions[:, :2])  # standing where reported

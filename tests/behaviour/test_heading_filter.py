@@ -1,0 +1,41 @@
+"""The grid filter on the circle: prediction spreads, summary and availability."""
+
+import numpy as np
+import pytest
+
+from pedenv.behaviour import heading_filter as hf
+
+CELLS = hf.cell_centres(72)
+
+
+def _peaked(centres, kappa=40.0):
+    p = sum(np.exp(kappa * (np.cos(CELLS - c) - 1.0)) for c in centres)
+    return hf.normalise(np.atleast_2d(p))
+
+
+@pytest.mark.parametrize("centres, expected", [
+    ([0.7], hf.AVAILABLE), ([0.7, 0.7 + np.pi], hf.SIGN_UNKNOWN), ([0.0, 2.1, 4.2], hf.UNAVAILABLE),
+])
+def test_availability_follows_autoware(centres, expected):
+    yaw, std, available = hf.summary(_peaked(centres), np.radians(40))
+    assert available[0] == expected
+    assert min(abs(hf._wrap(yaw[0] - c)) for c in centres) < np.radians(3)
+
+
+def test_prediction_spreads_with_time_and_a_gap_of_seconds_forgets():
+    p = _peaked([1.0])
+    stds = [hf.summary(hf.predict(p, np.array([dt]), np.radians(45)), np.radians(40))[1][0] for dt in (0.1, 1.0, 5.0)]
+    assert stds[0] < stds[1] < stds[2]
+    _, std, available = hf.summary(hf.predict(p, np.array([5.0]), np.radians(45)), np.radians(40))
+    assert available[0] == hf.UNAVAILABLE and 1.4 < std[0] <= np.pi / np.sqrt(3) + 0.01
+
+
+def test_update_with_a_vanishing_likelihood_is_flat_not_nan():
+    p = hf.update(_peaked([0.0]), np.zeros((1, 72)))
+    assert np.isfinite(p).all() and np.ptp(p) == 0
+
+
+def test_probability_within_counts_the_cells_near_the_centre():
+    p = _peaked([0.0], kappa=400.0)
+    assert hf.probability_within(p, np.array([0.0]), np.radians(30))[0] > 0.99
+    assert hf.probability_within(p, np.array([np.pi]), np.radians(30))[0] < 0.01
