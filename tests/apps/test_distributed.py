@@ -86,9 +86,9 @@ def test_resume_refuses_a_folder_pedenv_did_not_write(short_dataset, tmp_path):
 def test_a_damaged_checkpoint_is_one_clear_error(short_dataset, tmp_path):
     evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "run")
     name = short_dataset.scene_names()[0]
-    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.pkl"
-    checkpoint.write_bytes(b"not a pickle")
-    with pytest.raises(InputError, match=f"{checkpoint}: cannot read the scene checkpoint"):
+    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
+    checkpoint.write_bytes(b"not a checkpoint")
+    with pytest.raises(InputError, match=f"{checkpoint}: not a pedenv scene checkpoint .*to run scene {name} again"):
         evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "run", resume=True)
 
 
