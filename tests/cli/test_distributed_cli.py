@@ -77,7 +77,7 @@ def test_ctrl_c_keeps_the_finished_scenes_and_leaves_no_ray_process(tmp_path, st
                             env={**os.environ, "RAY_TMPDIR": ray_root}, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 300
-    while time.time() < deadline and proc.poll() is None and not list(out.glob("scenes/*/result.pkl")):
+    while time.time() < deadline and proc.poll() is None and not list(out.glob("scenes/*/result.npz")):
         time.sleep(0.2)  # until the first scene is done; the others still run
     assert proc.poll() is None and _processes_under(ray_root), "the run ended before Ctrl-C"
     proc.send_signal(signal.SIGINT)
@@ -90,5 +90,5 @@ def test_ctrl_c_keeps_the_finished_scenes_and_leaves_no_ray_process(tmp_path, st
         time.sleep(0.2)
         left = _processes_under(ray_root)
     assert left == []
-    finished = list(out.glob("scenes/*/result.pkl"))
+    finished = list(out.glob("scenes/*/result.npz"))
     assert finished and all((p.parent / "environment.jsonl").stat().st_size > 0 for p in finished)
