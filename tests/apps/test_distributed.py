@@ -105,3 +105,19 @@ def test_serial_executor_reuses_one_pose_backend(short_dataset, tmp_path):
         result = evaluate_on(short_dataset, executor=ex, pose_backend=factory)
     assert len(made) == 2  # once to check and name it, once for the (one) worker: not once per scene
     assert result.metrics.info["pose_backend"] == "detector-model"
+
+
+def test_resume_refuses_a_scene_checkpointed_with_another_method(short_dataset, tmp_path):
+    """Issue 19: a scene checkpointed with --method paper was merged into a fused run without a word."""
+    name = short_dataset.scene_names()[0]
+    evaluate_distributed(short_dataset, executor="serial", scenes=[name], config=Config(method="paper"),
+                         output_dir=tmp_path / "run")
+    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
+    with pytest.raises(InputError, match=f"{checkpoint}: scene {name} was checkpointed by another run "
+                                         r'\(config.method "paper" \(this run: "fused"\), .*delete '):
+        evaluate_distributed(short_dataset, executor="serial", scenes=[name], output_dir=tmp_path / "run",
+                             resume=True)
+    # the same settings resume it
+    again = evaluate_distributed(short_dataset, executor="serial", scenes=[name], config=Config(method="paper"),
+                                 output_dir=tmp_path / "run", resume=True)
+    assert again.extras["resumed"] == [name] and again.metrics.info["method"] == "paper"
