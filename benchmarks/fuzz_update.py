@@ -1,6 +1,7 @@
 """Property fuzz of ``PedestrianEnvironmentModel.update()`` (issue 19): counts, not a test.
 
     PYTHONPATH=src python benchmarks/fuzz_update.py --sequences 100000      # both methods
+    PYTHONPATH=src python benchmarks/fuzz_update.py --sequences 100000 --workers 3
     PYTHONPATH=src python benchmarks/fuzz_update.py --sequences 2000 --method fused --seed 7
 
 The property: whatever skeletons, ego motion and time steps arrive, ``update()`` returns
@@ -193,11 +194,47 @@ def fuzz(sequences: int, seed: int = 0, methods: tuple[str, ...] = ("paper", "fu
             now = time.perf_counter()
             if report_every > 0 and now - last >= report_every:
                 last = now
-                counts = "; ".join(f"{m} {o.nan_frames} NaN, {o.bad_covariance_frames} non-PSD, {o.phantom_frames} "
-                                   f"unseen, {sum(o.exceptions.values())} exceptions" for m, o in outcomes.items())
-                print(f"  {k + 1} sequences, {(k + 1) / (now - start):.0f} sequences/s: {counts}", flush=True)
+                _progress(outcomes, now - start)
     except KeyboardInterrupt:  # SIGINT: the counts so far
         print(f"  interrupted after {sum(o.sequences for o in outcomes.values())} sequences", flush=True)
+    return outcomes
+
+
+def _progress(outcomes: dict[str, Outcome], seconds: float) -> None:
+    done = sum(o.sequences for o in outcomes.values())
+    counts = "; ".join(f"{m} {o.nan_frames} NaN, {o.bad_covariance_frames} non-PSD, {o.phantom_frames} "
+                       f"unseen, {sum(o.exceptions.values())} exceptions" for m, o in outcomes.items())
+    print(f"  {done} sequences, {done / seconds:.0f} sequences/s: {counts}", flush=True)
+
+
+#: Sequences per task of a worker process (``--workers``).
+CHUNK = 500
+
+
+def _chunk(args: tuple[int, int, tuple[str, ...]]) -> dict[str, Outcome]:
+    first, count, methods = args
+    if first % len(methods):
+        raise ValueError("chunks must start at a multiple of the method count")
+    return fuzz(count, first, methods)
+
+
+def fuzz_parallel(sequences: int, seed: int, methods: tuple[str, ...], workers: int,
+                  report_every: float) -> dict[str, Outcome]:
+    """:func:`fuzz` in ``workers`` processes, :data:`CHUNK` sequences a task: the same
+    sequences (seeds) and counts as one process. ``seed`` must be a multiple of the methods."""
+    import multiprocessing
+
+    tasks = [(seed + k, min(CHUNK, sequences - k), methods) for k in range(0, sequences, CHUNK)]
+    outcomes = {m: Outcome() for m in methods}
+    start = last = time.perf_counter()
+    with multiprocessing.get_context("fork").Pool(workers) as pool:
+        for part in pool.imap_unordered(_chunk, tasks):
+            for m, o in part.items():
+                outcomes[m].add(o)
+            now = time.perf_counter()
+            if report_every > 0 and now - last >= report_every:
+                last = now
+                _progress(outcomes, now - start)
     return outcomes
 
 
@@ -207,6 +244,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the first sequence")
     parser.add_argument("--method", choices=["both", "paper", "fused"], default="both")
     parser.add_argument("--report-every", type=float, default=60.0, help="seconds between progress lines")
+    parser.add_argument("--workers", type=int, default=1, help="processes (the counts do not depend on it)")
     parser.add_argument("--show", action="store_true", help="run only the sequence --seed of the first method "
                         "and show its outcome or its exception's traceback")
     args = parser.parse_args()
@@ -215,7 +253,10 @@ def main() -> None:
         print(run_sequence(args.seed, methods[0], {methods[0]: configure(Config(), methods[0])}, reraise=True))
         return
     start = time.perf_counter()
-    outcomes = fuzz(args.sequences, args.seed, methods, args.report_every)
+    if args.workers > 1:
+        outcomes = fuzz_parallel(args.sequences, args.seed, methods, args.workers, args.report_every)
+    else:
+        outcomes = fuzz(args.sequences, args.seed, methods, args.report_every)
     wall = time.perf_counter() - start
     total = Outcome()
     print(f"{'method':8} {'sequences':>10} {'frames':>8} {'NaN/inf':>8} {'non-PSD':>8} {'unseen':>8} {'refused':>8}"
