@@ -228,13 +228,24 @@ def fuzz_parallel(sequences: int, seed: int, methods: tuple[str, ...], workers: 
     outcomes = {m: Outcome() for m in methods}
     start = last = time.perf_counter()
     with multiprocessing.get_context("fork").Pool(workers) as pool:
-        for part in pool.imap_unordered(_chunk, tasks):
-            for m, o in part.items():
-                outcomes[m].add(o)
-            now = time.perf_counter()
-            if report_every > 0 and now - last >= report_every:
-                last = now
-                _progress(outcomes, now - start)
+        parts = pool.imap_unordered(_chunk, tasks)
+        try:
+            for _ in tasks:
+                while True:  # polled: a blocking wait would not see Ctrl-C
+                    try:
+                        part = parts.next(timeout=1.0)
+                        break
+                    except multiprocessing.TimeoutError:
+                        continue
+                for m, o in part.items():
+                    outcomes[m].add(o)
+                now = time.perf_counter()
+                if report_every > 0 and now - last >= report_every:
+                    last = now
+                    _progress(outcomes, now - start)
+        except KeyboardInterrupt:  # SIGINT: the counts of the chunks finished so far
+            pool.terminate()
+            print(f"  interrupted after {sum(o.sequences for o in outcomes.values())} sequences", flush=True)
     return outcomes
 
 
