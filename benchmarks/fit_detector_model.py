@@ -44,9 +44,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_detections import DEFAULT_SAMPLES  # noqa: E402
 
+from pedenv.boxes import containment_matrix, greedy_match, iou_matrix  # noqa: E402
 from pedenv.datasets import kitti_files as kitti
 from pedenv.datasets import mot17, nuscenes_cameras  # noqa: E402
-from pedenv.synthetic.detector_fit import BINS, bin_index, fit_detection_curve, fit_noise_law, greedy_match, iou_matrix  # noqa: E402
+from pedenv.synthetic.detector_fit import BINS, bin_index, fit_detection_curve, fit_noise_law  # noqa: E402
 
 SCORE = 0.25
 SPAN_SCORE = 0.1  # skeleton geometry (spans) is measured on every person scoring above this
@@ -127,7 +128,7 @@ class Tables:
             # reach IoU 0.5) or an ignore region is not a false positive
             excuse = np.concatenate([np.asarray(ignore, float).reshape(-1, 4), gt])
             if len(excuse) and len(free):
-                inside = iou_matrix(det["boxes"][free], excuse, over_first=True)
+                inside = containment_matrix(det["boxes"][free], excuse)
                 free = free[inside.max(1) < 0.5]
             self.fp.setdefault(dataset, []).append(len(free))
         return match

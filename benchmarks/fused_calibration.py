@@ -30,6 +30,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_detections import DEFAULT_SAMPLES  # noqa: E402
 
+from pedenv.boxes import greedy_match, iou_matrix  # noqa: E402
 from pedenv.config import Config  # noqa: E402
 from pedenv.datasets import kitti_files as kitti
 from pedenv.datasets import nuscenes_cameras  # noqa: E402
@@ -37,7 +38,6 @@ from pedenv.evaluation.metrics import calibration  # noqa: E402
 from pedenv.localization import configure, create_locator  # noqa: E402
 from pedenv.localization.base import FrameGeometry  # noqa: E402
 from pedenv.records import Camera, Detections, EgoPose, Frame, default_cam_to_vehicle  # noqa: E402
-from pedenv.synthetic.detector_fit import greedy_match, iou_matrix  # noqa: E402
 
 SCORE = 0.25
 #: KITTI's cameras sit about this high above the road (KITTI sensor setup).

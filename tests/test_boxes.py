@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pedenv.boxes import giou_matrix, iou_matrix, nms
+from pedenv.boxes import containment_matrix, giou_matrix, greedy_match, iou_matrix, nms
 
 
 @pytest.mark.parametrize("a, b, expected", [
@@ -70,3 +70,23 @@ def test_nms_drops_only_against_kept_boxes():
     np.testing.assert_array_equal(nms(boxes, np.array([0.8, 0.9, 0.7]), 0.6), [1, 2])
     # equal scores keep their input order
     np.testing.assert_array_equal(nms(boxes[[1, 2]], np.array([0.5, 0.5]), 0.9), [0, 1])
+
+
+@pytest.mark.parametrize("a, b, expected", [
+    ([0, 0, 10, 10], [0, 0, 20, 20], 1.0),    # a inside b
+    ([0, 0, 20, 20], [0, 0, 10, 10], 0.25),   # a quarter of a lies in b
+    ([0, 0, 10, 10], [5, 0, 15, 10], 0.5),
+    ([0, 0, 10, 10], [20, 20, 30, 30], 0.0),
+])
+def test_containment_is_the_share_of_the_first_box_inside_the_second(a, b, expected):
+    assert containment_matrix(np.array([a], float), np.array([b], float))[0, 0] == pytest.approx(expected)
+
+
+def test_greedy_match_lets_the_higher_score_take_the_shared_box_first():
+    truth = np.array([[0, 0, 10, 20], [30, 0, 40, 20]], float)
+    dets = np.array([[1, 0, 11, 20], [0, 0, 10, 20], [60, 0, 70, 20]], float)
+    iou = iou_matrix(dets, truth)
+    # detection 1 overlaps truth 0 exactly but scores lower than detection 0, which takes it
+    assert greedy_match(iou, np.array([0.9, 0.8, 0.7]), 0.5) == [(0, 0)]
+    assert greedy_match(iou, np.array([0.5, 0.8, 0.7]), 0.5) == [(1, 0)]
+    assert greedy_match(np.zeros((2, 0)), np.array([0.9, 0.8])) == []

@@ -51,7 +51,7 @@ def _standing_template() -> np.ndarray:
 STANDING = _standing_template()
 
 
-def standing_body(height) -> np.ndarray:
+def standing_body(height: float | np.ndarray) -> np.ndarray:
     """Body-frame skeletons of upright people: height (N,) metres -> (N, 17, 3) metres."""
     return STANDING * np.asarray(height, float)[:, None, None]
 

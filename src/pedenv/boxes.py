@@ -1,4 +1,4 @@
-"""Axis-aligned image boxes: IoU, generalized IoU and non-maximum suppression.
+"""Axis-aligned image boxes: IoU, containment, generalized IoU, greedy matching and non-maximum suppression.
 
 Every box is ``[u_min, v_min, u_max, v_max]`` in pixels (any one unit works, the results
 are ratios). All functions are vectorized over the boxes.
@@ -12,7 +12,7 @@ import numpy as np
 _MIN_AREA = 1e-12
 
 
-def _overlaps(a: np.ndarray, b: np.ndarray):
+def _overlaps(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
     """Signed overlap widths and heights (N, M) and the sizes of a (N, 1) and b (M,).
 
     The overlap is negative along an axis where the boxes are apart.
@@ -35,6 +35,39 @@ def iou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     inter = np.maximum(iw, 0.0) * np.maximum(ih, 0.0)
     union = wa * ha + wb * hb - inter
     return inter / np.maximum(union, _MIN_AREA)
+
+
+def intersection_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, M) intersection areas of boxes a (N, 4) and b (M, 4), pixels^2 (0 where apart)."""
+    iw, ih, *_ = _overlaps(np.asarray(a, float).reshape(-1, 4), np.asarray(b, float).reshape(-1, 4))
+    return np.maximum(iw, 0.0) * np.maximum(ih, 0.0)
+
+
+def box_areas(boxes: np.ndarray) -> np.ndarray:
+    """(N,) areas of boxes (N, 4), pixels^2, at least the smallest area divided by (no zeros)."""
+    boxes = np.asarray(boxes, float).reshape(-1, 4)
+    return np.maximum((boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]), _MIN_AREA)
+
+
+def containment_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(N, M) share of each box of ``a`` that lies inside each box of ``b``: intersection over
+    the area of ``a``, in [0, 1]. a: (N, 4), b: (M, 4) pixels."""
+    return intersection_matrix(a, b) / box_areas(a)[:, None]
+
+
+def greedy_match(iou: np.ndarray, scores: np.ndarray, threshold: float = 0.5) -> list[tuple[int, int]]:
+    """(detection, ground truth) pairs: detections by falling score take their best free box
+    with IoU >= ``threshold`` (as detection benchmarks count). iou: (N, M); scores: (N,)."""
+    pairs, taken = [], np.zeros(iou.shape[1], bool)
+    for d in np.argsort(-np.asarray(scores), kind="stable"):
+        if iou.shape[1] == 0:
+            break
+        cand = np.where(taken, -1.0, iou[d])
+        g = int(np.argmax(cand))
+        if cand[g] >= threshold:
+            taken[g] = True
+            pairs.append((int(d), g))
+    return pairs
 
 
 def giou_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:

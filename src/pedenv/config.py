@@ -257,7 +257,18 @@ class FusedConfig:
     road_curvature_std_per_m: spread of the road's curvature (1/m); the road under a
         pedestrian ``r`` metres away lies about ``0.5 * curvature * r^2`` off the
         vehicle's plane. Raising it makes the ground cue fade sooner with distance.
-    ground_max_distance_m: the ground cue declines beyond this horizontal distance.
+    ground_max_distance_m: the ground cue declines beyond this horizontal distance (a
+        vehicle-mounted camera: its pitch and height over the road change as it drives).
+        A ``static`` camera (``Camera.mount``) has no such limit, see below.
+    static_ground_max_relative_std: a ``static`` camera's ground cue declines where the
+        foot point's own spread along the ray (its pixel noise and the ankle's lift, carried
+        through the ray's cut with the ground) exceeds this share of the range: there the
+        ray grazes the ground, the linearized cut no longer holds and the height prior is
+        sharper. Raising it uses the ground cue farther out.
+    static_ground_height_std_m: the ground's unevenness under a pedestrian against a static
+        camera's calibrated plane (paving, gutters), metres, per person; a static camera has
+        no pitch or height noise, so this replaces ``road_height_std_m`` and
+        ``road_curvature_std_per_m``. Raising it widens its ground cue along the ray.
     history_length: past observations of a track kept for triangulation. Raising it
         gives more baseline when driving slowly, at more cost per pedestrian; older rays
         add little (a walker's drift grows with their age): on the built-in terrain
@@ -317,6 +328,8 @@ class FusedConfig:
     road_height_std_m: float = 0.08
     road_curvature_std_per_m: float = 0.008
     ground_max_distance_m: float = 20.0
+    static_ground_max_relative_std: float = 0.2
+    static_ground_height_std_m: float = 0.02
     history_length: int = 6
     min_baseline_m: float = 0.3
     min_parallax_rad: float = 0.01
@@ -344,6 +357,9 @@ class FusedConfig:
         _check_range("fused.road_height_std_m", self.road_height_std_m, 0.0, 2.0)
         _check_range("fused.road_curvature_std_per_m", self.road_curvature_std_per_m, 0.0, 0.1)
         _check_range("fused.ground_max_distance_m", self.ground_max_distance_m, 1.0, 1000.0)
+        _check_range("fused.static_ground_max_relative_std", self.static_ground_max_relative_std, 0.0, 1.0,
+                     low_open=True)
+        _check_range("fused.static_ground_height_std_m", self.static_ground_height_std_m, 0.0, 1.0)
         _check_count("fused.history_length", self.history_length, 1)
         _check_range("fused.min_baseline_m", self.min_baseline_m, 0.0, 100.0)
         _check_range("fused.min_parallax_rad", self.min_parallax_rad, 0.0, 0.5)

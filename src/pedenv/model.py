@@ -111,7 +111,8 @@ class PedestrianEnvironmentModel:
         return CameraView.of(frame) if cfg.ground_gate > 0 or cfg.memory_s > 0 else None
 
     def _yaw_shift(self, frame: Frame) -> float:
-        if self._last is None or not self.config.tracking.yaw_compensation:
+        """The ego-yaw shift of the tracks' pixels (Eq. 1); none for a static camera, whose ego does not move."""
+        if self._last is None or not self.config.tracking.yaw_compensation or frame.camera.static:
             return 0.0
         return yaw_shift_pixels(yaw_change(self._last.ego.yaw, frame.ego.yaw), frame.camera.hfov, frame.camera.width)
 

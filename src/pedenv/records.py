@@ -122,6 +122,12 @@ def boxes_from_keypoints(keypoints: np.ndarray, visible: np.ndarray) -> np.ndarr
     ) if len(keypoints) else np.zeros((0, 4))
 
 
+#: How a camera is mounted: ``vehicle`` (on a moving vehicle whose pitch, roll and height
+#: over the road change as it drives) or ``static`` (fixed to the ground: an
+#: infrastructure camera, a parked vehicle; its pitch, roll and height are exact).
+MOUNTS = ("vehicle", "static")
+
+
 @dataclass(frozen=True)
 class Camera:
     """A pinhole camera mounted on the vehicle (images already undistorted).
@@ -129,14 +135,21 @@ class Camera:
     intrinsics: (3, 3) float, pixels.
     width, height: image size in pixels.
     cam_to_vehicle: (4, 4) float, optical camera frame -> vehicle frame, metres.
+    mount: one of :data:`MOUNTS`. A ``static`` camera's vehicle frame is fixed to the
+        ground: its road plane (vehicle z = 0) is exact, so the fused method trusts the
+        ground contact at any range its pixel noise allows, and the tracker does not
+        compensate ego motion.
     """
 
     intrinsics: np.ndarray
     width: int
     height: int
     cam_to_vehicle: np.ndarray = field(default_factory=lambda: default_cam_to_vehicle())
+    mount: str = "vehicle"
 
     def __post_init__(self) -> None:
+        if self.mount not in MOUNTS:
+            raise InputError(f"camera mount must be one of {', '.join(MOUNTS)}, got {self.mount!r}")
         k = check_array("intrinsics", self.intrinsics, (3, 3))
         if abs(np.linalg.det(k)) < 1e-9 or k[0, 0] <= 0 or k[1, 1] <= 0:
             raise InputError(
@@ -150,6 +163,11 @@ class Camera:
         _frozen_set(self, "cam_to_vehicle", t)
         _frozen_set(self, "width", int(self.width))
         _frozen_set(self, "height", int(self.height))
+
+    @property
+    def static(self) -> bool:
+        """True for a camera fixed to the ground (``mount == "static"``)."""
+        return self.mount == "static"
 
     @property
     def hfov(self) -> float:

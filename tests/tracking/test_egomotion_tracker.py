@@ -118,3 +118,22 @@ def test_motion_prediction_follows_a_fast_crossing_box(predict, kept):
         tr.update(np.array([[u, 100.0, u + 8.0, 130.0]]))
         ids.append(int(tr.ids[tr.misses == 0][0]))
     assert (len(set(ids)) == 1) is kept
+
+
+def test_a_static_camera_gets_no_yaw_shift():
+    """A static camera's ego does not move: poses that say it turned (jitter, a wrong file) shift nothing."""
+    from dataclasses import replace
+
+    from pedenv.records import Camera
+
+    def static(frame):
+        c = frame.camera
+        return replace(frame, camera=Camera(c.intrinsics, c.width, c.height, c.cam_to_vehicle, "static"))
+
+    a = frame_with_people(0, 0.0, EgoPose.from_xy_yaw(0, 0, 0.0), [(25.0, 4.0)])
+    b = frame_with_people(1, 0.1, EgoPose.from_xy_yaw(0, 0, np.radians(3.0)), [(25.0, 4.0)])
+    for make, moved in ((lambda f: f, True), (static, False)):
+        model = PedestrianEnvironmentModel(Config(method="paper"))
+        model.update(make(a))
+        _, boxes, _ = model.predicted_boxes(make(b))
+        assert bool(abs(boxes[0, 0] - a.detections.boxes[0, 0]) > 50.0) is moved

@@ -6,12 +6,15 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
+from rich.table import Table
+
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.config import Config
 from pedenv.datasets import Dataset
 from pedenv.evaluation.metrics import Metrics, strict_json
 from pedenv.evaluation.report import comparison_table
 from pedenv.localization import configure
+from pedenv.pose.base import PoseBackend
 
 #: Variant name -> paper-method settings changed from the configuration given.
 ABLATIONS: dict[str, dict] = {
@@ -23,7 +26,7 @@ ABLATIONS: dict[str, dict] = {
 
 
 def ablation_metrics(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,
-                     pose_backend=None) -> list[tuple[str, Metrics]]:
+                     pose_backend: str | PoseBackend | None = None) -> list[tuple[str, Metrics]]:
     """Evaluate every variant of :data:`ABLATIONS` on the same frames, with the paper's method
     (``config`` switched to it when it names another)."""
     config = configure(config or Config(), "paper")
@@ -33,7 +36,7 @@ def ablation_metrics(dataset: Dataset, *, scenes: Sequence[str] | None = None, c
 
 
 def run_ablation(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,
-                 pose_backend=None, output_dir: str | Path | None = None):
+                 pose_backend: str | PoseBackend | None = None, output_dir: str | Path | None = None) -> Table:
     """Run the ablations, save ``ablation.json`` in ``output_dir`` and return the table."""
     rows = ablation_metrics(dataset, scenes=scenes, config=config, pose_backend=pose_backend)
     if output_dir:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 
@@ -103,14 +103,6 @@ def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = N
 
 def _demo_order(method: str) -> int:
     return DEMO_METHODS.index(method) if method in DEMO_METHODS else len(DEMO_METHODS)
-
-
-def scenes_summary(scenes: Sequence[Scene]) -> str:
-    """One line: scenes, frames and labelled pedestrians."""
-    counter = SceneCounter()
-    for scene in scenes:
-        counter.add(scene)
-    return counter.summary()
 
 
 class SceneCounter:

@@ -64,7 +64,7 @@ class SerialExecutor:
     def __enter__(self) -> SerialExecutor:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         return None
 
     def run(self, task: Callable, items: Iterable, *, shared: dict[str, Any] | None = None,
@@ -124,7 +124,7 @@ class RayExecutor:
         self._started = True
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         if self._started:
             import ray
 
@@ -166,7 +166,7 @@ class RayExecutor:
                 queue.shutdown()
 
 
-def _cause(exc) -> BaseException:
+def _cause(exc: BaseException) -> BaseException:
     cause = getattr(exc, "cause", None)
     return cause if isinstance(cause, BaseException) else exc
 
@@ -175,7 +175,7 @@ def _cause(exc) -> BaseException:
 _WORKER_CACHE: dict = {}
 
 
-def _run_on_worker(task: Callable, item: Any, refs: list[dict], queue) -> Any:
+def _run_on_worker(task: Callable, item: Any, refs: list[dict], queue: Any) -> Any:
     """A Ray task: the shared objects (fetched once per process), then ``task(item, context)``."""
     import ray
 
@@ -191,14 +191,14 @@ def _run_on_worker(task: Callable, item: Any, refs: list[dict], queue) -> Any:
     return task(item, TaskContext(shared, _WORKER_CACHE, report))
 
 
-def _fetch(ray, ref):
+def _fetch(ray: Any, ref: Any) -> Any:
     key = ("shared", ref.hex())
     if key not in _WORKER_CACHE:
         _WORKER_CACHE[key] = ray.get(ref)
     return _WORKER_CACHE[key]
 
 
-def _drain(queue, on_progress) -> None:
+def _drain(queue: Any, on_progress: Callable | None) -> None:
     if queue is None or on_progress is None:
         return
     for item, done, total in queue.get_nowait_batch(queue.qsize()):

@@ -51,7 +51,7 @@ class FrameCounter:
     ``update(item, done, total)`` as a worker reports; ``finish(item)`` when an item ends.
     """
 
-    def __init__(self, bar, items: int, already: int = 0, noun: str = "scenes") -> None:
+    def __init__(self, bar: Any, items: int, already: int = 0, noun: str = "scenes") -> None:
         self.bar, self.items, self.finished, self.noun = bar, items, already, noun
         self.task = bar.add_task(self._label(), total=None)
         self.frames: dict[Any, tuple[int, int]] = {}
@@ -59,12 +59,12 @@ class FrameCounter:
     def _label(self) -> str:
         return f"{self.noun} {self.finished}/{self.items}"
 
-    def update(self, item, done: int, total: int) -> None:
+    def update(self, item: Any, done: int, total: int) -> None:
         self.frames[item] = (done, total)
         self.bar.update(self.task, completed=sum(d for d, _ in self.frames.values()),
                         total=sum(t for _, t in self.frames.values()) or None)
 
-    def finish(self, item, failed: bool = False) -> None:
+    def finish(self, item: Any, failed: bool = False) -> None:
         if not failed:
             done, total = self.frames.get(item, (0, 0))
             self.update(item, total, total)

@@ -26,7 +26,7 @@ from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
 
-def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None,
+def run_recording(*, calibration, ego_poses, output, images=None, video=None, fps=None, start_time=None, static=False,
                   pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
                   video_out: bool = False, overwrite: bool = False, progress=None,
                   detection: str | None = "far", extra_outputs: ExtraOutputs | None = None,
@@ -51,6 +51,8 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     ``method`` switches it to another position method (:func:`pedenv.localization.configure`).
     ``backend``: a pose backend already made (a worker's, kept over recordings) instead of
     the one ``pose_backend``, ``pose_model``, ``pose_input_size`` and ``detection`` describe.
+    ``static``: the camera is fixed to the ground (``mount: static``, whatever the calibration
+    says); ``ego_poses`` may then be None (:func:`pedenv.recordings.footage.load_recording`).
     Returns the summary also saved as ``run.json``.
     """
     cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
@@ -58,7 +60,7 @@ def run_recording(*, calibration, ego_poses, output, images=None, video=None, fp
     extra = extra_outputs or ExtraOutputs()
     extra.check()
     rec = load_recording(calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps,
-                         start_time=start_time)
+                         start_time=start_time, static=static)
     if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
         pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
     if backend is None:

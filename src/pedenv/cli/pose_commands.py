@@ -67,7 +67,10 @@ def run(
     calibration: Path | None = typer.Option(
         None, "--calibration", help="Calibration YAML (required without --manifest)."
     ),
-    ego_poses: Path | None = typer.Option(None, "--ego-poses", help="Ego poses CSV (required without --manifest)."),
+    ego_poses: Path | None = typer.Option(
+        None, "--ego-poses", help="Ego poses CSV (required without --manifest, unless the camera is static)."),
+    static: bool = typer.Option(
+        False, "--static", help="A camera fixed to the ground (mount: static); runs without --ego-poses."),
     output: Path = typer.Option(..., "--output", help="Output folder."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
@@ -107,7 +110,8 @@ def run(
 
     if manifest is not None:
         per_recording = (("--images", images), ("--video", video), ("--calibration", calibration),
-                         ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time))
+                         ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time),
+                         ("--static", static or None))
         given = [flag for flag, value in per_recording if value is not None]
         if given:
             raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
@@ -118,8 +122,9 @@ def run(
                       pose_input_size=pose_input_size, config=config, detection=detection, video_out=video_out,
                       method=method)
         return
-    if calibration is None or ego_poses is None:
-        raise InputError("give --calibration and --ego-poses (or a --manifest of recordings)")
+    if calibration is None or (ego_poses is None and not static):
+        raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
+                         "(or a --manifest of recordings)")
     if executor != "serial" or address or workers or resume:
         raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
     from pedenv.apps.progress import progress_callback
@@ -130,7 +135,7 @@ def run(
 
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(
-            images=images, video=video, calibration=calibration, ego_poses=ego_poses, output=output,
+            images=images, video=video, calibration=calibration, ego_poses=ego_poses, static=static, output=output,
             pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
             fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
             extra_outputs=extra, progress=progress, method=method)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 from pedenv.errors import InputError
 from pedenv.records import Frame
@@ -45,18 +45,18 @@ SCENE_WRITERS: dict[str, str] = {
 }
 
 
-def _load(table: dict[str, str], kind: str, name: str):
+def _load(table: dict[str, str], kind: str, name: str) -> Any:
     if name not in table:
         raise InputError(f"unknown {kind} {name!r}; valid: {', '.join(table)}")
     module, attr = table[name].split(":")
     return getattr(importlib.import_module(module), attr)
 
 
-def open_dataset(name: str, data_root: str | Path, **options) -> Dataset:
+def open_dataset(name: str, data_root: str | Path, **options: Any) -> Dataset:
     """Open the dataset registered as ``name`` under ``data_root``."""
     return _load(DATASETS, "dataset", name)(Path(data_root), **options)
 
 
-def scene_writer(name: str):
+def scene_writer(name: str) -> Any:
     """The function writing scenes in format ``name``: ``write(scenes, output_dir)``."""
     return _load(SCENE_WRITERS, "scene format", name)

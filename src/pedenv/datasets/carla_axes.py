@@ -41,7 +41,7 @@ def carla_ypr(rotation: np.ndarray) -> np.ndarray:
     return np.array([yaw, -pitch, -roll])
 
 
-def points_from_unreal(points) -> np.ndarray:
+def points_from_unreal(points: np.ndarray) -> np.ndarray:
     """(..., 3) Unreal world points, metres -> pedenv world points (flip y). Also the reverse."""
     return np.asarray(points, float) * np.array([1.0, -1.0, 1.0])
 
@@ -49,7 +49,7 @@ def points_from_unreal(points) -> np.ndarray:
 points_to_unreal = points_from_unreal
 
 
-def ego_from_unreal(xyz, yaw_pitch_roll_deg) -> np.ndarray:
+def ego_from_unreal(xyz: np.ndarray, yaw_pitch_roll_deg: np.ndarray) -> np.ndarray:
     """(4, 4) vehicle -> pedenv world of CARLA's ``ego_pos`` (location (3,), yaw/pitch/roll degrees)."""
     m = np.eye(4)
     m[:3, :3] = FLIP_Y @ carla_rotation(*np.asarray(yaw_pitch_roll_deg, float)) @ FLIP_Y

@@ -114,7 +114,7 @@ class KittiLabels:
     def __len__(self) -> int:
         return len(self.types)
 
-    def take(self, mask) -> KittiLabels:
+    def take(self, mask: np.ndarray) -> KittiLabels:
         """The rows selected by a boolean mask or index array."""
         return KittiLabels(**{name: getattr(self, name)[mask] for name in self.__dataclass_fields__})
 

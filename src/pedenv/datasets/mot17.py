@@ -10,6 +10,7 @@ from __future__ import annotations
 import configparser
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -56,7 +57,7 @@ def read_seqinfo(path: str | Path) -> SeqInfo:
         raise InputError(f"{path}: no [Sequence] section")
     section = parser["Sequence"]
 
-    def get(key: str, kind):
+    def get(key: str, kind: type) -> Any:
         if key not in section:
             raise InputError(f"{path}: [Sequence] lacks {key}")
         try:
@@ -97,7 +98,7 @@ class MotBoxes:
     def __len__(self) -> int:
         return len(self.frame)
 
-    def take(self, mask) -> MotBoxes:
+    def take(self, mask: np.ndarray) -> MotBoxes:
         """The rows selected by a boolean mask or index array."""
         return MotBoxes(**{name: getattr(self, name)[mask] for name in self.__dataclass_fields__})
 

@@ -89,7 +89,7 @@ def _matrix(path: Path, data: dict, key: str, shape: tuple[int, int]) -> np.ndar
     return value
 
 
-def _pedestrians(path: Path, entries) -> NuscenesPedestrians:
+def _pedestrians(path: Path, entries: object) -> NuscenesPedestrians:
     if not isinstance(entries, list):
         raise InputError(f"{path}: 'pedestrians' must be a list")
     columns: dict[str, list] = {name: [] for name in NuscenesPedestrians.__dataclass_fields__}

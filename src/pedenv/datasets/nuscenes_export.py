@@ -27,7 +27,7 @@ import numpy as np
 from pedenv.datasets.nuscenes_skeletons import SIDE_FILE_NAME, skeleton_entry, write_side_file
 from pedenv.errors import InputError
 from pedenv.geometry import rotation_to_quaternion, rotation_z
-from pedenv.records import Frame, Scene
+from pedenv.records import Frame, GroundTruth, Scene
 from pedenv.skeleton import COCO_BONES
 from pedenv.skeleton import CocoKeypoint as K
 
@@ -51,7 +51,7 @@ ATTRIBUTES = ("pedestrian.moving", "pedestrian.standing", "pedestrian.sitting_ly
 VISIBILITY = {"1": ("v0-40", 0.0), "2": ("v40-60", 0.4), "3": ("v60-80", 0.6), "4": ("v80-100", 0.8)}
 
 
-def token(*parts) -> str:
+def token(*parts: object) -> str:
     """A deterministic 32-hex-digit token for the record named by ``parts``."""
     return hashlib.md5("/".join(map(str, parts)).encode()).hexdigest()
 
@@ -187,13 +187,13 @@ def _calibration(frame: Frame, scene: str, tables: dict, known: dict, sensor_tok
     return known[key]
 
 
-def _annotation(gt, m: int, instance_token: str, sample_token: str, stamp: int) -> dict:
+def _annotation(gt: GroundTruth, m: int, instance_token: str, sample_token: str, stamp: int) -> dict:
     height = float(gt.heights[m]) if gt.heights is not None else DEFAULT_HEIGHT_M
     yaw = 0.0
     if gt.keypoints_3d is not None:
         left = gt.keypoints_3d[m, K.LEFT_SHOULDER] - gt.keypoints_3d[m, K.RIGHT_SHOULDER]
         yaw = float(np.arctan2(-left[0], left[1]))  # facing = left x up
-    seen = float(gt.visible[m].mean()) if gt.keypoints is not None else 1.0
+    seen = float(gt.visible[m].mean()) if gt.keypoints is not None and gt.visible is not None else 1.0
     visibility = max(t for t, (_, low) in VISIBILITY.items() if seen >= low)
     return {"token": token("sample_annotation", instance_token, stamp), "sample_token": sample_token,
             "instance_token": instance_token, "visibility_token": visibility, "attribute_tokens": [],

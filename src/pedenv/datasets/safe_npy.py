@@ -14,6 +14,7 @@ from __future__ import annotations
 import io
 import pickle
 from pathlib import Path
+from typing import Any, BinaryIO
 
 import numpy as np
 from numpy.lib import format as npy_format
@@ -40,19 +41,19 @@ class RestrictedUnpickler(pickle.Unpickler):
     :class:`pickle.UnpicklingError` before it is imported, so it can never be called.
     """
 
-    def find_class(self, module: str, name: str):
+    def find_class(self, module: str, name: str) -> Any:
         if (module, name) in NUMPY_GLOBALS or (module == "builtins" and name in BUILTIN_GLOBALS):
             return super().find_class(module, name)
         raise pickle.UnpicklingError(f"refusing to load {module}.{name}: only numpy arrays, dtypes and "
                                      f"plain containers (dict, list, tuple, str, numbers, None) are allowed")
 
 
-def restricted_loads(data: bytes):
+def restricted_loads(data: bytes) -> Any:
     """Unpickle ``data`` with :class:`RestrictedUnpickler`."""
     return RestrictedUnpickler(io.BytesIO(data)).load()
 
 
-def load_npy(path: str | Path):
+def load_npy(path: str | Path) -> Any:
     """The array stored in the ``.npy`` file ``path``; an object array's payload is unpickled safely.
 
     A 0-d object array (``np.save`` of a dict) is returned as its single item.
@@ -76,7 +77,7 @@ def load_npy(path: str | Path):
     return value
 
 
-def _read_header(f, version):
+def _read_header(f: BinaryIO, version: tuple[int, int]) -> tuple:
     if version == (1, 0):
         return npy_format.read_array_header_1_0(f)
     if version == (2, 0):

@@ -36,7 +36,7 @@ def numbers(path: Path, line: int, fields: list[str], what: str) -> np.ndarray:
     return values
 
 
-def frozen_arrays(obj, **arrays) -> None:
+def frozen_arrays(obj: object, **arrays: np.ndarray) -> None:
     """Set read-only array fields on a frozen dataclass instance."""
     for name, value in arrays.items():
         value = np.asarray(value)

@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from pedenv.boxes import containment_matrix, greedy_match, iou_matrix
 from pedenv.datasets import kitti_files as kitti
 from pedenv.datasets import mot17, nuscenes_cameras
 from pedenv.errors import InputError
-from pedenv.evaluation.matching import iou_matrix
 from pedenv.pose.tiling import CameraGeometry
 
 #: Person height bins, pixels: (label, low, high).
@@ -152,17 +152,13 @@ def match_detections(sample: DetectionSample, boxes: np.ndarray, scores: np.ndar
     boxes = np.asarray(boxes, float).reshape(-1, 4)
     hit = np.zeros(len(sample.boxes), bool)
     taken = np.zeros(len(sample.boxes), bool)
-    iou = iou_matrix(boxes, sample.boxes) if len(sample.boxes) else np.zeros((len(boxes), 0))
+    pairs = greedy_match(iou_matrix(boxes, sample.boxes), scores, sample.iou_threshold)
+    matched = np.zeros(len(boxes), bool)
+    for i, j in pairs:
+        matched[i], taken[j], hit[j] = True, True, sample.required[j]
     order = np.argsort(-np.asarray(scores), kind="stable")
-    unmatched = []
-    for i in order:
-        row = np.where(taken, -1.0, iou[i]) if iou.shape[1] else iou[i]
-        j = int(np.argmax(row)) if row.size else -1
-        if j >= 0 and row[j] >= sample.iou_threshold:
-            taken[j] = True
-            hit[j] = sample.required[j]
-        elif sample.count_false_positives and not _inside_any(boxes[i], sample.ignore):
-            unmatched.append(i)
+    unmatched = [i for i in order if not matched[i] and sample.count_false_positives
+                 and not _inside_any(boxes[i], sample.ignore)]
     occluded = list(sample.boxes[~sample.required & ~taken])
     parts = 0
     for i in unmatched:  # each occluded person absorbs at most one detection
@@ -174,12 +170,8 @@ def match_detections(sample: DetectionSample, boxes: np.ndarray, scores: np.ndar
 
 
 def _inside_any(box: np.ndarray, regions: np.ndarray, fraction: float = 0.5) -> bool:
-    if not len(regions):
-        return False
-    iw = np.clip(np.minimum(box[2], regions[:, 2]) - np.maximum(box[0], regions[:, 0]), 0, None)
-    ih = np.clip(np.minimum(box[3], regions[:, 3]) - np.maximum(box[1], regions[:, 1]), 0, None)
-    area = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
-    return bool(np.any(iw * ih / area >= fraction))
+    """Whether at least ``fraction`` of ``box`` (4,) lies inside one of ``regions`` (M, 4), pixels."""
+    return bool(len(regions)) and bool((containment_matrix(box[None], regions) >= fraction).any())
 
 
 def _bins(values: np.ndarray, hits: np.ndarray, bins) -> list[dict]:

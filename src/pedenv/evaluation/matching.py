@@ -47,7 +47,8 @@ def match_one_to_one(pred_boxes: np.ndarray, gt_boxes: np.ndarray, min_iou: floa
     return out
 
 
-def position_errors(pred_xy: np.ndarray, gt_xy: np.ndarray, ego_xy: np.ndarray):
+def position_errors(pred_xy: np.ndarray, gt_xy: np.ndarray, ego_xy: np.ndarray,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Absolute error (metres) and relative error (percent of the ego-to-truth distance).
 
     pred_xy, gt_xy: (K, 2) matched pairs, world x-y; ego_xy: (2,) the ego vehicle's position.

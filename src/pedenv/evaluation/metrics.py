@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +36,7 @@ class ErrorSamples:
     distance: list = field(default_factory=list)
     mahalanobis: list = field(default_factory=list)  # one-to-one pairs (match_one_to_one): may be fewer
 
-    def add(self, abs_err, rel_err, distance, mahalanobis) -> None:
+    def add(self, abs_err: np.ndarray, rel_err: np.ndarray, distance: np.ndarray, mahalanobis: np.ndarray) -> None:
         self.abs_err.append(abs_err)
         self.rel_err.append(rel_err)
         self.distance.append(distance)
@@ -93,7 +94,8 @@ class Metrics:
     info: dict
 
     @classmethod
-    def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking, timing_ms, info) -> Metrics:
+    def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking: dict | None, timing_ms: dict,
+                     info: dict) -> Metrics:
         arrays = {name: s.arrays() for name, s in per_scene.items()}
         every = {k: np.concatenate([a[k] for a in arrays.values()]) if arrays else np.zeros(0)
                  for k in ("abs_err", "rel_err", "distance", "mahalanobis")}
@@ -120,7 +122,7 @@ class Metrics:
         Path(path).write_text(json.dumps(strict_json(self.to_dict()), indent=2, allow_nan=False) + "\n")
 
 
-def strict_json(value):
+def strict_json(value: Any) -> Any:
     """NaN and inf -> None (in dicts, lists and tuples), so the file is strict JSON."""
     if isinstance(value, dict):
         return {k: strict_json(v) for k, v in value.items()}

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pedenv.boxes import box_areas, intersection_matrix, iou_matrix
 from pedenv.records import Detections
 
 #: COCO keypoint sigmas (nose, eyes, ears, shoulders, elbows, wrists, hips, knees, ankles).
@@ -46,12 +47,11 @@ class MergeConfig:
 
 
 def _iou_and_containment(box: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    iw = np.clip(np.minimum(box[2], boxes[:, 2]) - np.maximum(box[0], boxes[:, 0]), 0.0, None)
-    ih = np.clip(np.minimum(box[3], boxes[:, 3]) - np.maximum(box[1], boxes[:, 1]), 0.0, None)
-    inter = iw * ih
-    area = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
-    areas = np.maximum((boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]), 1e-9)
-    return inter / (area + areas - inter), inter / np.minimum(area, areas)
+    """IoU (M,) of ``box`` (4,) with ``boxes`` (M, 4), and their intersection over the smaller of
+    the two areas (M,): 1 when one box lies inside the other."""
+    inter = intersection_matrix(box[None], boxes)[0]
+    smaller = np.minimum(box_areas(box[None])[0], box_areas(boxes))
+    return iou_matrix(box[None], boxes)[0], inter / smaller
 
 
 def keypoint_similarity(kp: np.ndarray, conf: np.ndarray, kps: np.ndarray, confs: np.ndarray, box: np.ndarray,

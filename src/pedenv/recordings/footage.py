@@ -9,6 +9,11 @@ to the vehicle frame, x forward / y left / z up; translation in metres)::
     cam_to_vehicle:
       rotation: [0.5, -0.5, 0.5, -0.5]     # quaternion [w, x, y, z] or a 3x3 matrix
       translation: [1.70, 0.0, 1.51]
+    mount: vehicle    # optional: vehicle (the default) or static (a camera fixed to the ground)
+
+A ``static`` camera (an infrastructure camera, a parked vehicle) needs no ego poses: its
+vehicle frame stays where it is (the world frame), with ``cam_to_vehicle`` placing the
+camera over the ground (z = 0).
 
 Ego poses (CSV, vehicle -> world, timestamps in seconds, rows sorted by time), either
 ``timestamp,x,y,z,qw,qx,qy,qz`` or ``timestamp,x,y,yaw`` (yaw in radians, z = 0).
@@ -30,7 +35,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from pedenv.errors import InputError, check_array, read_text
 from pedenv.geometry import quaternion_to_rotation
 from pedenv.images import read_image_rgb
-from pedenv.records import Camera, EgoPose, Frame
+from pedenv.records import MOUNTS, Camera, EgoPose, Frame
 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
 POSE_HEADERS = (("timestamp", "x", "y", "z", "qw", "qx", "qy", "qz"), ("timestamp", "x", "y", "yaw"))
@@ -89,8 +94,11 @@ def load_calibration(path: str | Path) -> Camera:
     t[:3, 3] = _numbers(_field(data, "cam_to_vehicle.translation", path), "cam_to_vehicle.translation", path, (3,))
     if width != int(width) or height != int(height):
         raise InputError(f"{path}: calibration fields 'width' and 'height' must be whole pixels, got {width}, {height}")
+    mount = data.get("mount", "vehicle")
+    if mount not in MOUNTS:
+        raise InputError(f"{path}: calibration field 'mount' must be one of {', '.join(MOUNTS)}, got {mount!r}")
     try:
-        return Camera(k, int(width), int(height), t)
+        return Camera(k, int(width), int(height), t, mount)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
 
@@ -238,13 +246,15 @@ def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[t
 class Recording:
     """One recording: camera, ego trajectory and either an image folder or a video file.
 
+    trajectory: the ego poses, or None for a static camera (every frame's ego pose is the
+    identity: the vehicle frame is the world frame).
     images: (path, timestamp in seconds) per frame in order, or empty for a video.
     video: the video file, or None. start_time: seconds of a video's first frame.
     """
 
     name: str
     camera: Camera
-    trajectory: EgoTrajectory
+    trajectory: EgoTrajectory | None
     images: tuple[tuple[Path, float], ...] = ()
     video: Path | None = None
     fps: float | None = None
@@ -259,16 +269,23 @@ class Recording:
         source = _video_frames(self.video, self.fps, self.start_time) if self.video else (
             (i, t, p, read_image_rgb(p)) for i, (p, t) in enumerate(self.images))
         for index, timestamp, path, image in source:
-            ego = self.trajectory.at(timestamp)
-            if ego is None:
-                span = self.trajectory.timestamps
-                raise InputError(f"{path}: frame {index} at {timestamp:.6f} s has no ego pose: "
-                                 f"{self.trajectory.source} covers {span[0]:.6f} s to {span[-1]:.6f} s")
+            ego = self._ego_at(index, timestamp, path)
             if image.shape[:2] != (self.camera.height, self.camera.width):
                 raise InputError(f"{path}: frame {index} is {image.shape[1]}x{image.shape[0]} pixels, "
                                  f"the calibration says {self.camera.width}x{self.camera.height}")
             yield Frame(index, timestamp, self.camera, ego, image=image,
                         image_path=None if self.video else path, scene=self.name)
+
+    def _ego_at(self, index: int, timestamp: float, path) -> EgoPose:
+        """The ego pose of frame ``index``: the identity without a trajectory (a static camera)."""
+        if self.trajectory is None:
+            return EgoPose(np.zeros(3), np.eye(3))
+        ego = self.trajectory.at(timestamp)
+        if ego is None:
+            span = self.trajectory.timestamps
+            raise InputError(f"{path}: frame {index} at {timestamp:.6f} s has no ego pose: "
+                             f"{self.trajectory.source} covers {span[0]:.6f} s to {span[-1]:.6f} s")
+        return ego
 
     def __len__(self) -> int:
         if self.video is None:
@@ -303,22 +320,30 @@ def _video_frames(video: Path, fps: float | None, start_time: float):
         raise InputError(f"{video}: the video holds no readable frame")
 
 
-def load_recording(*, calibration: str | Path, ego_poses: str | Path, images: str | Path | None = None,
+def load_recording(*, calibration: str | Path, ego_poses: str | Path | None, images: str | Path | None = None,
                    video: str | Path | None = None, fps: float | None = None, start_time: float | None = None,
-                   name: str | None = None) -> Recording:
+                   name: str | None = None, static: bool = False) -> Recording:
     """Read a recording: exactly one of ``images`` (a folder) or ``video`` (a file).
 
     Frame timestamps: ``images/timestamps.csv`` (filename,timestamp), else ``fps``; a
     video's come from ``fps`` or its own frame rate. With ``fps`` (and for a video) the first
-    frame is at ``start_time``, by default the first ego pose's timestamp.
+    frame is at ``start_time``, by default the first ego pose's timestamp (0 without poses).
+    ``static`` mounts the camera ``static`` whatever the calibration says; a static camera
+    may come without ``ego_poses`` (its vehicle frame is then the world frame).
     """
     if (images is None) == (video is None):
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if fps is not None and not (np.isfinite(fps) and fps > 0):
         raise InputError(f"fps must be a finite number > 0, got {fps}")
     camera = load_calibration(calibration)
-    trajectory = load_ego_poses(ego_poses)
-    start = float(trajectory.timestamps[0] if start_time is None else start_time)
+    if static and not camera.static:
+        camera = Camera(camera.intrinsics, camera.width, camera.height, camera.cam_to_vehicle, "static")
+    if ego_poses is None and not camera.static:
+        raise InputError(f"{calibration}: a vehicle-mounted camera needs ego poses (--ego-poses); "
+                         "a fixed camera runs without them with --static or 'mount: static' in the calibration")
+    trajectory = None if ego_poses is None else load_ego_poses(ego_poses)
+    first = 0.0 if trajectory is None else float(trajectory.timestamps[0])
+    start = float(first if start_time is None else start_time)
     if video is not None:
         video = Path(video)
         if not video.is_file():

@@ -16,6 +16,8 @@ guess, labelled as such in the YAML: focal length ``focal_px`` (default: the ima
 53 deg across), principal point at the image centre, level unless ``pitch_down_deg`` says
 otherwise, ``camera_height_m`` above the road. The ego stands still (identity poses): right
 for the static sequences, wrong for MOT17-05/10/11/13 (moving cameras). Timestamps from ``frameRate``.
+MOT17 with UCMCTrack's estimated camera (:func:`write_mot17_static_recording`): that camera,
+``mount: static``, no ego poses.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import yaml
 from pedenv.datasets import kitti_files as kitti
 from pedenv.datasets import mot17
 from pedenv.datasets.kitti import CAMERA_TO_VEHICLE_AXES, FRAME_RATE_HZ, cam0_to_vehicle
+from pedenv.datasets.ucmctrack import read_camera_parameters, static_camera
 from pedenv.errors import InputError
 from pedenv.geometry import rotation_to_quaternion
 
@@ -45,10 +48,12 @@ def _prepare(out: Path) -> Path:
 
 
 def _write_calibration(path: Path, K: np.ndarray, width: int, height: int, cam_to_vehicle: np.ndarray,
-                       note: str) -> None:
-    data = {"width": int(width), "height": int(height), "intrinsics": np.asarray(K, float).tolist(),
-            "cam_to_vehicle": {"rotation": np.asarray(cam_to_vehicle[:3, :3], float).tolist(),
-                               "translation": np.asarray(cam_to_vehicle[:3, 3], float).tolist()}}
+                       note: str, mount: str = "vehicle") -> None:
+    data: dict = {"width": int(width), "height": int(height), "intrinsics": np.asarray(K, float).tolist(),
+                  "cam_to_vehicle": {"rotation": np.asarray(cam_to_vehicle[:3, :3], float).tolist(),
+                                     "translation": np.asarray(cam_to_vehicle[:3, 3], float).tolist()}}
+    if mount != "vehicle":  # files of vehicle cameras stay as they were
+        data["mount"] = mount
     path.write_text(f"# {note}\n" + yaml.safe_dump(data, sort_keys=False))
 
 
@@ -131,5 +136,24 @@ def write_mot17_recording(folder: str | Path, out: str | Path, camera_height_m: 
                        f"at the centre, pitched down {pitch_down_deg:g} deg, {camera_height_m} m above the road")
     stamps = np.array([seq.frames[0] - 1, seq.frames[-1]], float) / info.frame_rate
     _write_poses(out / "ego_poses.csv", stamps, np.repeat(np.eye(4)[None], 2, axis=0))
+    _link_images(images, [(seq.image_path(n), (n - 1) / info.frame_rate) for n in seq.frames])
+    return out
+
+
+def write_mot17_static_recording(folder: str | Path, cam_para: str | Path, out: str | Path) -> Path:
+    """Write the MOT17 sequence in ``folder`` as a static-camera recording in ``out`` with the
+    camera estimated in UCMCTrack's ``cam_para`` file (:mod:`pedenv.datasets.ucmctrack`):
+    ``calibration.yaml`` with ``mount: static`` and ``images/``, no ego poses; returns ``out``.
+    Then ``pedenv run --calibration OUT/calibration.yaml --images OUT/images --output RUN``."""
+    out = Path(out)
+    seq = mot17.read_sequence(folder)
+    if not seq.frames:
+        raise InputError(f"{folder}: no images")
+    info = seq.info
+    cam = static_camera(read_camera_parameters(cam_para), info.width, info.height)
+    images = _prepare(out)
+    _write_calibration(out / "calibration.yaml", cam.intrinsics, info.width, info.height, cam.cam_to_vehicle,
+                       f"{info.name}: camera estimated by UCMCTrack ({Path(cam_para).name}, MIT licence), static",
+                       mount="static")
     _link_images(images, [(seq.image_path(n), (n - 1) / info.frame_rate) for n in seq.frames])
     return out

@@ -7,9 +7,13 @@ and the tests that check a fitted profile reproduces those measurements.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.optimize import minimize
 from scipy.stats import median_abs_deviation
+
+from pedenv.boxes import greedy_match, iou_matrix
 
 #: Person height bins (pixels, ground-truth box height): [low, high).
 BINS: tuple[tuple[float, float], ...] = ((0.0, 50.0), (50.0, 100.0), (100.0, 200.0), (200.0, float("inf")))
@@ -19,36 +23,6 @@ def bin_index(heights_px: np.ndarray) -> np.ndarray:
     """(N,) int: the :data:`BINS` entry of each height (N,) pixels."""
     edges = np.array([b[1] for b in BINS[:-1]])
     return np.searchsorted(edges, np.asarray(heights_px, float), side="right")
-
-
-def iou_matrix(a: np.ndarray, b: np.ndarray, over_first: bool = False) -> np.ndarray:
-    """(N, M) IoU of boxes a (N, 4) and b (M, 4) ``[u_min, v_min, u_max, v_max]`` pixels.
-
-    over_first: intersection over the area of ``a`` instead (how much of ``a`` lies in ``b``).
-    """
-    a, b = np.asarray(a, float).reshape(-1, 4), np.asarray(b, float).reshape(-1, 4)
-    w = np.clip(np.minimum(a[:, None, 2], b[None, :, 2]) - np.maximum(a[:, None, 0], b[None, :, 0]), 0, None)
-    h = np.clip(np.minimum(a[:, None, 3], b[None, :, 3]) - np.maximum(a[:, None, 1], b[None, :, 1]), 0, None)
-    inter = w * h
-    area_a = (a[:, 2] - a[:, 0]) * (a[:, 3] - a[:, 1])
-    area_b = (b[:, 2] - b[:, 0]) * (b[:, 3] - b[:, 1])
-    denom = area_a[:, None] if over_first else area_a[:, None] + area_b[None, :] - inter
-    return inter / np.maximum(denom, 1e-9)
-
-
-def greedy_match(iou: np.ndarray, scores: np.ndarray, threshold: float = 0.5) -> list[tuple[int, int]]:
-    """(detection, ground truth) pairs: detections by falling score take their best free box
-    with IoU >= ``threshold``. iou: (N, M); scores: (N,)."""
-    pairs, taken = [], np.zeros(iou.shape[1], bool)
-    for d in np.argsort(-np.asarray(scores), kind="stable"):
-        if iou.shape[1] == 0:
-            break
-        cand = np.where(taken, -1.0, iou[d])
-        g = int(np.argmax(cand))
-        if cand[g] >= threshold:
-            taken[g] = True
-            pairs.append((int(d), g))
-    return pairs
 
 
 def logistic(heights_px: np.ndarray, half_px: float, slope_px: float) -> np.ndarray:
@@ -61,7 +35,7 @@ def fit_detection_curve(heights_px: np.ndarray, detected: np.ndarray) -> tuple[f
     curve from persons' heights (N,) pixels and whether each was detected (N,) bool."""
     h, y = np.asarray(heights_px, float), np.asarray(detected, bool)
 
-    def nll(p):
+    def nll(p: np.ndarray) -> float:
         q = np.clip(logistic(h, p[0], np.exp(p[1])), 1e-9, 1 - 1e-9)
         return -(np.log(q[y]).sum() + np.log(1 - q[~y]).sum())
 
@@ -99,7 +73,7 @@ def recall_by_bin(heights_px: np.ndarray, detected: np.ndarray) -> list[float | 
     return [float(detected[idx == b].mean()) if (idx == b).any() else None for b in range(len(BINS))]
 
 
-def synthetic_recall(frames, model, span_over_box: float) -> tuple[np.ndarray, np.ndarray]:
+def synthetic_recall(frames: Any, model: Any, span_over_box: float) -> tuple[np.ndarray, np.ndarray]:
     """Run the detector ``model`` on ``frames`` (with ground-truth skeletons) and match like the
     real benchmark (IoU >= 0.5, greedy by score). Returns ``(heights (N,) px, detected (N,) bool)``.
 
@@ -140,7 +114,8 @@ class Offsets:
     def __init__(self) -> None:
         self.rows: dict[tuple, list[tuple[float, float, float]]] = {}
 
-    def add(self, key_of, keypoints, confidences, scores, boxes, truth_boxes, ground_uv, counted) -> None:
+    def add(self, key_of: Any, keypoints: np.ndarray, confidences: np.ndarray, scores: np.ndarray,
+            boxes: np.ndarray, truth_boxes: np.ndarray, ground_uv: np.ndarray, counted: np.ndarray) -> None:
         """One image: detections (N, 17, 2) px, (N, 17), (N,), boxes (N, 4) px; truth boxes
         (M, 4) px, true ground points (M, 2) px, counted (M,) bool; ``key_of(g)`` names truth
         person g."""
@@ -167,7 +142,7 @@ class Offsets:
                 "foot_within_person": robust_std(w[:, 0]), "column_within_person": robust_std(w[:, 1])}
 
 
-def synthetic_offsets(model, scenes) -> tuple[Offsets, float]:
+def synthetic_offsets(model: Any, scenes: Any) -> tuple[Offsets, float]:
     """Offsets of ``model``'s detections against the projected true positions on ``scenes``,
     and the median ratio of box height to keypoint extent of the persons measured."""
     from pedenv.geometry import invert_transform, project
@@ -190,7 +165,7 @@ def fit_person_offset(real: dict, synthetic: dict, box_over_extent: float) -> di
     """The detector model's per-person offsets (in keypoint extents) that bring the synthetic
     spread across persons up to the real one: ``sqrt(real**2 - synthetic**2)``, 0 where the
     synthetic spread is already as large."""
-    def extra(key):
+    def extra(key: str) -> float:
         return float(np.sqrt(max(real[key] ** 2 - synthetic[key] ** 2, 0.0)) * box_over_extent)
 
     return {"person_offset_u": extra("column_across_persons"), "person_offset_v": extra("foot_across_persons")}

@@ -48,7 +48,7 @@ def smooth_step(t: np.ndarray, start: float, duration: float) -> np.ndarray:
     return 0.5 - 0.5 * np.cos(np.pi * x)
 
 
-def integrate_track(times: np.ndarray, speed: Profile, yaw_rate: Profile, *, start_xy=(0.0, 0.0),
+def integrate_track(times: np.ndarray, speed: Profile, yaw_rate: Profile, *, start_xy: tuple[float, float] = (0.0, 0.0),
                     start_yaw: float = 0.0, rate_hz: float = 200.0) -> EgoTrack:
     """Integrate ``speed(t)`` (m/s) and ``yaw_rate(t)`` (rad/s) on a fine grid, sample at ``times``."""
     times = np.asarray(times, float)

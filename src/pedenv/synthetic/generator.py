@@ -16,7 +16,7 @@ from pedenv.errors import InputError
 from pedenv.records import Camera, Frame, GroundTruth, Scene
 from pedenv.synthetic.ego_motion import ego_poses, integrate_track
 from pedenv.synthetic.population import Pedestrians
-from pedenv.synthetic.scenarios import SCENARIOS, build_scenario, default_duration
+from pedenv.synthetic.scenarios import ALL_SCENARIOS, SCENARIOS, build_scenario, default_duration
 from pedenv.synthetic.terrain import Terrain, random_terrain
 from pedenv.synthetic.visibility import VisibilityRules, visible_pedestrians
 from pedenv.synthetic.walker import body_keypoints, gait_amplitude, stride_length
@@ -48,7 +48,8 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
     """Generate the built-in scenes.
 
     seed: the same seed gives identical scenes. names: scenario names (default: all of
-    :data:`~pedenv.synthetic.SCENARIOS`, in that order). frame_rate_hz: camera frame
+    :data:`~pedenv.synthetic.SCENARIOS`, in that order; the static-camera scenes of
+    :data:`~pedenv.synthetic.scenarios.STATIC_SCENARIOS` only when named). frame_rate_hz: camera frame
     rate. duration_s: length of every scene (default: each scenario's own, 15-20 s).
     terrain: rolling terrain with grades up to 5 % instead of the flat plane z = 0.
     Raises ValueError for an unknown name or an out-of-range option.
@@ -58,9 +59,9 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
     if isinstance(names, str):
         names = [names]
     names = list(SCENARIOS if names is None else names)
-    unknown = [n for n in names if n not in SCENARIOS]
+    unknown = [n for n in names if n not in ALL_SCENARIOS]
     if unknown:
-        raise InputError(f"unknown scenario {unknown[0]!r}; valid: {', '.join(SCENARIOS)}")
+        raise InputError(f"unknown scenario {unknown[0]!r}; valid: {', '.join(ALL_SCENARIOS)}")
     if isinstance(frame_rate_hz, bool) or not 0.5 <= frame_rate_hz <= 100.0:
         raise InputError(f"frame_rate_hz must be in [0.5, 100], got {frame_rate_hz}")
     if duration_s is not None and not 1.0 <= duration_s <= 600.0:
@@ -78,7 +79,7 @@ def generate_scene(seed: int, name: str, *, frame_rate_hz: float, duration_s: fl
     ground = scene_terrain(seed, name, terrain)
     times = np.arange(int(np.floor(duration_s * frame_rate_hz + 1e-9))) / frame_rate_hz
     track = integrate_track(times, plan.speed, plan.yaw_rate, start_xy=plan.start_xy, start_yaw=plan.start_yaw)
-    camera = default_camera()
+    camera = plan.camera or default_camera()
     frames = []
     for index, (t, ego) in enumerate(zip(times, ego_poses(track, ground))):
         cam_to_world = ego.matrix @ camera.cam_to_vehicle

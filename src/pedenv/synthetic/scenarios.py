@@ -4,6 +4,10 @@ Every recipe takes a seeded generator and the scene duration and returns a
 :class:`ScenarioPlan`. The ego drives along world +x in the right-hand lane (y = -1.75 m)
 unless the recipe says otherwise; pedestrian numbers grow with the stretch of street
 the ego sees during the scene, so longer scenes stay as busy.
+
+:data:`SCENARIOS` are the paper's kind, a camera on a vehicle (the default set of every
+command and of the golden figures); :data:`STATIC_SCENARIOS` have a camera fixed to the
+ground (``mount: static``) and are generated only when named.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.records import Camera, default_cam_to_vehicle
 from pedenv.synthetic.ego_motion import Profile, integrate_track, smooth_step
 from pedenv.synthetic.population import Pedestrians, concat
 from pedenv.synthetic.streets import Road, crossers, plaza_walkers, sidewalk_walkers, standing_group
@@ -35,6 +40,7 @@ class ScenarioPlan:
     pedestrians: Pedestrians
     start_xy: tuple[float, float] = (0.0, LANE_Y_M)
     start_yaw: float = 0.0
+    camera: Camera | None = None  # None: the paper's vehicle camera (generator.default_camera)
 
 
 def _constant(value: float) -> Profile:
@@ -139,6 +145,34 @@ def standing_pedestrians(rng: np.random.Generator, duration_s: float) -> Scenari
                         _constant(0.0), _constant(0.0), peds)
 
 
+#: The static scenes' camera: this high above the ground (metres), pitched down this much (degrees).
+STATIC_CAMERA_HEIGHT_M, STATIC_CAMERA_PITCH_DEG = 6.0, 20.0
+
+
+def static_camera(height_m: float = STATIC_CAMERA_HEIGHT_M, pitch_down_deg: float = STATIC_CAMERA_PITCH_DEG) -> Camera:
+    """The paper's 1600x900, 64.5 deg camera fixed ``height_m`` above the ground over the
+    vehicle frame's origin, looking along +x and pitched down ``pitch_down_deg`` (``mount: static``)."""
+    mount = default_cam_to_vehicle(height_m)
+    a = np.radians(pitch_down_deg)
+    pitch = np.array([[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]])  # about y (left)
+    mount[:3, :3] = pitch @ mount[:3, :3]
+    base = Camera.from_fov(1600, 900, 64.5)
+    return Camera(base.intrinsics, base.width, base.height, mount, "static")
+
+
+def static_plaza(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+    plaza = (8.0, 60.0), (-22.0, 22.0)
+    street = Road(origin=(38.0, 0.0), yaw=np.pi / 2, half_width_m=4.0, sidewalk_m=3.0)
+    peds = concat(
+        plaza_walkers(rng, 28, *plaza),
+        crossers(rng, street, _count(0.6, duration_s), (-15.0, 15.0), (-6.0, duration_s - 4.0)),
+        standing_group(rng, np.array([[14.0, -6.0], [26.0, 9.0], [50.0, -12.0]]), rng.integers(2, 4, 3)),
+    )
+    return ScenarioPlan(f"a static camera {STATIC_CAMERA_HEIGHT_M:g} m up, {STATIC_CAMERA_PITCH_DEG:g} deg down, "
+                        "over a plaza: people wander, cross a street through it and stand in groups",
+                        _constant(0.0), _constant(0.0), peds, start_xy=(0.0, 0.0), camera=static_camera())
+
+
 #: Scenario name -> (recipe, default duration in seconds).
 _RECIPES: dict[str, tuple[Callable[[np.random.Generator, float], ScenarioPlan], float]] = {
     "red-light-crossing": (red_light_crossing, 20.0),
@@ -149,18 +183,26 @@ _RECIPES: dict[str, tuple[Callable[[np.random.Generator, float], ScenarioPlan], 
     "crowd": (crowd, 15.0),
     "standing-pedestrians": (standing_pedestrians, 15.0),
 }
+_STATIC_RECIPES: dict[str, tuple[Callable[[np.random.Generator, float], ScenarioPlan], float]] = {
+    "static-plaza": (static_plaza, 15.0),
+}
 
-#: Names of the built-in scenarios, in their default order.
+#: Names of the built-in vehicle-camera scenarios, in their default order (the default set).
 SCENARIOS: tuple[str, ...] = tuple(_RECIPES)
+#: Names of the built-in static-camera scenarios (generated only when named).
+STATIC_SCENARIOS: tuple[str, ...] = tuple(_STATIC_RECIPES)
+#: Every name :func:`build_scenario` knows.
+ALL_SCENARIOS: tuple[str, ...] = SCENARIOS + STATIC_SCENARIOS
 
 
 def default_duration(name: str) -> float:
     """Default length of scenario ``name`` in seconds."""
-    return _RECIPES[name][1]
+    return {**_RECIPES, **_STATIC_RECIPES}[name][1]
 
 
 def build_scenario(name: str, rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
     """The plan of scenario ``name``; raises ValueError listing the valid names."""
-    if name not in _RECIPES:
-        raise InputError(f"unknown scenario {name!r}; valid: {', '.join(SCENARIOS)}")
-    return _RECIPES[name][0](rng, duration_s)
+    recipes = {**_RECIPES, **_STATIC_RECIPES}
+    if name not in recipes:
+        raise InputError(f"unknown scenario {name!r}; valid: {', '.join(ALL_SCENARIOS)}")
+    return recipes[name][0](rng, duration_s)

@@ -13,7 +13,8 @@ One folder per scene, named after the scene::
 * per frame: ``index`` (T,) int64; ``timestamp`` (T,) float64 seconds;
   ``ego_translation`` (T, 3) and ``ego_rotation`` (T, 3, 3), vehicle -> world;
   ``intrinsics`` (T, 3, 3) pixels; ``image_size`` (T, 2) int64 width, height;
-  ``cam_to_vehicle`` (T, 4, 4); ``has_gt`` and ``has_detections`` (T,) bool.
+  ``cam_to_vehicle`` (T, 4, 4); ``has_gt`` and ``has_detections`` (T,) bool; optional
+  ``camera_static`` (T,) bool, the camera's mount is ``static`` (absent: ``vehicle``).
 * ground truth: frame ``i`` owns rows ``gt_offsets[i]:gt_offsets[i + 1]`` ((T + 1,) int64)
   of ``gt_ids`` (P,) int64, ``gt_positions`` (P, 3) world metres, ``gt_boxes`` (P, 4)
   pixels and the optional ``gt_keypoints`` (P, 17, 2), ``gt_visible`` (P, 17) bool,
@@ -82,6 +83,8 @@ def _scene_arrays(scene: Scene) -> dict[str, np.ndarray]:
         "gt_boxes": _stack([g.boxes for g in gts], (4,)),
         "det_offsets": _offsets([len(d) for d in dets]),
     }
+    if any(f.camera.static for f in frames):  # optional: files of vehicle cameras stay as they were
+        out["camera_static"] = np.array([f.camera.static for f in frames], bool)
     for name, tail in _OPTIONAL.items():
         dtype = bool if name == "visible" else np.float64
         present = [getattr(g, name) is not None for g in gts]
@@ -155,7 +158,8 @@ def read_scene(folder: str | Path) -> Scene:
 
 def _frame(a: dict[str, np.ndarray], i: int, meta: dict) -> Frame:
     width, height = (int(v) for v in a["image_size"][i])
-    camera = Camera(a["intrinsics"][i], width, height, a["cam_to_vehicle"][i])
+    static = "camera_static" in a and bool(a["camera_static"][i])
+    camera = Camera(a["intrinsics"][i], width, height, a["cam_to_vehicle"][i], "static" if static else "vehicle")
     gt = det = None
     if a["has_gt"][i]:
         rows = slice(int(a["gt_offsets"][i]), int(a["gt_offsets"][i + 1]))

@@ -12,7 +12,7 @@ DEFAULT_FUSED = FusedConfig()
 
 
 def run_height(frame, config=DEFAULT_FUSED, **kw):
-    return height_cue(skeletons_of(frame, config), float(frame.camera.intrinsics[0, 0]), config, **kw)
+    return height_cue(skeletons_of(frame, config), config, **kw)
 
 
 def test_height_cue_is_exact_for_a_person_of_mean_height_on_a_rise_and_a_pitched_vehicle():

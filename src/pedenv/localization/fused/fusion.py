@@ -6,7 +6,8 @@ plus the per-person part ``B_c``) the fused estimate is ``S = (sum S_c^-1)^-1``,
 others: ``d^2 = (mu_c - mu_rest)^T (S_c + S_rest)^-1 (mu_c - mu_rest)``. While the worst
 ``d^2`` exceeds the chi-square quantile (2 dof) that cue is dropped, so a bad cue is
 outvoted, not averaged in. Between two cues only, the one later in the trust order is
-dropped (the height cue is trusted most: terrain and a walking person bias the others).
+dropped (the height cue is trusted most: terrain and a walking person bias the others;
+under a static camera the ground is the calibrated plane, so its ground cue goes first).
 
 The fused error is ``S sum S_c^-1 e_c``; with the cues' errors independent its
 frame-to-frame part is ``F = S (sum S_c^-1 F_c S_c^-1) S`` and its per-person part
@@ -34,6 +35,9 @@ from pedenv.localization.fused.cue import REASON_CODE, REASONS, CueEstimate
 
 #: Which cue to keep when only two disagree: earlier in this tuple wins.
 TRUST_ORDER = ("height", "triangulation", "ground")
+#: The same for a static camera (``Camera.mount``): its ground plane and height are exact,
+#: while the height cue leans on a body-height prior and upright-body proportions.
+STATIC_TRUST_ORDER = ("ground", "height", "triangulation")
 #: Between equal gate distances the less trusted cue goes: distances are scaled by
 #: ``1 + TIE_BREAK * rank`` (small enough never to change a real ordering).
 TIE_BREAK = 1e-6
@@ -82,11 +86,13 @@ def _components(cues: list[CueEstimate], field: str):
     return stacked[..., 0, 0], 0.5 * (stacked[..., 0, 1] + stacked[..., 1, 0]), stacked[..., 1, 1]
 
 
-def fuse_cues(cues: list[CueEstimate], gate_probability: float, origin: np.ndarray | None = None) -> Fused:
+def fuse_cues(cues: list[CueEstimate], gate_probability: float, origin: np.ndarray | None = None,
+              trust_order: tuple[str, ...] = TRUST_ORDER) -> Fused:
     """Gate and fuse N pedestrians' cue estimates (all cues have the same N).
 
     origin: (2,) camera centre, world x-y, metres; given, the fused covariance across each
     pedestrian's viewing ray is floored at the sharpest used cue's (see the module notes).
+    trust_order: which cue stays when two disagree (:data:`STATIC_TRUST_ORDER`: static cameras).
     """
     n, c = len(cues[0]), len(cues)
     means = np.stack([q.positions for q in cues], axis=1)  # (N, C, 2)
@@ -103,7 +109,7 @@ def fuse_cues(cues: list[CueEstimate], gate_probability: float, origin: np.ndarr
     sa, sb, sc = np.where(use, sa, 1.0), np.where(use, sb, 0.0), np.where(use, sc, 1.0)
     ia, ib, ic = inverse_sym(sa, sb, sc)
     threshold = chi2_quantile_2dof(gate_probability)
-    rank = np.array([TRUST_ORDER.index(q.name) if q.name in TRUST_ORDER else len(TRUST_ORDER) for q in cues])
+    rank = np.array([trust_order.index(q.name) if q.name in trust_order else len(trust_order) for q in cues])
     rows = np.arange(n)
     for _ in range(c - 1):
         count = use.sum(axis=1, keepdims=True)

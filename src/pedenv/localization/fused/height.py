@@ -106,13 +106,13 @@ def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.nd
     return r, var_pix * to_range, var_frac * to_range
 
 
-def height_cue(skeletons: FrameSkeletons, focal_px: float, config: FusedConfig,
+def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
                height_mean: np.ndarray | None = None, height_std: np.ndarray | None = None,
                reference_range: np.ndarray | None = None) -> CueEstimate:
     """Ground point of N pedestrians from the known body-height shares of their keypoints.
 
     skeletons: the frame's rays (world), usable keypoints and stance ankles.
-    focal_px: focal length, pixels. height_mean, height_std: (N,) metres, each person's
+    height_mean, height_std: (N,) metres, each person's
     height belief (default: the population prior of ``config``). reference_range: (N,)
     metres, the range at which to scale the variance (NaN or None: this frame's range).
     The variance grows with the range squared; scaled at this frame's noisy range, a

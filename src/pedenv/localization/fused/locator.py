@@ -28,8 +28,8 @@ from pedenv.localization.fused.cue import (
     keypoint_usable,
     range_bearing_covariance,
 )
-from pedenv.localization.fused.fusion import describe_sources, fuse_cues
-from pedenv.localization.fused.ground import ground_cue
+from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, describe_sources, fuse_cues
+from pedenv.localization.fused.ground import box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
 from pedenv.localization.fused.triangulation import Triangulated, triangulate, triangulation_cue
@@ -52,14 +52,18 @@ MIN_ALONG = 1e-3
 
 
 def box_estimate(boxes: np.ndarray, centre_rays: np.ndarray, origin: np.ndarray, focal_px: float,
-                 height_m: float) -> CueEstimate:
+                 height_m: float, max_ranges: np.ndarray | None = None) -> CueEstimate:
     """Last resort: range ``f H / box height`` along the box centre's ray, 50 % spread
     (the person's own height and pose: per-person, 5 % of it frame-to-frame); across the ray
     frame-to-frame.
 
     boxes: (N, 4) pixels. centre_rays: (N, 3) unit, world. origin: (3,) world, metres.
+    max_ranges: optional (N,) metres, no range beyond (a static camera: where the box's
+    bottom meets the ground, :func:`~pedenv.localization.fused.ground.box_bottom_ranges`).
     """
     r = np.clip(focal_px * height_m / np.maximum(boxes[:, 3] - boxes[:, 1], 1.0), *BOX_RANGE_M)
+    if max_ranges is not None:
+        r = np.clip(np.minimum(r, max_ranges), *BOX_RANGE_M)
     bearing = horizontal_bearing(centre_rays)
     across = across_variance(r, focal_px, BOX_PIXEL_STD, BOX_LATERAL_STD_M)
     frame = range_bearing_covariance(bearing, (BOX_FRAME_RELATIVE_STD * r) ** 2, across)
@@ -130,7 +134,7 @@ class FusedLocator:
         if "ground" in cfg.cues:
             cues.append(ground_cue(frame, skel, cfg))
         if "height" in cfg.cues:
-            cues.append(height_cue(skel, focal, cfg, reference_range=last_range))
+            cues.append(height_cue(skel, cfg, reference_range=last_range))
         terms, dots = ray_terms(rays, origin)
         # where each keypoint was: the track's last skeleton, moved onto this frame's rays
         last_skel = h.skeletons[rows]
@@ -140,12 +144,13 @@ class FusedLocator:
         h.push(rows, rays, terms, dots, usable, origin, frame.timestamp)
         if "triangulation" in cfg.cues:
             cues.append(triangulation_cue(tri, skel, cfg))
-        fused = fuse_cues(cues, cfg.gate_probability, origin[:2])
+        fused = fuse_cues(cues, cfg.gate_probability, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
         sources = describe_sources(cues, fused, self._sources, ~fused.valid)
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
         if not fused.valid.all():
-            box = box_estimate(det.boxes, geo.centre_rays, origin, focal, cfg.person_height_mean_m)
+            bound = box_bottom_ranges(frame, det.boxes, origin) if cam.static else None
+            box = box_estimate(det.boxes, geo.centre_rays, origin, focal, cfg.person_height_mean_m, bound)
             lost = ~fused.valid
             xy = np.where(lost[:, None], box.positions, xy)
             cov = np.where(lost[:, None, None], box.covariances, cov)
