@@ -1,7 +1,16 @@
 """Seeded fuzz of the model (issue 10): whatever detections arrive, update() either refuses
-them with an InputError or returns only finite values within the method's maximum range."""
+them with an InputError or returns only finite values within the method's maximum range.
+
+Issue 19: small, collapsed, degenerate and far skeletons with ego motion and time steps,
+the sequences of ``benchmarks/fuzz_update.py`` (a seeded share of its 100,000): no NaN or
+inf, no covariance that is not positive semi-definite, no exception but InputError, no
+pedestrian made of a person with no seen keypoint, for both methods."""
 
 from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +24,12 @@ from pedenv.records import Camera, Detections, EgoPose, Frame
 from standing_people import frame_with_people
 
 CAMERA = Camera.from_fov()
+_spec = importlib.util.spec_from_file_location(
+    "fuzz_update", Path(__file__).resolve().parents[1] / "benchmarks" / "fuzz_update.py")
+fuzz_update = sys.modules.setdefault("fuzz_update", importlib.util.module_from_spec(_spec))
+_spec.loader.exec_module(fuzz_update)  # registered first: its dataclasses look their module up
+#: Sequences per method in CI (seeds 0, 2, 4, ... for paper, 1, 3, 5, ... for fused).
+CI_SEQUENCES = 300
 FIELDS = ("positions", "velocities", "covariances", "keypoints", "confidences", "boxes", "keypoints_3d", "distances")
 
 
@@ -95,3 +110,52 @@ def test_transition_cache_stays_bounded():
     for i in range(1000):  # 1000 more distinct intervals
         model._transition(round(0.2 + 1e-4 * i, 6))
     assert model._transition.cache_info().currsize == 64
+
+
+@pytest.mark.parametrize("method", ["paper", "fused"])
+def test_degenerate_skeletons_never_give_nan_a_bad_covariance_or_an_exception(method):
+    """Issue 19: before its fixes these seeds gave fused 1 frame with NaN and 27 with a
+    covariance not positive semi-definite (a collapsed skeleton's height cue at 1e16 m,
+    1e55 m^2, broke the filter's arithmetic) and paper 354 frames with a pedestrian made of
+    a person with no seen keypoint."""
+    methods = ("paper", "fused")
+    configs = {m: configure(Config(), m) for m in methods}
+    out = fuzz_update.Outcome()
+    for k in range(methods.index(method), 2 * CI_SEQUENCES, 2):
+        out.add(fuzz_update.run_sequence(k, method, configs))
+    assert out.sequences == CI_SEQUENCES and out.frames > 2 * CI_SEQUENCES
+    assert (out.nan_frames, out.bad_covariance_frames, out.phantom_frames, dict(out.exceptions)) == (0, 0, 0, {}), \
+        out.first_seed
+
+
+#: The issue's two reproductions: one point repeated, ego 2 and 5 m/s; NaN at frame 1 and
+#: ValueError from linear_sum_assignment before the fix.
+COLLAPSED = [((1475.0, 202.0), 0.2), ((545.0, 482.0), 0.5)]
+
+
+@pytest.mark.parametrize(("point", "step"), COLLAPSED)
+def test_a_skeleton_collapsed_to_one_point_gives_no_position_from_its_height(point, step):
+    model = PedestrianEnvironmentModel(Config())
+    kp = np.full((1, 17, 2), point)
+    for i in range(3):
+        ego = EgoPose.from_xy_yaw(step * i, 0, 0)
+        state = model.update(Frame(i, 0.1 * i, CAMERA, ego, detections=Detections(kp, np.full((1, 17), 0.9))))
+        p = state.pedestrians
+        assert len(p) == 1 and np.isfinite(p.positions).all() and np.isfinite(p.covariances).all()
+        assert fuzz_update.psd(p.covariances) and fuzz_update.psd(model.tracks.filter.P[:, [0, 2]][:, :, [0, 2]])
+        assert "height:inconsistent" in p.sources[0]  # a collapsed skeleton has no height to read
+
+
+@pytest.mark.parametrize("kind", ["nan", "zero", "negative"])
+def test_paper_leaves_out_a_person_with_no_seen_keypoint(kind):
+    """Issue 19: the paper method placed them 479-500 m away; fused leaves them out too."""
+    good = frame_with_people(0, 0.0, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 0.0)]).detections
+    kp, conf = good.keypoints.copy(), good.confidences.copy()
+    ghost_kp, ghost_conf = kp[0] + [300.0, 0.0], {"nan": conf[0], "zero": 0 * conf[0], "negative": -conf[0]}[kind]
+    if kind == "nan":
+        ghost_kp = np.full_like(ghost_kp, np.nan)
+    det = Detections(np.stack([kp[0], ghost_kp]), np.stack([conf[0], ghost_conf]))
+    for method in ("paper", "fused"):
+        model = PedestrianEnvironmentModel(configure(Config(), method))
+        state = model.update(Frame(0, 0.0, CAMERA, EgoPose.from_xy_yaw(0, 0, 0), detections=det))
+        assert len(state.pedestrians) == 1 and state.pedestrians.distances[0] < 30.0, method

@@ -64,8 +64,15 @@ class PedestrianEnvironmentModel:
         """Add one frame and return the environment model at its timestamp.
 
         ``frame.detections`` must be set (by a pose backend); timestamps must increase.
+        With a locator that ``requires_keypoints`` (``paper``), a person with no seen
+        keypoint (all NaN or all confidences <= 0) is left out before tracking.
         """
         det = self._check(frame)
+        if getattr(self.locator, "requires_keypoints", False):
+            seen = (det.confidences > 0).any(axis=1)  # NaN keypoints and confidences <= 0 are 0 here
+            if not seen.all():  # no keypoint to place them by: no pedestrians (fused: no score to track)
+                det = det.take(seen)
+                frame = dataclasses.replace(frame, detections=det)
         t0 = time.perf_counter()
         self._predict(frame)  # first: the tracker may gate with the prediction (beyond the paper)
         t1 = time.perf_counter()

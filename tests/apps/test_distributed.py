@@ -86,9 +86,9 @@ def test_resume_refuses_a_folder_pedenv_did_not_write(short_dataset, tmp_path):
 def test_a_damaged_checkpoint_is_one_clear_error(short_dataset, tmp_path):
     evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "run")
     name = short_dataset.scene_names()[0]
-    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.pkl"
-    checkpoint.write_bytes(b"not a pickle")
-    with pytest.raises(InputError, match=f"{checkpoint}: cannot read the scene checkpoint"):
+    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
+    checkpoint.write_bytes(b"not a checkpoint")
+    with pytest.raises(InputError, match=f"{checkpoint}: not a pedenv scene checkpoint .*to run scene {name} again"):
         evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "run", resume=True)
 
 
@@ -105,3 +105,19 @@ def test_serial_executor_reuses_one_pose_backend(short_dataset, tmp_path):
         result = evaluate_on(short_dataset, executor=ex, pose_backend=factory)
     assert len(made) == 2  # once to check and name it, once for the (one) worker: not once per scene
     assert result.metrics.info["pose_backend"] == "detector-model"
+
+
+def test_resume_refuses_a_scene_checkpointed_with_another_method(short_dataset, tmp_path):
+    """Issue 19: a scene checkpointed with --method paper was merged into a fused run without a word."""
+    name = short_dataset.scene_names()[0]
+    evaluate_distributed(short_dataset, executor="serial", scenes=[name], config=Config(method="paper"),
+                         output_dir=tmp_path / "run")
+    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
+    with pytest.raises(InputError, match=f"{checkpoint}: scene {name} was checkpointed by another run "
+                                         r'\(config.method "paper" \(this run: "fused"\), .*delete '):
+        evaluate_distributed(short_dataset, executor="serial", scenes=[name], output_dir=tmp_path / "run",
+                             resume=True)
+    # the same settings resume it
+    again = evaluate_distributed(short_dataset, executor="serial", scenes=[name], config=Config(method="paper"),
+                                 output_dir=tmp_path / "run", resume=True)
+    assert again.extras["resumed"] == [name] and again.metrics.info["method"] == "paper"

@@ -8,18 +8,19 @@ backend is made once per worker process and kept for its later scenes. The resul
 merged in scene order by :func:`~pedenv.apps.scene_result.merge_scene_results`, so
 ``metrics.json`` holds the numbers of a serial run to the last digit, all but the stage
 timings (wall times). With ``output_dir`` each finished scene is saved at once under
-``scenes/<name>/`` (its ``environment.jsonl`` and a ``result.pkl`` checkpoint); at the end
+``scenes/<name>/`` (its ``environment.jsonl`` and a ``result.npz`` checkpoint of plain arrays,
+:mod:`pedenv.apps.scene_checkpoint`); at the end
 ``environment.jsonl`` is their concatenation in scene order, as a serial run writes it.
 A scene that raises is reported by name in ``result.extras["failures"]`` and in
 ``metrics.json``'s ``info.failed_scenes``; the others finish and are written.
-``resume`` reuses the checkpoints of an earlier run in ``output_dir`` and runs the rest
-(the checkpoints are pickles: resume only output folders you wrote yourself).
+``resume`` reuses the checkpoints of an earlier run in ``output_dir`` and runs the rest.
+The checkpoints are data, read without pickle: a forged one gives a clear error, never runs
+code. A checkpoint of another run (another method, config, pose backend or dataset) is
+refused with a line naming the scene, never merged.
 """
 
 from __future__ import annotations
 
-import os
-import pickle
 import shutil
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -27,6 +28,7 @@ from pathlib import Path
 from pedenv.apps.evaluate import evaluation_info, resolve_scenes
 from pedenv.apps.executors import RayExecutor, SerialExecutor, TaskContext
 from pedenv.apps.progress import FrameCounter, progress_bar
+from pedenv.apps.scene_checkpoint import load_checkpoint, run_identity, save_checkpoint
 from pedenv.apps.scene_result import SceneResult, evaluate_scene, merge_scene_results
 from pedenv.config import Config
 from pedenv.datasets import Dataset
@@ -37,7 +39,9 @@ from pedenv.pose import PoseBackend, create_pose_backend
 
 #: Folder of the per-scene outputs and checkpoints inside the output folder.
 SCENES_FOLDER = "scenes"
-CHECKPOINT = "result.pkl"
+CHECKPOINT = "result.npz"
+#: The pickle checkpoint of pedenv before issue 19: never opened (unpickling can run code).
+PICKLE_CHECKPOINT = "result.pkl"
 
 #: A pose backend as workers get it: a registered name, a picklable backend, or a
 #: picklable factory (``functools.partial(create_pose_backend, "onnx", detection="far")``).
@@ -67,7 +71,8 @@ def evaluate_on(dataset: Dataset, *, executor: SerialExecutor | RayExecutor, sce
     spec = pose_backend or dataset.default_pose_backend
     backend = make_backend(spec)
     names = resolve_scenes(dataset, scenes)
-    store = SceneStore(Path(output_dir)) if output_dir else None
+    run = run_identity(dataset.name, backend.name, config.to_dict())
+    store = SceneStore(Path(output_dir), run) if output_dir else None
     finished: dict[str, SceneResult] = store.load(names) if (store and resume) else {}
     resumed = list(finished)
     failures: dict[str, BaseException] = {}
@@ -105,11 +110,15 @@ def _scene_task(name: str, context: TaskContext) -> SceneResult:
 
 
 class SceneStore:
-    """The per-scene outputs of an output folder: ``scenes/<name>/environment.jsonl`` and its checkpoint."""
+    """The per-scene outputs of an output folder: ``scenes/<name>/environment.jsonl`` and its checkpoint.
 
-    def __init__(self, output_dir: Path) -> None:
+    run: what the checkpoints must share with this run (:func:`~pedenv.apps.scene_checkpoint.run_identity`).
+    """
+
+    def __init__(self, output_dir: Path, run: dict) -> None:
         self.root = output_dir / SCENES_FOLDER
         self.output_dir = output_dir
+        self.run = run
 
     def folder(self, name: str) -> Path:
         if not name or "/" in name or "\\" in name or name in (".", ".."):
@@ -122,30 +131,22 @@ class SceneStore:
         with EnvironmentWriter(folder / "environment.jsonl") as writer:
             for line in result.lines or []:
                 writer.write_line(line)
-        lines, result.lines = result.lines, None
-        try:
-            tmp = folder / (CHECKPOINT + ".tmp")
-            with tmp.open("wb") as f:
-                pickle.dump(result, f, protocol=pickle.HIGHEST_PROTOCOL)
-            os.replace(tmp, folder / CHECKPOINT)
-        finally:
-            result.lines = lines
+        save_checkpoint(folder / CHECKPOINT, result, self.run)
 
     def load(self, names: Sequence[str]) -> dict[str, SceneResult]:
-        """The checkpoints of the scenes among ``names`` that an earlier run completed."""
+        """The checkpoints of the scenes among ``names`` that an earlier run completed
+        (InputError naming the scene for a checkpoint that is damaged, of another run, or a
+        pickle of an older pedenv, which is never opened)."""
         found = {}
         for name in names:
-            path = self.folder(name) / CHECKPOINT
-            if path.is_file() and (path.parent / "environment.jsonl").is_file():
-                try:
-                    with path.open("rb") as f:
-                        result = pickle.load(f)  # noqa: S301 - pedenv's own checkpoint in the user's output folder
-                except (OSError, pickle.UnpicklingError, EOFError, AttributeError) as exc:
-                    raise InputError(f"{path}: cannot read the scene checkpoint ({exc}); delete it to run the "
-                                     f"scene again") from None
-                if not isinstance(result, SceneResult) or result.name != name:
-                    raise InputError(f"{path}: not the checkpoint of scene {name}; delete it to run the scene again")
-                found[name] = result
+            folder = self.folder(name)
+            path = folder / CHECKPOINT
+            if not path.is_file() and (folder / PICKLE_CHECKPOINT).is_file():
+                raise InputError(f"{folder / PICKLE_CHECKPOINT}: a checkpoint of an older pedenv, a Python pickle, "
+                                 f"which pedenv no longer opens (unpickling can run code); delete {folder} to run "
+                                 f"scene {name} again")
+            if path.is_file() and (folder / "environment.jsonl").is_file():
+                found[name] = load_checkpoint(path, name, self.run)
         return found
 
     def concatenate(self, names: Sequence[str]) -> Path:

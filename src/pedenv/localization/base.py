@@ -74,7 +74,8 @@ class Locator(Protocol):
 
     ``columns`` is the locator's group of per-track columns (row-aligned with the track
     table, carried by the tracker); ``locate`` reads and writes the rows ``rows`` (N,)
-    of the frame's N detections.
+    of the frame's N detections. A locator with a true attribute ``requires_keypoints``
+    is never given a person without a seen keypoint (the model leaves those out).
     """
 
     columns: ColumnGroup

@@ -234,6 +234,10 @@ class PaperLocator:
     (:class:`~pedenv.config.PaperConfig`); the paper gives none.
     """
 
+    #: A person with no seen keypoint cannot be placed (the box alone put them 479-500 m
+    #: away): the model leaves them out (see :class:`~pedenv.localization.base.Locator`).
+    requires_keypoints = True
+
     def __init__(self, config: Config) -> None:
         self.config = config.paper
         self.max_range_m = config.paper.max_distance_m  # the model clamps beyond (pedenv.localization.bounds)

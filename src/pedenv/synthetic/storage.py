@@ -138,7 +138,7 @@ def read_scene(folder: str | Path) -> Scene:
     if not path.is_file():
         raise InputError(f"{path}: missing (every scene folder holds frames.npz)")
     try:
-        with np.load(path) as data:  # allow_pickle stays off: object arrays are refused
+        with np.load(path, allow_pickle=False) as data:  # object arrays (pickles) are refused, never loaded
             a = {k: data[k] for k in data.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         raise InputError(f"{path}: cannot read (truncated or corrupted?): {type(exc).__name__}: {exc}") from None

@@ -58,6 +58,12 @@ MIN_FRACTION_SPAN = 0.25
 PASSES = 2
 #: A fitted range below this (metres) is no person in front of the camera.
 MIN_RANGE_M = 0.3
+#: A fitted range whose frame-to-frame standard deviation exceeds this share of itself is
+#: no range: the keypoints' elevations do not resolve the slope (a skeleton collapsed to a
+#: point or a line fits a slope of rounding noise, 1e16 m away with a 1e55 m^2 covariance
+#: that broke the filter's arithmetic). Such a slope is not surely positive, so the cue
+#: declines (``inconsistent``) rather than claim a range it cannot tell from infinity.
+MAX_RELATIVE_RANGE_STD = 1.0
 #: Relative determinant below which the straight-line fit is singular.
 MIN_RELATIVE_DET = 1e-12
 #: A track's last range scales this frame's variance only while this frame's range lies
@@ -114,7 +120,8 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     would drift near, so a tracked pedestrian's variance is scaled at its last range, as
     long as this frame's range agrees with it (:data:`REFERENCE_RANGE_SIGMAS`).
     Declines with ``no-keypoints`` (fewer than two usable levels), ``short-extent``
-    (they span too little of the body) or ``inconsistent`` (no positive range fits).
+    (they span too little of the body) or ``inconsistent`` (no positive range fits, or
+    the fit's range is not resolved: :data:`MAX_RELATIVE_RANGE_STD`).
     """
     n, idx = len(skeletons), HEIGHT_KEYPOINTS
     hm = np.full(n, config.person_height_mean_m) if height_mean is None else np.asarray(height_mean, float)
@@ -134,7 +141,9 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     scaled = ANKLE_FRACTION + config.keypoint_span_scale * (frac - ANKLE_FRACTION)
     r, var_pix, var_frac = solve_range(skeletons.tangents[:, idx], np.broadcast_to(scaled, used.shape), frac_std,
                                        used, hm, skeletons.noise)
-    good = enough & np.isfinite(r) & (r > MIN_RANGE_M) & np.isfinite(var_pix + var_frac)  # NaN compares False
+    with np.errstate(over="ignore", invalid="ignore"):  # NaN and inf compare False
+        resolved = var_pix + var_frac <= MAX_RELATIVE_RANGE_STD**2 * r**2
+    good = enough & np.isfinite(r) & (r > MIN_RANGE_M) & np.isfinite(var_pix + var_frac) & resolved
     reasons = first_reason([(levels < 2, "no-keypoints"), (~enough, "short-extent"), (~good, "inconsistent")], n)
     r = np.where(good, r, 1.0)
     r2 = r**2
