@@ -122,7 +122,7 @@ def test_a_partial_section_starts_from_its_methods_defaults():
      f"fused.cues entry must be one of ground, triangulation, height, got '{'x' * 27}...{'x' * 28}'"),
     ({"fused": {"cues": list(range(10 ** 6))}},
      "fused.cues must list at least one and at most 3 entries, got (0, 1, 2, 3, ...)"),
-    ({"detection": {"mode": "slow"}}, "detection.mode must be one of fast, far, got 'slow'"),
+    ({"detection": {"mode": "slow"}}, "detection.mode must be one of fast, far, stream, got 'slow'"),
     ({"detection": {"level_scales": [1.0, 2.0] * 10}},
      "detection.level_scales must be a non-empty tuple of at most 8 numbers, got (1.0, 2.0, 1.0, 2.0, ...)"),
     ({"detection": {"max_tiles": 1e9}}, "detection.max_tiles must be an integer in [1, 64], got 1000000000.0"),

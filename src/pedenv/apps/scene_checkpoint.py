@@ -17,6 +17,7 @@ with a line naming the scene and the first differences: resuming merges it into 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import zipfile
@@ -29,7 +30,7 @@ from pedenv.errors import InputError
 from pedenv.evaluation.metrics import ErrorSamples
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth
 from pedenv.stage_timer import StageTimer
-from pedenv.state import EnvironmentState, Pedestrians
+from pedenv.state import Behaviour, EnvironmentState, Pedestrians
 
 #: What ``meta["format"]`` says, and the version of the layout below.
 FORMAT, VERSION = "pedenv-scene-checkpoint", 1
@@ -76,6 +77,16 @@ def _busiest_arrays(state: EnvironmentState, frame: Frame, arrays: dict) -> dict
     for name in PEDESTRIAN_FIELDS:
         arrays[f"state.{name}"] = np.asarray(getattr(state.pedestrians, name))
     arrays["state.ego_translation"], arrays["state.ego_rotation"] = state.ego.translation, state.ego.rotation
+    behaviour = state.pedestrians.behaviour
+    scalars = None
+    if behaviour is not None:  # the cues' arrays, and their per-frame numbers in the meta
+        scalars = {}
+        for f in dataclasses.fields(behaviour):
+            value = getattr(behaviour, f.name)
+            if isinstance(value, np.ndarray):
+                arrays[f"behaviour.{f.name}"] = value
+            else:
+                scalars[f.name] = float(value)
     cam = frame.camera
     arrays["frame.intrinsics"], arrays["frame.cam_to_vehicle"] = cam.intrinsics, cam.cam_to_vehicle
     arrays["frame.ego_translation"], arrays["frame.ego_rotation"] = frame.ego.translation, frame.ego.rotation
@@ -87,7 +98,8 @@ def _busiest_arrays(state: EnvironmentState, frame: Frame, arrays: dict) -> dict
     return {"state_index": state.frame_index, "state_timestamp": state.timestamp, "state_scene": state.scene,
             "index": frame.index, "timestamp": frame.timestamp, "width": cam.width, "height": cam.height,
             "scene": frame.scene, "image_path": None if frame.image_path is None else str(frame.image_path),
-            "detections": frame.detections is not None, "truth": frame.ground_truth is not None}
+            "detections": frame.detections is not None, "truth": frame.ground_truth is not None,
+            "behaviour": scalars}
 
 
 def load_checkpoint(path: Path, name: str, run: dict) -> SceneResult:
@@ -151,7 +163,13 @@ def _events(arrays: dict[str, np.ndarray], i: int):
 
 
 def _busiest(b: dict, arrays: dict[str, np.ndarray]) -> tuple[EnvironmentState, Frame]:
-    peds = Pedestrians(*(arrays[f"state.{n}"] for n in PEDESTRIAN_FIELDS))
+    behaviour = None
+    if b.get("behaviour") is not None:
+        cues: dict = {k[len("behaviour."):]: v for k, v in arrays.items() if k.startswith("behaviour.")}
+        cues.update({k: float(v) for k, v in b["behaviour"].items()})
+        behaviour = Behaviour(**cues)
+    columns: dict = {n: arrays[f"state.{n}"] for n in PEDESTRIAN_FIELDS}
+    peds = Pedestrians(**columns, behaviour=behaviour)
     state = EnvironmentState(int(b["state_index"]), float(b["state_timestamp"]),
                              EgoPose(arrays["state.ego_translation"], arrays["state.ego_rotation"]), peds,
                              str(b["state_scene"]))
