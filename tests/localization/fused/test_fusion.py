@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from pedenv.localization.fused.cue import REASON_CODE, CueEstimate
-from pedenv.localization.fused.fusion import chi2_quantile_2dof, describe_sources, fuse_cues
+from pedenv.localization.fused.fusion import chi2_quantile_2dof, fuse_cues
+from pedenv.localization.fused.sources import CueSources
 
 
 def cue(name, pos, cov, valid=True, bias=None):
@@ -63,7 +64,7 @@ def test_cue_with_nan_declines_as_degenerate():
     fused = fuse_cues([bad, cue("height", [5.0, 1.0], np.eye(2))], 0.999)
     assert fused.degenerate[0].tolist() == [True, False] and not fused.used[0, 0]
     assert np.isfinite(fused.positions).all()
-    assert describe_sources([bad, cue("height", [5.0, 1.0], np.eye(2))], fused, {}, ~fused.valid)[0] == \
+    assert CueSources.of([bad, cue("height", [5.0, 1.0], np.eye(2))], fused, ~fused.valid).spell()[0] == \
         "height;ground:degenerate"
 
 
@@ -82,8 +83,8 @@ def test_the_fused_covariance_splits_into_frame_and_per_person_parts():
 def test_sources_name_used_cues_then_why_not_the_others():
     cues = [cue("ground", [0.0, 0.0], np.eye(2), valid=False), cue("height", [5.0, 1.0], np.eye(2))]
     fused = fuse_cues(cues, 0.999)
-    assert describe_sources(cues, fused, {}, np.array([False]))[0] == "height;ground:no-keypoints"
-    assert describe_sources(cues, fused, {}, np.array([True]))[0] == "boxheight;ground:no-keypoints"
+    assert CueSources.of(cues, fused, np.array([False])).spell()[0] == "height;ground:no-keypoints"
+    assert CueSources.of(cues, fused, np.array([True])).spell()[0] == "boxheight;ground:no-keypoints"
 
 
 def test_bearing_floor_keeps_the_sharpest_cues_sideways_variance():

@@ -13,9 +13,11 @@ finite into a ``degenerate`` decline, so no NaN reaches the measurement.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from pedenv.geometry import inverse_2x2_entries
 from pedenv.skeleton import ANKLE_KEYPOINTS
 
 #: Why a cue declined, by code (0: it did not). Codes are what cues store per pedestrian.
@@ -76,6 +78,69 @@ def symmetric_2x2(xx: np.ndarray, xy: np.ndarray, yy: np.ndarray) -> np.ndarray:
     out[..., 0, 0], out[..., 1, 1] = xx, yy
     out[..., 0, 1] = out[..., 1, 0] = xy
     return out
+
+
+@dataclass(frozen=True)
+class Sym2:
+    """Symmetric 2x2 matrices ``[[xx, xy], [xy, yy]]`` kept as their three components.
+
+    xx, xy, yy: arrays of one shape (e.g. (N, C): N pedestrians, C cues) or scalars; the
+    unit is the matrices' (m^2 for a covariance, 1/m^2 for an information matrix). On a few
+    pedestrians a frame the components are cheaper than stacked (..., 2, 2) matrices.
+    """
+
+    xx: Any
+    xy: Any
+    yy: Any
+
+    @classmethod
+    def of(cls, matrices: np.ndarray) -> Sym2:
+        """From (..., 2, 2) matrices; the off-diagonal is the mean of both (symmetrized)."""
+        return cls(matrices[..., 0, 0], 0.5 * (matrices[..., 0, 1] + matrices[..., 1, 0]), matrices[..., 1, 1])
+
+    def matrices(self) -> np.ndarray:
+        """(..., 2, 2) the matrices."""
+        return symmetric_2x2(self.xx, self.xy, self.yy)
+
+    def __add__(self, other: Sym2) -> Sym2:
+        return Sym2(self.xx + other.xx, self.xy + other.xy, self.yy + other.yy)
+
+    def __sub__(self, other: Sym2) -> Sym2:
+        return Sym2(self.xx - other.xx, self.xy - other.xy, self.yy - other.yy)
+
+    def inverse(self) -> Sym2:
+        """The inverse matrices (inf or NaN where singular: no check)."""
+        xx, xy, _, yy = inverse_2x2_entries(self.xx, self.xy, self.xy, self.yy)
+        return Sym2(xx, xy, yy)
+
+    def where(self, mask: np.ndarray, other: Sym2) -> Sym2:
+        """These matrices where ``mask``, ``other`` (e.g. :data:`IDENTITY`) elsewhere."""
+        return Sym2(np.where(mask, self.xx, other.xx), np.where(mask, self.xy, other.xy),
+                    np.where(mask, self.yy, other.yy))
+
+    def sum(self, axis: int = 1, keepdims: bool = False) -> Sym2:
+        """The sum of the matrices along ``axis`` (of the component arrays)."""
+        return Sym2(self.xx.sum(axis, keepdims=keepdims), self.xy.sum(axis, keepdims=keepdims),
+                    self.yy.sum(axis, keepdims=keepdims))
+
+    def times(self, x, y) -> tuple[Any, Any]:
+        """The matrices times the vectors ``(x, y)``: components ``(x', y')``."""
+        return self.xx * x + self.xy * y, self.xy * x + self.yy * y
+
+    def quadratic(self, x, y):
+        """The quadratic form ``v^T M v`` of the vectors ``v = (x, y)``."""
+        return self.xx * x * x + 2.0 * self.xy * x * y + self.yy * y * y
+
+    def sandwich(self, inner: Sym2) -> Sym2:
+        """``M F M`` for these matrices ``M`` and ``inner`` ``F``."""
+        a, b, c = self.xx, self.xy, self.yy
+        p, q = a * inner.xx + b * inner.xy, a * inner.xy + b * inner.yy  # first row of M F
+        r, s = b * inner.xx + c * inner.xy, b * inner.xy + c * inner.yy  # second row
+        return Sym2(p * a + q * b, p * b + q * c, r * b + s * c)
+
+
+#: The identity and the zero matrix, as fills for :meth:`Sym2.where`.
+IDENTITY, ZERO = Sym2(1.0, 0.0, 1.0), Sym2(0.0, 0.0, 0.0)
 
 
 def range_bearing_covariance(bearing: np.ndarray, range_var: np.ndarray, across_var) -> np.ndarray:

@@ -30,8 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.geometry import inverse_2x2_entries
-from pedenv.localization.fused.cue import REASON_CODE, REASONS, CueEstimate
+from pedenv.localization.fused.cue import IDENTITY, ZERO, CueEstimate, Sym2
 
 #: Which cue to keep when only two disagree: earlier in this tuple wins.
 TRUST_ORDER = ("height", "triangulation", "ground")
@@ -68,22 +67,41 @@ class Fused:
     valid: np.ndarray
 
 
-def inverse_sym(a, b, c):
-    """Inverse ``(a', b', c')`` of symmetric 2x2 matrices ``[[a, b], [b, c]]`` (arrays)."""
-    ia, ib, _, ic = inverse_2x2_entries(a, b, b, c)
-    return ia, ib, ic
+@dataclass(frozen=True)
+class StackedCues:
+    """The C cues' estimates of N pedestrians side by side: each cue's mean and covariance together.
 
+    x, y: (N, C) mean, world x-y, metres. frame, bias: (N, C) :class:`Sym2`, m^2, the
+    frame-to-frame and per-person parts of the covariance. has: (N, C) bool, cue c has an
+    estimate. rank: (C,) int, each cue's place in the trust order (later: dropped first).
+    """
 
-def sandwich(m, f):
-    """Components of ``M F M`` for symmetric 2x2 ``M = (a, b, c)`` and ``F = (a, b, c)``."""
-    (a, b, c), (fa, fb, fc) = m, f
-    p, q, r, s = a * fa + b * fb, a * fb + b * fc, b * fa + c * fb, b * fb + c * fc  # M F
-    return p * a + q * b, p * b + q * c, r * b + s * c
+    x: np.ndarray
+    y: np.ndarray
+    frame: Sym2
+    bias: Sym2
+    has: np.ndarray
+    rank: np.ndarray
 
+    @classmethod
+    def of(cls, cues: list[CueEstimate], trust_order: tuple[str, ...]) -> StackedCues:
+        means = np.stack([q.positions for q in cues], axis=1)  # (N, C, 2)
+        rank = [trust_order.index(q.name) if q.name in trust_order else len(trust_order) for q in cues]
+        return cls(means[..., 0], means[..., 1], Sym2.of(np.stack([q.covariances for q in cues], axis=1)),
+                   Sym2.of(np.stack([q.bias_covariances for q in cues], axis=1)),
+                   np.stack([q.valid for q in cues], axis=1), np.array(rank))
 
-def _components(cues: list[CueEstimate], field: str):
-    stacked = np.stack([getattr(q, field) for q in cues], axis=1)  # (N, C, 2, 2)
-    return stacked[..., 0, 0], 0.5 * (stacked[..., 0, 1] + stacked[..., 1, 0]), stacked[..., 1, 1]
+    @property
+    def total(self) -> Sym2:
+        """(N, C) the whole covariance, frame-to-frame plus per-person part, m^2."""
+        return self.frame + self.bias
+
+    def finite(self) -> np.ndarray:
+        """(N, C) bool: finite mean and covariances, the whole covariance positive definite."""
+        s, f = self.total, self.frame
+        with np.errstate(invalid="ignore", over="ignore"):
+            return (np.isfinite(self.x) & np.isfinite(self.y) & np.isfinite(s.xx + s.xy + s.yy + f.xx + f.xy + f.yy)
+                    & (s.xx > 0) & (s.xx * s.yy - s.xy * s.xy > 0))
 
 
 def fuse_cues(cues: list[CueEstimate], gate_probability: float, origin: np.ndarray | None = None,
@@ -94,76 +112,82 @@ def fuse_cues(cues: list[CueEstimate], gate_probability: float, origin: np.ndarr
     pedestrian's viewing ray is floored at the sharpest used cue's (see the module notes).
     trust_order: which cue stays when two disagree (:data:`STATIC_TRUST_ORDER`: static cameras).
     """
-    n, c = len(cues[0]), len(cues)
-    means = np.stack([q.positions for q in cues], axis=1)  # (N, C, 2)
-    fa, fb, fc = _components(cues, "covariances")
-    ba, bb, bc = _components(cues, "bias_covariances")
-    sa, sb, sc = fa + ba, fb + bb, fc + bc
-    has = np.stack([q.valid for q in cues], axis=1)  # (N, C)
-    with np.errstate(invalid="ignore", over="ignore"):
-        finite = (np.isfinite(means).all(axis=-1) & np.isfinite(sa + sb + sc + fa + fb + fc)
-                  & (sa > 0) & (sa * sc - sb * sb > 0))
-    degenerate = has & ~finite
-    use = has & finite
-    mx, my = np.where(use, means[..., 0], 0.0), np.where(use, means[..., 1], 0.0)
-    sa, sb, sc = np.where(use, sa, 1.0), np.where(use, sb, 0.0), np.where(use, sc, 1.0)
-    ia, ib, ic = inverse_sym(sa, sb, sc)
-    threshold = chi2_quantile_2dof(gate_probability)
-    rank = np.array([trust_order.index(q.name) if q.name in trust_order else len(trust_order) for q in cues])
-    rows = np.arange(n)
-    for _ in range(c - 1):
-        count = use.sum(axis=1, keepdims=True)
-        testable = use & (count > 1)
+    stack = StackedCues.of(cues, trust_order)
+    finite = stack.finite()
+    use = stack.has & finite
+    x, y = np.where(use, stack.x, 0.0), np.where(use, stack.y, 0.0)
+    total = stack.total.where(use, IDENTITY)
+    information = total.inverse()
+    outvote(use, x, y, total, information, chi2_quantile_2dof(gate_probability), stack.rank)
+    positions, frame, bias = combine(use, x, y, information.where(use, ZERO), stack.frame)
+    if origin is not None:
+        bearing_floor(positions - np.asarray(origin, float)[:2], use, stack.frame, stack.bias, frame, bias)
+    return Fused(positions, frame, bias, use, stack.has & finite & ~use, stack.has & ~finite, use.any(axis=1))
+
+
+def outvote(use: np.ndarray, x: np.ndarray, y: np.ndarray, total: Sym2, information: Sym2, threshold: float,
+            rank: np.ndarray) -> None:
+    """Drop each pedestrian's worst cue while its gate distance exceeds ``threshold``, in place.
+
+    use: (N, C) bool, updated. x, y: (N, C) the cues' means, metres (0 where unused).
+    total, information: (N, C) each cue's whole covariance (m^2) and its inverse (identity
+    where unused). rank: (C,) trust ranks, breaking ties between equal distances.
+    """
+    rows = np.arange(len(use))
+    for _ in range(use.shape[1] - 1):
+        testable = use & (use.sum(axis=1, keepdims=True) > 1)
         if not testable.any():
             break
-        ua, ub, uc = np.where(use, ia, 0.0), np.where(use, ib, 0.0), np.where(use, ic, 0.0)
-        vx, vy = ua * mx + ub * my, ub * mx + uc * my  # each cue's information times its mean
-        # the others' information and information-weighted mean (identity where none)
-        ra = np.where(testable, ua.sum(1, keepdims=True) - ua, 1.0)
-        rb = np.where(testable, ub.sum(1, keepdims=True) - ub, 0.0)
-        rc = np.where(testable, uc.sum(1, keepdims=True) - uc, 1.0)
-        qa, qb, qc = inverse_sym(ra, rb, rc)
-        rx, ry = vx.sum(1, keepdims=True) - vx, vy.sum(1, keepdims=True) - vy
-        dx, dy = mx - (qa * rx + qb * ry), my - (qb * rx + qc * ry)
-        ja, jb, jc = inverse_sym(sa + qa, sb + qb, sc + qc)
-        d2 = ja * dx * dx + 2.0 * jb * dx * dy + jc * dy * dy
+        d2 = gate_distances(x, y, total, information.where(use, ZERO), testable)
         score = np.where(testable, d2 * (1.0 + TIE_BREAK * rank), -np.inf)
         worst = np.argmax(score, axis=1)
         drop = score[rows, worst] > threshold
         if not drop.any():
             break
         use[rows[drop], worst[drop]] = False
-    ua, ub, uc = np.where(use, ia, 0.0), np.where(use, ib, 0.0), np.where(use, ic, 0.0)
+
+
+def gate_distances(x: np.ndarray, y: np.ndarray, total: Sym2, information: Sym2, testable: np.ndarray) -> np.ndarray:
+    """(N, C) ``d^2`` of each cue against the fusion of the others (module notes).
+
+    information: (N, C) each used cue's, zero for the others. testable: (N, C) bool, the
+    cue and another are used (elsewhere the result is meaningless).
+    """
+    vx, vy = information.times(x, y)  # each cue's information times its mean
+    # the others' information and information-weighted mean (identity where none)
+    others = (information.sum(keepdims=True) - information).where(testable, IDENTITY).inverse()
+    rx, ry = vx.sum(1, keepdims=True) - vx, vy.sum(1, keepdims=True) - vy
+    mx, my = others.times(rx, ry)
+    return (total + others).inverse().quadratic(x - mx, y - my)
+
+
+def combine(use: np.ndarray, x: np.ndarray, y: np.ndarray, information: Sym2, cue_frame: Sym2):
+    """The information-weighted mean of the used cues and its covariance's two parts.
+
+    use: (N, C) bool. x, y: (N, C) means, metres. information: (N, C) the used cues', zero
+    for the others. cue_frame: (N, C) the cues' frame-to-frame covariances, m^2. Returns
+    ``(positions (N, 2) metres, frame (N, 2, 2) m^2, bias (N, 2, 2) m^2)`` (module notes).
+    """
     valid = use.any(axis=1)
-    ta, tb, tc = ua.sum(1), ub.sum(1), uc.sum(1)
-    ta, tc = np.where(valid, ta, 1.0), np.where(valid, tc, 1.0)
-    pa, pb, pc = inverse_sym(ta, tb, tc)
-    vx, vy = (ua * mx + ub * my).sum(1), (ub * mx + uc * my).sum(1)
-    pos = np.column_stack([pa * vx + pb * vy, pb * vx + pc * vy])
-    ga, gb, gc = sandwich((ua, ub, uc), (fa, fb, fc))  # S_c^-1 F_c S_c^-1, 0 for unused cues
-    fa_, fb_, fc_ = sandwich((pa, pb, pc), (ga.sum(1), gb.sum(1), gc.sum(1)))
-    frame = np.empty((n, 2, 2))
-    frame[:, 0, 0], frame[:, 1, 1], frame[:, 0, 1], frame[:, 1, 0] = fa_, fc_, fb_, fb_
-    bias = np.empty((n, 2, 2))
-    bias[:, 0, 0], bias[:, 1, 1], bias[:, 0, 1], bias[:, 1, 0] = pa - fa_, pc - fc_, pb - fb_, pb - fb_
-    if origin is not None:
-        bearing_floor(pos - np.asarray(origin, float)[:2], use, (fa, fb, fc), (ba, bb, bc), frame, bias)
-    return Fused(pos, frame, bias, use, has & finite & ~use, degenerate, valid)
+    fused = information.sum().where(valid, IDENTITY).inverse()
+    vx, vy = information.times(x, y)
+    positions = np.column_stack(fused.times(vx.sum(1), vy.sum(1)))
+    frame = fused.sandwich(information.sandwich(cue_frame).sum())  # S (sum S_c^-1 F_c S_c^-1) S
+    return positions, frame.matrices(), (fused - frame).matrices()
 
 
-def bearing_floor(offsets: np.ndarray, use: np.ndarray, cue_frame, cue_bias, frame: np.ndarray,
+def bearing_floor(offsets: np.ndarray, use: np.ndarray, cue_frame: Sym2, cue_bias: Sym2, frame: np.ndarray,
                   bias: np.ndarray) -> None:
     """Raise the fused variances across the ray to the sharpest used cue's, in place.
 
     offsets: (N, 2) fused position minus camera centre, metres. use: (N, C) bool.
-    cue_frame, cue_bias: components ``(xx, xy, yy)`` (N, C) of the cues' frame-to-frame and
-    per-person covariances. frame, bias: (N, 2, 2) the fused ones, m^2, updated.
+    cue_frame, cue_bias: (N, C) the cues' frame-to-frame and per-person covariances, m^2.
+    frame, bias: (N, 2, 2) the fused ones, m^2, updated.
     """
     norm = np.sqrt((offsets**2).sum(1))
     ux = np.where(norm > 0, -offsets[:, 1] / np.maximum(norm, 1e-12), 0.0)[:, None]  # across the ray
     uy = np.where(norm > 0, offsets[:, 0] / np.maximum(norm, 1e-12), 0.0)[:, None]
-    across = lambda c: c[0] * ux * ux + 2.0 * c[1] * ux * uy + c[2] * uy * uy  # noqa: E731
-    f_c, b_c = across(cue_frame), across(cue_bias)  # (N, C)
+    f_c, b_c = cue_frame.quadratic(ux, uy), cue_bias.quadratic(ux, uy)  # (N, C)
     sharpest = np.argmin(np.where(use, f_c + b_c, np.inf), axis=1)
     rows = np.arange(len(offsets))
     u = np.column_stack([ux[:, 0], uy[:, 0]])
@@ -172,42 +196,3 @@ def bearing_floor(offsets: np.ndarray, use: np.ndarray, cue_frame, cue_bias, fra
         now = np.einsum("ni,nij,nj->n", u, fused, u)
         lift = np.where(use.any(1), np.maximum(per_cue[rows, sharpest] - now, 0.0), 0.0)
         fused += lift[:, None, None] * outer
-
-
-def describe_sources(cues: list[CueEstimate], fused: Fused, cache: dict, prefix: np.ndarray) -> np.ndarray:
-    """(N,) str: used cues joined by ``+``, then ``;cue:reason`` for each cue left out
-    (``outvoted`` by the gate, ``degenerate`` numbers, else the cue's own reason); the
-    name ``box`` in front where ``prefix`` (N,) bool (no cue placed the pedestrian).
-
-    cache: a dict kept between frames; the few distinct combinations are spelled once.
-    """
-    degenerate = REASON_CODE["degenerate"]
-    outvoted = degenerate + 1
-    key = prefix.astype(np.int64)
-    base = outvoted + 2
-    for c, cue in enumerate(cues):
-        code = np.where(fused.used[:, c], outvoted + 1,
-                        np.where(fused.outvoted[:, c], outvoted,
-                                 np.where(fused.degenerate[:, c], degenerate, cue.reasons)))
-        key = key * base + code
-    names = tuple(q.name for q in cues)
-    out = []
-    for k in key.tolist():
-        text = cache.get((names, k))
-        if text is None:
-            text = cache[(names, k)] = _spell(names, k, base, outvoted)
-        out.append(text)
-    return np.array(out)
-
-
-def _spell(names: tuple[str, ...], key: int, base: int, outvoted: int) -> str:
-    codes = []
-    for _ in names:
-        key, code = divmod(key, base)
-        codes.append(code)
-    codes.reverse()
-    box = "box" if key else ""
-    head = "+".join(name for name, code in zip(names, codes) if code == outvoted + 1)
-    tail = "".join(f";{name}:{'outvoted' if code == outvoted else REASONS[code]}"
-                   for name, code in zip(names, codes) if 0 < code <= outvoted)
-    return box + head + tail

@@ -28,10 +28,11 @@ from pedenv.localization.fused.cue import (
     keypoint_usable,
     range_bearing_covariance,
 )
-from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, describe_sources, fuse_cues
+from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, fuse_cues
 from pedenv.localization.fused.ground import box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import Triangulated, triangulate, triangulation_cue
 
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
@@ -117,7 +118,6 @@ class FusedLocator:
         self.config = config
         self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = self.history = TrackHistory(config.fused.history_length)
-        self._sources: dict = {}
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
         cfg, frame, det = self.config.fused, geo.frame, geo.detections
@@ -145,7 +145,7 @@ class FusedLocator:
         if "triangulation" in cfg.cues:
             cues.append(triangulation_cue(tri, skel, cfg))
         fused = fuse_cues(cues, cfg.gate_probability, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
-        sources = describe_sources(cues, fused, self._sources, ~fused.valid)
+        sources = CueSources.of(cues, fused, ~fused.valid).spell()
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
         if not fused.valid.all():
