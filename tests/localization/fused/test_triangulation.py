@@ -3,7 +3,7 @@ import pytest
 
 from pedenv.config import FusedConfig
 from pedenv.localization.fused.history import TrackHistory, ray_terms
-from pedenv.localization.fused.triangulation import triangulate, triangulation_cue
+from pedenv.localization.fused.triangulation import RaysNow, triangulate, triangulation_cue
 
 from fused_frames import make_frame, skeletons_of
 
@@ -31,8 +31,8 @@ def run(observations, config=DEFAULT_FUSED, start=None, tri=False):
     r = np.linalg.norm(np.asarray(start, float) - now.origin[:2], axis=1)
     begin = now.origin + (r[:, None] / now.horizontal)[..., None] * now.rays
     terms, _ = ray_terms(now.rays, now.origin)
-    result = triangulate(now.rays, terms, now.usable, now.origin, t, begin, np.ones(n, bool), *hist.of(rows),
-                         now.angle_std, config)
+    result = triangulate(RaysNow(now.rays, terms, now.usable, now.origin, t, now.angle_std), begin, np.ones(n, bool),
+                         hist.of(rows), config)
     return result if tri else triangulation_cue(result, now, config)
 
 

@@ -9,6 +9,8 @@ history is one weighted sum per frame, not a rebuild of every past ray's matrice
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pedenv.skeleton import NUM_KEYPOINTS
@@ -35,6 +37,39 @@ def ray_terms(rays: np.ndarray, origin: np.ndarray):
     out[..., 3], out[..., 4], out[..., 5] = 1.0 - y * y, -y * z, 1.0 - z * z
     out[..., 6:] = origin - rays * dot[..., None]
     return out, dot
+
+
+@dataclass(frozen=True)
+class HistoryView:
+    """The past rays of N tracks, the slots of their rings side by side (L of them).
+
+    rays: (N, 17, L, 3) unit, world. terms: (N, 17, L, 9) and dots: (N, 17, L) their
+    least-squares terms (:func:`ray_terms`). usable: (N, 17, L) bool. cameras: (N, L, 5)
+    each slot's camera: centre (world, metres), its squared norm, time (seconds).
+    filled: (N, L) bool, the slot holds an observation.
+    """
+
+    rays: np.ndarray
+    terms: np.ndarray
+    dots: np.ndarray
+    usable: np.ndarray
+    cameras: np.ndarray
+    filled: np.ndarray
+
+    @property
+    def centres(self) -> np.ndarray:
+        """(N, L, 3) each slot's camera centre, world, metres."""
+        return self.cameras[..., CENTRE]
+
+    @property
+    def centres_sq(self) -> np.ndarray:
+        """(N, L) the squared norm of each slot's camera centre, m^2."""
+        return self.cameras[..., CENTRE_SQ]
+
+    @property
+    def times(self) -> np.ndarray:
+        """(N, L) each slot's time, seconds."""
+        return self.cameras[..., TIME]
 
 
 class TrackHistory(ColumnGroup):
@@ -85,13 +120,13 @@ class TrackHistory(ColumnGroup):
         self.filled[rows, slot] = True
         self.count[rows] += 1
 
-    def of(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(rays, terms, dots, usable, cameras, filled)`` of the tracks at ``rows`` (N,); views, not
-        copies, when ``rows`` is the whole table in order (the usual case)."""
+    def of(self, rows: np.ndarray) -> HistoryView:
+        """The histories of the tracks at ``rows`` (N,); views, not copies, when ``rows`` is
+        the whole table in order (the usual case)."""
         if len(rows) == len(self.count) and (rows == np.arange(len(rows))).all():
-            return self.rays, self.terms, self.dots, self.usable, self.cameras, self.filled
-        return (self.rays[rows], self.terms[rows], self.dots[rows], self.usable[rows], self.cameras[rows],
-                self.filled[rows])
+            return HistoryView(self.rays, self.terms, self.dots, self.usable, self.cameras, self.filled)
+        return HistoryView(self.rays[rows], self.terms[rows], self.dots[rows], self.usable[rows], self.cameras[rows],
+                           self.filled[rows])
 
     def place(self, rows: np.ndarray, positions: np.ndarray, skeletons: np.ndarray, valid: np.ndarray) -> None:
         """Remember the fused ground points (N, 2) world x-y and 3D skeletons (N, 17, 3) of

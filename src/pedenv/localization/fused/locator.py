@@ -33,7 +33,7 @@ from pedenv.localization.fused.ground import box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
 from pedenv.localization.fused.sources import CueSources
-from pedenv.localization.fused.triangulation import Triangulated, triangulate, triangulation_cue
+from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
 
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
 BOX_RELATIVE_STD = 0.5
@@ -140,7 +140,8 @@ class FusedLocator:
         last_skel = h.skeletons[rows]
         depth = ((last_skel - origin) * rays).sum(-1)
         start = origin + np.where(placed[:, None], np.maximum(depth, MIN_ALONG), 1.0)[..., None] * rays
-        tri = triangulate(rays, terms, usable, origin, frame.timestamp, start, placed, *h.of(rows), skel.noise, cfg)
+        now = RaysNow(rays, terms, usable, origin, frame.timestamp, skel.noise)
+        tri = triangulate(now, start, placed, h.of(rows), cfg)
         h.push(rows, rays, terms, dots, usable, origin, frame.timestamp)
         if "triangulation" in cfg.cues:
             cues.append(triangulation_cue(tri, skel, cfg))

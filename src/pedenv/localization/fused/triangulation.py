@@ -32,7 +32,7 @@ from pedenv.localization.fused.cue import (
     horizontal_bearing,
     symmetric_2x2,
 )
-from pedenv.localization.fused.history import CENTRE, CENTRE_SQ, TIME, TORSO_KEYPOINTS
+from pedenv.localization.fused.history import TORSO_KEYPOINTS, HistoryView
 
 NAME = "triangulation"
 #: The normal matrix must be at least this well conditioned (determinant / (trace / 3)^3).
@@ -81,67 +81,93 @@ def _solve_3x3(s: np.ndarray):
     return points, cov, ok
 
 
-def triangulate(rays: np.ndarray, terms: np.ndarray, usable: np.ndarray, origin: np.ndarray, time: float,
-                start: np.ndarray, has_start: np.ndarray, past_rays: np.ndarray, past_terms: np.ndarray,
-                past_dots: np.ndarray, past_usable: np.ndarray, cameras: np.ndarray, filled: np.ndarray,
-                angle_std: float | np.ndarray, config: FusedConfig) -> Triangulated:
+@dataclass(frozen=True)
+class RaysNow:
+    """This frame's keypoint rays of N pedestrians, as triangulation uses them.
+
+    rays: (N, K, 3) unit, world. terms: (N, K, 9) their least-squares terms
+    (:func:`~pedenv.localization.fused.history.ray_terms`). usable: (N, K) bool.
+    origin: (3,) camera centre, world, metres. time: seconds. angle_std: keypoint noise,
+    radians, scalar or (N,) per person.
+    """
+
+    rays: np.ndarray
+    terms: np.ndarray
+    usable: np.ndarray
+    origin: np.ndarray
+    time: float
+    angle_std: float | np.ndarray
+
+
+def triangulate(now: RaysNow, start: np.ndarray, has_start: np.ndarray, past: HistoryView,
+                config: FusedConfig) -> Triangulated:
     """Triangulate N pedestrians' K keypoints from their rays now and in the past.
 
-    rays: (N, K, 3) unit, world, now; terms: (N, K, 9) their least-squares terms
-    (:func:`~pedenv.localization.fused.history.ray_terms`); usable: (N, K) bool.
-    origin: (3,) camera centre now, world, metres; time: seconds.
     start: (N, K, 3) world, metres, where each keypoint is believed to be (outlier test);
-    has_start: (N,) bool. past_rays, past_terms, past_dots, past_usable, cameras, filled:
-    the tracks' histories (N, K, L, 3), (N, K, L, 9), (N, K, L), (N, K, L), (N, L, 5), (N, L)
-    (see :class:`~pedenv.localization.fused.history.TrackHistory`).
-    angle_std: keypoint noise (radians), scalar or (N,) per person. Reasons: ``no-history``,
+    has_start: (N,) bool. past: the tracks' histories
+    (:meth:`~pedenv.localization.fused.history.TrackHistory.of`). Reasons: ``no-history``,
     ``no-baseline``, ``unplaced``, ``no-parallax``, ``degenerate``.
     """
-    n, k = usable.shape
-    d_now = rays
-    centres = cameras[..., CENTRE]  # (N, L, 3)
-    offset = centres - origin
-    moved = filled & ((offset**2).sum(-1) >= config.min_baseline_m**2)  # (N, L)
+    n, k = now.usable.shape
+    moved = past.filled & (((past.centres - now.origin) ** 2).sum(-1) >= config.min_baseline_m**2)  # (N, L)
     both = np.empty((n, k, 3, 2))
-    both[..., 0], both[..., 1] = d_now, start
-    dots = past_rays @ both  # (N, K, L, 2): each past ray . the current ray, . the start
+    both[..., 0], both[..., 1] = now.rays, start
+    dots = past.rays @ both  # (N, K, L, 2): each past ray . the current ray, . the start
     cos = dots[..., 0]
-    candidate = (moved[:, None, :] & past_usable & (usable & has_start[:, None])[..., None]
+    candidate = (moved[:, None, :] & past.usable & (now.usable & has_start[:, None])[..., None]
                  & (cos <= np.cos(config.min_parallax_rad)))
     nothing = ~candidate.any(axis=(1, 2))
-    reasons = first_reason([(~filled.any(axis=1), "no-history"), (~moved.any(axis=1), "no-baseline"),
+    reasons = first_reason([(~past.filled.any(axis=1), "no-history"), (~moved.any(axis=1), "no-baseline"),
                             (~has_start, "unplaced"), (nothing, "no-parallax")], n)
     if nothing.all():
         return Triangulated(np.zeros((n, k, 3)), np.zeros((n, k, 3)), np.zeros((n, k)), np.zeros((n, k), bool), reasons)
+    age = now.time - past.times  # (N, L)
+    keep, weight, w_now, any_kept = ray_weights(now, start, past, candidate, dots[..., 1], age, config)
+    summed = (weight[..., None, :] @ past.terms)[..., 0, :] + w_now[..., None] * now.terms
+    points, cov, ok = _solve_3x3(summed)
+    ahead = ((points - now.origin) * now.rays).sum(-1) > MIN_RANGE_M
+    good = ok & ahead & any_kept
+    drift_var = walker_drift(keep, cos, age, good, config.pedestrian_speed_std_mps)
+    reasons = np.where((reasons == 0) & ~good.any(axis=1), REASON_CODE["degenerate"], reasons)
+    return Triangulated(points, cov, drift_var, good, reasons)
 
+
+def ray_weights(now: RaysNow, start: np.ndarray, past: HistoryView, candidate: np.ndarray, start_dots: np.ndarray,
+                age: np.ndarray, config: FusedConfig):
+    """The past rays that pass the outlier test and the least-squares weights.
+
+    candidate: (N, K, L) bool, past rays with baseline and parallax. start_dots: (N, K, L)
+    each past ray . the start. age: (N, L) seconds. Returns ``(keep (N, K, L) bool,
+    weights (N, K, L) 1/m^2, the current ray's weights (N, K) 1/m^2, any kept (N, K) bool)``.
+    """
+    n = len(start)
     # each past ray's spread at the start, and how far it misses the start
-    age = time - cameras[..., TIME]  # (N, L)
-    reach2 = ((start**2).sum(-1)[..., None] - 2.0 * (start @ centres.transpose(0, 2, 1))
-              + cameras[:, None, :, CENTRE_SQ])
-    along = dots[..., 1] - past_dots
-    angle_var = np.broadcast_to(np.asarray(angle_std, float) ** 2, (n,))[:, None]
+    reach2 = (start**2).sum(-1)[..., None] - 2.0 * (start @ past.centres.transpose(0, 2, 1)) + past.centres_sq[:, None]
+    along = start_dots - past.dots
+    angle_var = np.broadcast_to(np.asarray(now.angle_std, float) ** 2, (n,))[:, None]
     pixel_var = reach2 * angle_var[..., None] + MIN_RAY_VARIANCE
     var = pixel_var + ((config.pedestrian_speed_std_mps * age) ** 2)[:, None, :]
     keep = candidate & (reach2 - along**2 <= config.outlier_sigma**2 * var)
     weight = np.where(keep, 1.0 / pixel_var, 0.0)
     any_kept = weight.sum(axis=-1) > 0  # (N, K) the current ray needs a past ray besides it
-    reach_now2 = ((start - origin) ** 2).sum(-1)
+    reach_now2 = ((start - now.origin) ** 2).sum(-1)
     w_now = np.where(any_kept, 1.0 / (reach_now2 * angle_var + MIN_RAY_VARIANCE), 0.0)
-    summed = (weight[..., None, :] @ past_terms)[..., 0, :] + w_now[..., None] * terms
-    points, cov, ok = _solve_3x3(summed)
-    ahead = ((points - origin) * d_now).sum(-1) > MIN_RANGE_M
-    good = ok & ahead & any_kept
-    # the walker's drift, at the past ray that pins the range best against it
-    # the walker's drift is the person's: measured at the torso, shared by every keypoint
+    return keep, weight, w_now, any_kept
+
+
+def walker_drift(keep: np.ndarray, cos: np.ndarray, age: np.ndarray, good: np.ndarray, speed_std: float) -> np.ndarray:
+    """(N, K) m^2 the walker's drift along the current ray, at the kept past ray that pins
+    the range best against it: the person's, measured at the torso and shared by every
+    keypoint; inf for a keypoint triangulated without the torso, 0 where none was.
+
+    keep: (N, K, L) bool kept past rays; cos: (N, K, L) their angle to the current ray;
+    age: (N, L) seconds; good: (N, K) bool triangulated; speed_std: m/s.
+    """
     t_keep, t_cos = keep[:, TORSO_KEYPOINTS], cos[:, TORSO_KEYPOINTS]
     ratio2 = np.where(t_keep, (age**2)[:, None, :] / np.maximum(1.0 - t_cos**2, MIN_SINE2), np.inf).min(axis=-1)
     torso = good[:, TORSO_KEYPOINTS]
     person = (np.where(torso, ratio2, 0.0).sum(1) / np.maximum(torso.sum(1), 1))[:, None]
-    # a keypoint triangulated without the torso has no drift measure: infinitely loose
-    drift_var = np.where(good & torso.any(1)[:, None], config.pedestrian_speed_std_mps**2 * person,
-                         np.where(good, np.inf, 0.0))
-    reasons = np.where((reasons == 0) & ~good.any(axis=1), REASON_CODE["degenerate"], reasons)
-    return Triangulated(points, cov, drift_var, good, reasons)
+    return np.where(good & torso.any(1)[:, None], speed_std**2 * person, np.where(good, np.inf, 0.0))
 
 
 def triangulation_cue(tri: Triangulated, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
