@@ -24,6 +24,8 @@ linearized intersection no longer holds.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pedenv.config import FusedConfig
@@ -91,6 +93,58 @@ def pixel_jacobians(frame: Frame, rays: np.ndarray, normal: np.ndarray, cam_heig
     return ju, jv
 
 
+@dataclass(frozen=True)
+class AnkleHits:
+    """N pedestrians' two ankle rays (left, right) cut with the road plane under them.
+
+    rays: (N, 2, 3) unit, world. xy: (N, 2, 2) where each ray meets the road, world x-y,
+    metres (garbage where it does not). sine: (N, 2) of each ray's angle below the road.
+    cam_height: metres, the camera above the road. hits: (N, 2) bool, a stance ankle whose
+    ray meets the road. ranges: (N, 2) horizontal range of the meeting points, metres.
+    ju, jv: (N, 2, 2) metres per pixel (:func:`pixel_jacobians`). pixel_var: (N,) px^2,
+    each skeleton's own pixel noise. lift_std: (N,) metres, how high the ankle may be lifted.
+    """
+
+    rays: np.ndarray
+    xy: np.ndarray
+    sine: np.ndarray
+    cam_height: float
+    hits: np.ndarray
+    ranges: np.ndarray
+    ju: np.ndarray
+    jv: np.ndarray
+    pixel_var: np.ndarray
+    lift_std: np.ndarray
+
+    @classmethod
+    def of(cls, frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> AnkleHits:
+        """The stance ankles of ``skeletons`` on the vehicle's road plane, lifted by the
+        ankle's resting height."""
+        origin, normal = skeletons.origin, frame.ego.rotation[:, 2]
+        rest = KEYPOINT_HEIGHT_FRACTION[ANKLE_KEYPOINTS[0]] * config.person_height_mean_m
+        road = float(normal @ frame.ego.translation) + rest  # the plane's offset, metres
+        rays = skeletons.rays[:, list(ANKLE_KEYPOINTS)]  # (N, 2, 3)
+        points, sine, cam_height = plane_intersection(rays, origin, normal, road)
+        hits = skeletons.stance & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
+        xy = points[..., :2]
+        ranges = np.sqrt((xy[..., 0] - origin[0]) ** 2 + (xy[..., 1] - origin[1]) ** 2)
+        ju, jv = pixel_jacobians(frame, rays, normal, cam_height)
+        pixel_var = (skeletons.noise * float(frame.camera.intrinsics[0, 0])) ** 2  # px^2
+        lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
+                            config.ankle_height_std_m)
+        return cls(rays, xy, sine, cam_height, hits, ranges, ju, jv, pixel_var, lift_std)
+
+    def near(self, static: bool, config: FusedConfig) -> np.ndarray:
+        """(N, 2) bool, hits close enough to trust: within ``ground_max_distance_m``, or for
+        a ``static`` camera where the foot point's own spread (pixels and lift) stays within
+        ``static_ground_max_relative_std`` of the range."""
+        if not static:
+            return self.hits & (self.ranges <= config.ground_max_distance_m)
+        spread = (self.pixel_var[:, None] * (self.ju**2 + self.jv**2).sum(-1)
+                  + (self.lift_std[:, None] / np.where(self.hits, self.sine, 1.0)) ** 2)
+        return self.hits & (spread <= (config.static_ground_max_relative_std * self.ranges) ** 2)
+
+
 def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
     """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
 
@@ -100,56 +154,56 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
     height under the pedestrian and the body's lateral spread.
     Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
     """
-    n, ankles, origin = len(skeletons), list(ANKLE_KEYPOINTS), skeletons.origin
-    normal = frame.ego.rotation[:, 2]
-    rest = KEYPOINT_HEIGHT_FRACTION[ankles[0]] * config.person_height_mean_m
-    offset = float(normal @ frame.ego.translation) + rest
-    rays = skeletons.rays[:, ankles]  # (N, 2, 3)
-    points, sine, cam_height = plane_intersection(rays, origin, normal, offset)
-    seen = skeletons.stance
-    hits = seen & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
-    xy_all = points[..., :2]
-    ranges = np.sqrt((xy_all[..., 0] - origin[0]) ** 2 + (xy_all[..., 1] - origin[1]) ** 2)
-    ju, jv = pixel_jacobians(frame, rays, normal, cam_height)
-    focal = float(frame.camera.intrinsics[0, 0])
-    pixel_var = (skeletons.noise * focal) ** 2  # (N,) the skeleton's own pixel noise, px^2
-    lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
-                        config.ankle_height_std_m)
-    if frame.camera.static:
-        # the range the foot point itself allows: its spread (pixels and lift) within a share of the range
-        spread = pixel_var[:, None] * (ju**2 + jv**2).sum(-1) + (lift_std[:, None] / np.where(hits, sine, 1.0)) ** 2
-        near = hits & (spread <= (config.static_ground_max_relative_std * ranges) ** 2)
-    else:
-        near = hits & (ranges <= config.ground_max_distance_m)
+    n, seen = len(skeletons), skeletons.stance
+    ankles = AnkleHits.of(frame, skeletons, config)
+    near = ankles.near(frame.camera.static, config)
     count = near.sum(axis=1)
     if not count.any():
         return CueEstimate.declined(NAME, first_reason(
-            [(~seen.any(axis=1), "no-ankles"), (np.full(n, cam_height <= 0), "camera-below-road"),
-             (~hits.any(axis=1), "above-horizon"), (count == 0, "beyond-range")], n))
-    reasons = first_reason([(~seen.any(axis=1), "no-ankles"), (~hits.any(axis=1), "above-horizon"),
+            [(~seen.any(axis=1), "no-ankles"), (np.full(n, ankles.cam_height <= 0), "camera-below-road"),
+             (~ankles.hits.any(axis=1), "above-horizon"), (count == 0, "beyond-range")], n))
+    reasons = first_reason([(~seen.any(axis=1), "no-ankles"), (~ankles.hits.any(axis=1), "above-horizon"),
                             (count == 0, "beyond-range")], n)
     weight = near / np.maximum(count, 1)[:, None]  # (N, 2)
-    xy = (weight[..., None] * np.where(near[..., None], xy_all, 0.0)).sum(axis=1)
+    xy = (weight[..., None] * np.where(near[..., None], ankles.xy, 0.0)).sum(axis=1)
+    # a height error dz of the contact point moves it along the ray by dz / sine
+    along = (weight[..., None] * ankles.rays[..., :2] / np.where(near, ankles.sine, 1.0)[..., None]).sum(axis=1)
+    frame_cov = frame_covariance(ankles, near, weight, along, config)
+    r = np.sqrt((xy[:, 0] - skeletons.origin[0]) ** 2 + (xy[:, 1] - skeletons.origin[1]) ** 2)
+    bias = person_covariance(r, along, frame.camera.static, config)
+    return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)
 
-    w2 = np.where(near, weight**2, 0.0) * pixel_var[:, None]
+
+def frame_covariance(ankles: AnkleHits, near: np.ndarray, weight: np.ndarray, along: np.ndarray,
+                     config: FusedConfig) -> np.ndarray:
+    """(N, 2, 2) m^2, the part of the ground point's error new every frame: the pixel noise,
+    the ankle's lift (it changes with the gait) and where the foot stands against the body.
+
+    near: (N, 2) bool, the ankles used; weight: (N, 2) their weights in the mean; along:
+    (N, 2) metres per metre of height error, the ground point's move (module notes).
+    """
+    w2 = np.where(near, weight**2, 0.0) * ankles.pixel_var[:, None]
+    ju, jv = ankles.ju, ankles.jv
     pxx = (w2 * (ju[..., 0] ** 2 + jv[..., 0] ** 2)).sum(1)
     pxy = (w2 * (ju[..., 0] * ju[..., 1] + jv[..., 0] * jv[..., 1])).sum(1)
     pyy = (w2 * (ju[..., 1] ** 2 + jv[..., 1] ** 2)).sum(1)
-
-    # a height error dz of the contact point moves it along the ray by dz / sine
-    along = (weight[..., None] * rays[..., :2] / np.where(near, sine, 1.0)[..., None]).sum(axis=1)  # (N, 2)
     ax, ay = along[:, 0], along[:, 1]
-    lift, lat = lift_std**2, config.lateral_std_m**2  # the foot's lift changes with the gait
+    lift = ankles.lift_std**2
     # a standing foot lies up to half a step ahead of or behind the body (walking direction
     # unknown: the same each way); the midpoint of two standing feet half as far
-    stance = config.stance_std_m**2 / count.clip(1) ** 2
-    frame_cov = symmetric_2x2(pxx + lift * ax * ax + stance, pxy + lift * ax * ay, pyy + lift * ay * ay + stance)
-    # the road under a pedestrian r metres away stays off the vehicle's plane frame after
-    # frame, and so does the body's sideways spread about its ground point (lean: the person's)
-    r = np.sqrt((xy[:, 0] - origin[0]) ** 2 + (xy[:, 1] - origin[1]) ** 2)
-    if frame.camera.static:  # the calibrated ground: only its own unevenness
-        road = np.full(n, config.static_ground_height_std_m**2)
+    stance = config.stance_std_m**2 / near.sum(axis=1).clip(1) ** 2
+    return symmetric_2x2(pxx + lift * ax * ax + stance, pxy + lift * ax * ay, pyy + lift * ay * ay + stance)
+
+
+def person_covariance(ranges: np.ndarray, along: np.ndarray, static: bool, config: FusedConfig) -> np.ndarray:
+    """(N, 2, 2) m^2, the part of the error that repeats for the same person: the road under
+    a pedestrian ``ranges`` (N,) metres away stays off the vehicle's plane frame after frame
+    (a ``static`` camera's calibrated ground: only its own unevenness), and so does the
+    body's sideways spread about its ground point (lean). along: (N, 2) as in :func:`frame_covariance`.
+    """
+    if static:
+        road = np.full(len(ranges), config.static_ground_height_std_m**2)
     else:
-        road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * r**2) ** 2
-    bias = symmetric_2x2(road * ax * ax + lat, road * ax * ay, road * ay * ay + lat)
-    return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)
+        road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * ranges**2) ** 2
+    ax, ay, lat = along[:, 0], along[:, 1], config.lateral_std_m**2
+    return symmetric_2x2(road * ax * ax + lat, road * ax * ay, road * ay * ay + lat)
