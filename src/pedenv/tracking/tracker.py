@@ -127,45 +127,61 @@ class Tracker:
             fresh = np.delete(fresh, m[:, 0])
             free = free[~np.isin(free, candidates[m[:, 1]])]
         matches = np.concatenate(pairs).astype(np.int64)
-
-        missed = free  # live tracks without a detection
-        alive = tr.misses[missed] + 1 < cfg.max_misses
-        if memory:
-            assert view is not None
-            keep_lost = np.zeros(len(tr.ids), bool)
-            keep_lost[missed[~alive]] = True
-            still = remembered[~np.isin(remembered, matches[:, 1])]
-            keep_lost[still[view.timestamp - tr.last_seen[still] <= cfg.memory_s]] = True
-            gone = np.setdiff1d(np.arange(len(tr.ids)), np.concatenate([matches[:, 1], missed[alive]]))
-            kept = np.concatenate([missed[alive], np.flatnonzero(keep_lost)])
-            dropped = tr.ids[gone[~keep_lost[gone]]]
-        else:
-            kept, dropped = missed[alive], tr.ids[missed[~alive]]
+        kept, dropped = self._without_detection(free, remembered, matches, view if memory else None)
         n_match, n_kept, n_new = len(matches), len(kept), len(fresh)
-        previous_box = tr.boxes[matches[:, 1]] - tr.velocities[matches[:, 1]]  # the last frame's box
-        was_lost = tr.lost[matches[:, 1]]
+        motion = None
+        if cfg.predict_motion:  # the matched tracks' displacement since the last frame's box (none after a loss)
+            previous_box = tr.boxes[matches[:, 1]] - tr.velocities[matches[:, 1]]
+            motion = np.where(tr.lost[matches[:, 1]][:, None], 0.0, boxes[matches[:, 0]] - previous_box)
 
         previous_rows = np.concatenate([matches[:, 1], kept, np.full(n_new, -1, np.int64)])
         detection_rows = np.full(len(boxes), -1, np.int64)
         detection_rows[matches[:, 0]] = np.arange(n_match)
         detection_rows[fresh] = np.arange(n_match + n_kept, n_match + n_kept + n_new)
         self.table.carry(previous_rows)
+        self._write_rows(boxes[matches[:, 0]], boxes[fresh], n_kept, motion, view)
+        return TrackerStep(detection_rows, previous_rows, dropped)
 
-        matched, new = slice(0, n_match), slice(n_match + n_kept, None)
+    def _without_detection(self, missed: np.ndarray, remembered: np.ndarray, matches: np.ndarray,
+                           view: CameraView | None) -> tuple[np.ndarray, np.ndarray]:
+        """The rows kept without a detection and the ids dropped.
+
+        missed: live rows without a detection; remembered: lost rows; matches: (M, 2)
+        (detection, row). A live track is kept while under ``max_misses``; with the memory
+        (``view`` given) a track past it, and a lost one not matched, is remembered for
+        ``memory_s`` seconds since it was last seen. Returns ``(kept rows, dropped ids)``.
+        """
+        cfg, tr = self.config, self.table.tracks
+        alive = tr.misses[missed] + 1 < cfg.max_misses
+        if view is None:
+            return missed[alive], tr.ids[missed[~alive]]
+        keep_lost = np.zeros(len(tr.ids), bool)
+        keep_lost[missed[~alive]] = True
+        still = remembered[~np.isin(remembered, matches[:, 1])]
+        keep_lost[still[view.timestamp - tr.last_seen[still] <= cfg.memory_s]] = True
+        gone = np.setdiff1d(np.arange(len(tr.ids)), np.concatenate([matches[:, 1], missed[alive]]))
+        return np.concatenate([missed[alive], np.flatnonzero(keep_lost)]), tr.ids[gone[~keep_lost[gone]]]
+
+    def _write_rows(self, matched_boxes: np.ndarray, new_boxes: np.ndarray, n_kept: int, motion: np.ndarray | None,
+                    view: CameraView | None) -> None:
+        """Fill the carried table's rows: matched (their ``matched_boxes`` (M, 4)), kept
+        (``n_kept``, one more miss) and new (``new_boxes`` (F, 4), fresh ids). motion: (M, 4)
+        pixels, the matched tracks' displacement (``predict_motion``); view: for the time seen."""
+        cfg, tr = self.config, self.table.tracks
+        n_match, n_new = len(matched_boxes), len(new_boxes)
+        matched, kept, new = slice(0, n_match), slice(n_match, n_match + n_kept), slice(n_match + n_kept, None)
         tr.ids[new] = self.id_counter.take(n_new)
-        tr.boxes[matched], tr.boxes[new] = boxes[matches[:, 0]], boxes[fresh]
+        tr.boxes[matched], tr.boxes[new] = matched_boxes, new_boxes
         tr.hits[matched] += 1
         tr.hits[new] = 1
         tr.misses[matched] = 0
-        tr.misses[n_match:n_match + n_kept] += 1
+        tr.misses[kept] += 1
         tr.lost[matched] = False
-        tr.lost[n_match:n_match + n_kept] = tr.misses[n_match:n_match + n_kept] >= cfg.max_misses
+        tr.lost[kept] = tr.misses[kept] >= cfg.max_misses
         if view is not None:
             tr.last_seen[matched] = tr.last_seen[new] = view.timestamp
-        if cfg.predict_motion:
-            moved = np.where(was_lost[:, None], 0.0, boxes[matches[:, 0]] - previous_box)
-            tr.velocities[matched] = MOTION_SMOOTHING * moved + (1.0 - MOTION_SMOOTHING) * tr.velocities[matched]
-        return TrackerStep(detection_rows, previous_rows, dropped)
+        if motion is not None:
+            tr.velocities[matched] = MOTION_SMOOTHING * motion + (1.0 - MOTION_SMOOTHING) * tr.velocities[matched]
 
     def _associate_beyond(self, boxes: np.ndarray, scores: np.ndarray | None, view: CameraView | None):
         """The association of the fused preset: the low-score band in one assignment at its
