@@ -9,6 +9,8 @@ from pedenv.localization.paper import (
     HEIGHT_FIRST,
     HEIGHT_PARALLEL,
     TRIANGULATION,
+    Reprojection,
+    Sighting,
     estimate_positions,
     keep_most_confident,
     refine_distance,
@@ -41,8 +43,8 @@ def test_refinement_removes_three_quarters_of_the_error(camera, start_factor):
     origin, w2c, direction, d_true = _geometry(camera, (30.0, 0.0))
     cfg = PaperConfig()
     h_px = camera.intrinsics[1, 1] * 1.7 / 30.0  # a 1.7 m person at a depth of 30 m
-    refined = refine_distance(np.array([start_factor * d_true]), direction, origin, np.array([h_px]), 0.0,
-                              camera.intrinsics, w2c, cfg)
+    refined = refine_distance(np.array([start_factor * d_true]), direction, origin, np.array([h_px]),
+                              Reprojection(camera.intrinsics, w2c, 0.0), cfg)
     assert refined[0] / d_true - 1 == pytest.approx((start_factor - 1) * 5 / 20, abs=2e-3)
 
 
@@ -55,8 +57,8 @@ def test_one_refinement_step_is_the_papers_rescaling(camera):
     bottom[2] = 0.0
     px, _ = project(np.stack([bottom, bottom + [0.0, 0.0, cfg.person_height_m]]), camera.intrinsics, w2c)
     h_est = np.linalg.norm(px[1] - px[0])
-    got = refine_distance(np.array([d0]), direction, origin, np.array([h_orig]), 0.0, camera.intrinsics, w2c, cfg,
-                          lambdas=np.array([lam]))
+    got = refine_distance(np.array([d0]), direction, origin, np.array([h_orig]),
+                          Reprojection(camera.intrinsics, w2c, 0.0), cfg, lambdas=np.array([lam]))
     assert got[0] == pytest.approx(d0 * (1 + (h_est / h_orig - 1) / lam), rel=1e-12)
 
 
@@ -68,8 +70,9 @@ def test_height_fallback_finds_the_true_distance(camera, has_prev, source):
     rays = np.broadcast_to(direction[:, None], (1, 17, 3))
     ones = np.ones((1, 17))
     # the previous view, when there is one, is the same: parallel rays, no intersection
-    est = estimate_positions(rays, direction, ones, np.array([h_px]), origin, rays, direction, ones, origin[None],
-                             np.array([has_prev]), camera.intrinsics, w2c, 0.0, PaperConfig())
+    est = estimate_positions(Sighting(rays, direction, ones, origin), np.array([h_px]),
+                             Sighting(rays, direction, ones, origin[None]), np.array([has_prev]),
+                             Reprojection(camera.intrinsics, w2c, 0.0), PaperConfig())
     assert est.sources.tolist() == [source]
     assert est.distances[0] == pytest.approx(d_true, rel=1e-3)
     np.testing.assert_allclose(est.positions[0], [42.0, 0.0, 0.0], atol=0.05)

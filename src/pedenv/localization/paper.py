@@ -32,6 +32,35 @@ HEIGHT_PARALLEL = "height:no-intersection"
 
 
 @dataclass(frozen=True)
+class Sighting:
+    """N pedestrians' skeletons at one observation, as rays.
+
+    rays: (N, 17, 3) unit keypoint rays, world frame. centre_rays: (N, 3) unit rays of the
+    centre of each skeleton's box (the skeleton's midpoint of the ``midpoint`` ablation).
+    confidences: (N, 17). origin: the camera centre, world frame, metres: (3,) for this
+    frame, (N, 3) for the tracks' previous observations.
+    """
+
+    rays: np.ndarray
+    centre_rays: np.ndarray
+    confidences: np.ndarray
+    origin: np.ndarray
+
+
+@dataclass(frozen=True)
+class Reprojection:
+    """What the height refinement projects an upright person with (Eq. 6).
+
+    intrinsics: (3, 3) pixels. world_to_cam: (4, 4) world to camera frame. ground_z: the
+    height of the road under the ego, world frame, metres.
+    """
+
+    intrinsics: np.ndarray
+    world_to_cam: np.ndarray
+    ground_z: float
+
+
+@dataclass(frozen=True)
 class PositionEstimate:
     """Positions of N pedestrians in one frame.
 
@@ -83,8 +112,7 @@ def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarra
 
 
 def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray,
-                    ground_z: float, intrinsics: np.ndarray, world_to_cam: np.ndarray, config: PaperConfig,
-                    lambdas=None) -> np.ndarray:
+                    camera: Reprojection, config: PaperConfig, lambdas=None) -> np.ndarray:
     """Rescale distances so the re-projected person height meets the skeleton's (Eq. 7).
 
     distances: (N,) metres along ``directions`` (N, 3) from ``origin`` (3,).
@@ -93,15 +121,15 @@ def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.nd
     Returns the refined (N,) distances, kept within [0.1 m, ``max_distance_m``].
 
     Each step re-projects an upright person of ``person_height_m`` standing under the
-    point ``origin + d * direction`` (bottom at ``ground_z``, Eq. 6) and compares its pixel
+    point ``origin + d * direction`` (bottom at ``camera.ground_z``, Eq. 6) and compares its pixel
     height with the skeleton's. The bottom and top points are linear in the distance
     ``d`` (``a + d b`` in the camera frame), so each step is a handful of operations on
     precomputed (4, N) arrays.
     """
     if lambdas is None:
         lambdas = np.arange(1, config.refinement_steps + 1) + config.refinement_lambda_offset
-    r, t = world_to_cam[:3, :3], world_to_cam[:3, 3]
-    base = np.array([origin[0], origin[1], ground_z])
+    r, t, intrinsics = camera.world_to_cam[:3, :3], camera.world_to_cam[:3, 3], camera.intrinsics
+    base = np.array([origin[0], origin[1], camera.ground_z])
     slope = np.column_stack([directions[:, 0], directions[:, 1], np.zeros(len(directions))])
     a = np.broadcast_to(intrinsics @ (r @ base + t), (len(directions), 3))  # bottom at d = 0, homogeneous px
     b = (slope @ r.T) @ intrinsics.T             # (N, 3) its change per metre
@@ -146,35 +174,30 @@ def pixel_heights(keypoints: np.ndarray, seen: np.ndarray) -> np.ndarray:
     return np.where(seen.any(axis=1), np.maximum(bottom - top, 1.0), 1.0)
 
 
-def estimate_positions(rays: np.ndarray, centre_rays: np.ndarray, confidences: np.ndarray, heights_px: np.ndarray,
-                       origin: np.ndarray, prev_rays: np.ndarray, prev_centre_rays: np.ndarray,
-                       prev_confidences: np.ndarray, prev_origins: np.ndarray,
-                       has_prev: np.ndarray, intrinsics: np.ndarray, world_to_cam: np.ndarray, ground_z: float,
-                       config: PaperConfig) -> PositionEstimate:
+def estimate_positions(now: Sighting, heights_px: np.ndarray, previous: Sighting, has_prev: np.ndarray,
+                       camera: Reprojection, config: PaperConfig) -> PositionEstimate:
     """The paper's position of N pedestrians seen in this frame (Algorithm 1).
 
-    rays, prev_rays: (N, 17, 3) unit keypoint rays, world frame, now and at each track's
-    previous observation. centre_rays, prev_centre_rays: (N, 3) unit rays of the centre
-    of the skeleton's box, the skeleton's midpoint of the ``midpoint`` ablation. confidences, prev_confidences: (N, 17).
-    heights_px: (N,) skeleton heights in pixels. origin: (3,) camera centre now;
-    prev_origins: (N, 3). has_prev: (N,) bool, tracks seen before. ground_z: height of the
-    road under the ego, world frame, metres.
+    now: this frame's skeletons (camera centre (3,)); previous: each track's previous
+    observation (camera centres (N, 3)), used where ``has_prev`` (N,) bool.
+    heights_px: (N,) skeleton heights in pixels.
     """
+    rays, origin = now.rays, now.origin
     n = len(rays)
-    seen = confidences > 0
-    kept = keep_most_confident(seen, confidences, config.low_confidence_fraction)
+    seen = now.confidences > 0
+    kept = keep_most_confident(seen, now.confidences, config.low_confidence_fraction)
     directions = mean_directions(rays, kept)
     centres = origin + directions  # placeholder row values, replaced below
     ok = np.zeros(n, bool)
     if has_prev.any():
         idx = np.flatnonzero(has_prev)
         if config.initial_estimate == "midpoint":
-            now, before = centre_rays[idx, None], prev_centre_rays[idx, None]
+            here, before = now.centre_rays[idx, None], previous.centre_rays[idx, None]
             usable, conf = np.ones((len(idx), 1), bool), np.ones((len(idx), 1))
         else:
-            now, before = rays[idx], prev_rays[idx]
-            usable, conf = seen[idx] & (prev_confidences[idx] > 0), confidences[idx]
-        c, good = initial_positions(now, origin, before, prev_origins[idx], usable, conf, config)
+            here, before = rays[idx], previous.rays[idx]
+            usable, conf = seen[idx] & (previous.confidences[idx] > 0), now.confidences[idx]
+        c, good = initial_positions(here, origin, before, previous.origin[idx], usable, conf, config)
         centres[idx[good]] = c[good]
         ok[idx[good]] = True
     distances = np.linalg.norm(centres - origin, axis=1)
@@ -189,12 +212,11 @@ def estimate_positions(rays: np.ndarray, centre_rays: np.ndarray, confidences: n
         refine = np.where(r <= config.refinement_steps, r + config.refinement_lambda_offset, np.inf)
         fallback = np.where(r <= FALLBACK_STEPS, 1.0, np.inf)
         lambdas = np.where(ok, refine if config.refine else np.inf, fallback)
-        start = np.where(ok, distances, pinhole_distance(heights_px, intrinsics, config))
-        distances = refine_distance(start, directions, origin, heights_px, ground_z, intrinsics, world_to_cam,
-                                    config, lambdas=lambdas)
+        start = np.where(ok, distances, pinhole_distance(heights_px, camera.intrinsics, config))
+        distances = refine_distance(start, directions, origin, heights_px, camera, config, lambdas=lambdas)
     sources = np.where(ok, TRIANGULATION, np.where(has_prev, HEIGHT_PARALLEL, HEIGHT_FIRST))
     positions = origin + distances[:, None] * directions
-    positions[:, 2] = ground_z
+    positions[:, 2] = camera.ground_z
     return PositionEstimate(positions, distances, directions, sources)
 
 
@@ -245,10 +267,11 @@ class PaperLocator:
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
         det, frame, mem, cfg = geo.detections, geo.frame, self.columns, self.config
-        est = estimate_positions(
-            geo.rays, geo.centre_rays, det.confidences, pixel_heights(det.keypoints, det.confidences > 0), geo.origin,
-            mem.rays[rows], mem.centre_rays[rows], mem.confidences[rows], mem.origins[rows], mem.seen[rows],
-            frame.camera.intrinsics, geo.world_to_cam, float(frame.ego.translation[2]), cfg)
+        now = Sighting(geo.rays, geo.centre_rays, det.confidences, geo.origin)
+        previous = Sighting(mem.rays[rows], mem.centre_rays[rows], mem.confidences[rows], mem.origins[rows])
+        camera = Reprojection(frame.camera.intrinsics, geo.world_to_cam, float(frame.ego.translation[2]))
+        est = estimate_positions(now, pixel_heights(det.keypoints, det.confidences > 0), previous, mem.seen[rows],
+                                 camera, cfg)
         mem.rays[rows], mem.centre_rays[rows], mem.confidences[rows] = geo.rays, geo.centre_rays, det.confidences
         mem.origins[rows], mem.seen[rows] = geo.origin, True
         var = (cfg.measurement_std_m + cfg.measurement_std_rel * est.distances) ** 2
