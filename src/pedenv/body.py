@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.skeleton import NUM_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 #: Heights above the ground of an upright person, shares of H: eyes, nose, ears,
 #: shoulder joints, hip joints, knees, ankles (about 0.08 m).
@@ -31,17 +31,17 @@ NOSE_FORWARD, EYE_FORWARD, EYE_HALF_WIDTH, EAR_FORWARD, EAR_HALF_WIDTH = 0.052, 
 def _standing_template() -> np.ndarray:
     t = np.zeros((NUM_KEYPOINTS, 3))
     for left, right, forward, half_width, height in (
-            (K.LEFT_EYE, K.RIGHT_EYE, EYE_FORWARD, EYE_HALF_WIDTH, EYE),
-            (K.LEFT_EAR, K.RIGHT_EAR, EAR_FORWARD, EAR_HALF_WIDTH, EAR),
-            (K.LEFT_SHOULDER, K.RIGHT_SHOULDER, 0.0, SHOULDER_HALF_WIDTH, SHOULDER),
-            (K.LEFT_ELBOW, K.RIGHT_ELBOW, 0.0, SHOULDER_HALF_WIDTH, SHOULDER - UPPER_ARM),
-            (K.LEFT_WRIST, K.RIGHT_WRIST, 0.0, SHOULDER_HALF_WIDTH, SHOULDER - UPPER_ARM - FOREARM),
-            (K.LEFT_HIP, K.RIGHT_HIP, 0.0, HIP_HALF_WIDTH, HIP),
-            (K.LEFT_KNEE, K.RIGHT_KNEE, 0.0, HIP_HALF_WIDTH, KNEE),
-            (K.LEFT_ANKLE, K.RIGHT_ANKLE, 0.0, HIP_HALF_WIDTH, ANKLE)):
+            (KP.LEFT_EYE, KP.RIGHT_EYE, EYE_FORWARD, EYE_HALF_WIDTH, EYE),
+            (KP.LEFT_EAR, KP.RIGHT_EAR, EAR_FORWARD, EAR_HALF_WIDTH, EAR),
+            (KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER, 0.0, SHOULDER_HALF_WIDTH, SHOULDER),
+            (KP.LEFT_ELBOW, KP.RIGHT_ELBOW, 0.0, SHOULDER_HALF_WIDTH, SHOULDER - UPPER_ARM),
+            (KP.LEFT_WRIST, KP.RIGHT_WRIST, 0.0, SHOULDER_HALF_WIDTH, SHOULDER - UPPER_ARM - FOREARM),
+            (KP.LEFT_HIP, KP.RIGHT_HIP, 0.0, HIP_HALF_WIDTH, HIP),
+            (KP.LEFT_KNEE, KP.RIGHT_KNEE, 0.0, HIP_HALF_WIDTH, KNEE),
+            (KP.LEFT_ANKLE, KP.RIGHT_ANKLE, 0.0, HIP_HALF_WIDTH, ANKLE)):
         t[left] = forward, half_width, height
         t[right] = forward, -half_width, height
-    t[K.NOSE] = NOSE_FORWARD, 0.0, NOSE
+    t[KP.NOSE] = NOSE_FORWARD, 0.0, NOSE
     t.setflags(write=False)
     return t
 

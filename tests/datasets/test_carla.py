@@ -15,7 +15,7 @@ from pedenv.datasets.carla_bones import BONE_NAMES, bones_to_coco
 from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.records import OPTICAL_TO_VEHICLE
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 from shared_paths import SHARED
 
@@ -62,7 +62,7 @@ def test_camera_mount_and_ground_points(sample_frames):
             np.testing.assert_allclose(mount[:3, 3], [0.6, 0.0, 1.5], atol=1e-9)
             np.testing.assert_allclose(mount[:3, :3], OPTICAL_TO_VEHICLE, atol=1e-9)
             gt = f.ground_truth
-            ankles = gt.keypoints_3d[:, [K.LEFT_ANKLE, K.RIGHT_ANKLE]]
+            ankles = gt.keypoints_3d[:, [KP.LEFT_ANKLE, KP.RIGHT_ANKLE]]
             assert np.all(np.linalg.norm(ankles[..., :2].mean(1) - gt.positions[:, :2], axis=1) < 0.5)
             assert np.all(
                 (ankles[..., 2].min(1) - gt.positions[:, 2] > 0.0) & (ankles[..., 2].min(1) - gt.positions[:, 2] < 0.2)
@@ -84,9 +84,10 @@ def test_bone_mapping_left_right(sample_frames):
     for frames in sample_frames.values():
         for f in frames:
             k = f.ground_truth.keypoints_3d
-            facing = 0.5 * (k[:, K.LEFT_EYE] + k[:, K.RIGHT_EYE]) - k[:, K.NOSE]
+            facing = 0.5 * (k[:, KP.LEFT_EYE] + k[:, KP.RIGHT_EYE]) - k[:, KP.NOSE]
             left = np.cross([0.0, 0.0, 1.0], facing)
-            for a, b in ((K.LEFT_SHOULDER, K.RIGHT_SHOULDER), (K.LEFT_HIP, K.RIGHT_HIP), (K.LEFT_EYE, K.RIGHT_EYE)):
+            for a, b in ((KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER), (KP.LEFT_HIP, KP.RIGHT_HIP),
+                         (KP.LEFT_EYE, KP.RIGHT_EYE)):
                 agree += int(np.sum(np.sum(left * (k[:, a] - k[:, b]), axis=1) > 0))
                 total += len(k)
     assert total > 0 and agree == total
@@ -97,15 +98,15 @@ def test_bone_mapping_and_visibility(sample_frames):
     f = sample_frames["scene1"][0]
     bones = np.asarray(record["2d_skel"])
     np.testing.assert_array_equal(f.ground_truth.keypoints, bones_to_coco(bones))
-    np.testing.assert_array_equal(f.ground_truth.keypoints[:, K.NOSE], bones[:, BONE_NAMES.index("head")])
-    np.testing.assert_array_equal(f.ground_truth.keypoints[:, K.LEFT_ANKLE], bones[:, BONE_NAMES.index("foot_L")])
+    np.testing.assert_array_equal(f.ground_truth.keypoints[:, KP.NOSE], bones[:, BONE_NAMES.index("head")])
+    np.testing.assert_array_equal(f.ground_truth.keypoints[:, KP.LEFT_ANKLE], bones[:, BONE_NAMES.index("foot_L")])
     np.testing.assert_array_equal(f.ground_truth.boxes, np.asarray(record["bbox_2d"]))
     all_vis = np.concatenate([fr.ground_truth.visible for frames in sample_frames.values() for fr in frames])
     all_kp = np.concatenate([fr.ground_truth.keypoints for frames in sample_frames.values() for fr in frames])
-    assert not all_vis[:, [K.LEFT_EAR, K.RIGHT_EAR]].any()
+    assert not all_vis[:, [KP.LEFT_EAR, KP.RIGHT_EAR]].any()
     on_border = (all_kp[..., 0] <= 0) | (all_kp[..., 0] >= 1599)
     assert on_border.any() and not all_vis[on_border].any()
-    assert all_vis[:, [K.NOSE, K.LEFT_ANKLE]][~on_border[:, [K.NOSE, K.LEFT_ANKLE]]].all()
+    assert all_vis[:, [KP.NOSE, KP.LEFT_ANKLE]][~on_border[:, [KP.NOSE, KP.LEFT_ANKLE]]].all()
 
 
 @pytest.mark.parametrize("ypr", [(0.0, 0.0, 0.0), (16.0, -1.9, 0.0), (-130.0, 7.0, 3.0), (95.0, -20.0, -11.0)])

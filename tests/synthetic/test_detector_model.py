@@ -8,12 +8,12 @@ import pytest
 from pedenv.errors import InputError
 from pedenv.pose import create_pose_backend
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.synthetic.detector import DetectorModel
 from pedenv.synthetic.walker import body_keypoints
 
 CAMERA = Camera.from_fov(1600, 900, 64.5, height_m=1.5)
-TORSO = [K.LEFT_SHOULDER, K.RIGHT_SHOULDER, K.LEFT_HIP, K.RIGHT_HIP, K.LEFT_KNEE, K.RIGHT_KNEE]
+TORSO = [KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER, KP.LEFT_HIP, KP.RIGHT_HIP, KP.LEFT_KNEE, KP.RIGHT_KNEE]
 
 
 def person_frame(index: int, height_px: float, centre_u: float = 800.0, scene: str = "unit", people: int = 1,
@@ -71,7 +71,7 @@ def test_confidences_like_a_pose_network():
     unseen = np.concatenate([model(person_frame(i, 300.0, visible=False)).confidences for i in range(50)])
     assert big[:, TORSO].mean() > 0.85 and 0.5 < small[:, TORSO].mean() < big[:, TORSO].mean() - 0.2
     assert unseen.max() <= 0.25 and unseen.min() > 0.0
-    assert big[:, [K.LEFT_WRIST, K.RIGHT_ANKLE]].mean() < big[:, TORSO].mean()
+    assert big[:, [KP.LEFT_WRIST, KP.RIGHT_ANKLE]].mean() < big[:, TORSO].mean()
 
 
 def test_unseen_keypoints_are_guessed_inside_the_image():

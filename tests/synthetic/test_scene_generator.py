@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pedenv.geometry import invert_transform, project
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.synthetic import SCENARIOS, generate_scenes
 from pedenv.synthetic.generator import scene_terrain
 
@@ -105,7 +105,7 @@ def test_ground_points_lie_on_the_terrain_and_feet_on_the_ground(terrain_scenes)
         for frame in scene.frames:
             gt = frame.ground_truth
             np.testing.assert_allclose(gt.positions[:, 2], terrain.height(gt.positions[:, :2]), atol=1e-9)
-            ankles = gt.keypoints_3d[:, [K.LEFT_ANKLE, K.RIGHT_ANKLE], 2].min(axis=1) - gt.positions[:, 2]
+            ankles = gt.keypoints_3d[:, [KP.LEFT_ANKLE, KP.RIGHT_ANKLE], 2].min(axis=1) - gt.positions[:, 2]
             np.testing.assert_allclose(ankles, 0.046 * gt.heights, atol=0.02 * 1.98)
 
 

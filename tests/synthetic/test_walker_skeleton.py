@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from pedenv.body import world_keypoints
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.synthetic.walker import body_keypoints, stride_length
 
 
@@ -21,8 +21,8 @@ def walking(phases: np.ndarray, height: float = 1.75) -> np.ndarray:
 
 @pytest.mark.parametrize("height", [1.55, 1.72, 1.95])
 @pytest.mark.parametrize("keypoint, fraction", [
-    (K.NOSE, 0.920), (K.LEFT_EYE, 0.933), (K.RIGHT_EAR, 0.915), (K.LEFT_SHOULDER, 0.818),
-    (K.RIGHT_HIP, 0.530), (K.LEFT_KNEE, 0.285), (K.RIGHT_ANKLE, 0.046),
+    (KP.NOSE, 0.920), (KP.LEFT_EYE, 0.933), (KP.RIGHT_EAR, 0.915), (KP.LEFT_SHOULDER, 0.818),
+    (KP.RIGHT_HIP, 0.530), (KP.LEFT_KNEE, 0.285), (KP.RIGHT_ANKLE, 0.046),
 ])
 def test_standing_proportions_scale_with_height(height, keypoint, fraction):
     assert standing(height)[keypoint, 2] == pytest.approx(fraction * height, abs=1e-9)
@@ -30,13 +30,13 @@ def test_standing_proportions_scale_with_height(height, keypoint, fraction):
 
 def test_ankles_about_8_cm_above_ground_and_head_below_height():
     kp = standing(1.72)
-    assert kp[K.LEFT_ANKLE, 2] == pytest.approx(0.079, abs=0.002)  # 0.046 * 1.72
+    assert kp[KP.LEFT_ANKLE, 2] == pytest.approx(0.079, abs=0.002)  # 0.046 * 1.72
     assert kp[:, 2].max() < 1.72
 
 
 @pytest.mark.parametrize("a, b, length", [
-    (K.LEFT_HIP, K.LEFT_KNEE, 0.245), (K.RIGHT_KNEE, K.RIGHT_ANKLE, 0.239),
-    (K.LEFT_SHOULDER, K.LEFT_ELBOW, 0.186), (K.RIGHT_ELBOW, K.RIGHT_WRIST, 0.146),
+    (KP.LEFT_HIP, KP.LEFT_KNEE, 0.245), (KP.RIGHT_KNEE, KP.RIGHT_ANKLE, 0.239),
+    (KP.LEFT_SHOULDER, KP.LEFT_ELBOW, 0.186), (KP.RIGHT_ELBOW, KP.RIGHT_WRIST, 0.146),
 ])
 def test_segments_keep_their_length_through_the_gait(a, b, length):
     kp = walking(np.linspace(0, 2 * np.pi, 24, endpoint=False))
@@ -45,15 +45,15 @@ def test_segments_keep_their_length_through_the_gait(a, b, length):
 
 def test_stance_foot_stays_on_the_ground():
     kp = walking(np.linspace(0, 2 * np.pi, 36, endpoint=False))
-    lowest = kp[:, [K.LEFT_ANKLE, K.RIGHT_ANKLE], 2].min(axis=1)
+    lowest = kp[:, [KP.LEFT_ANKLE, KP.RIGHT_ANKLE], 2].min(axis=1)
     np.testing.assert_allclose(lowest, 0.046 * 1.75, atol=1e-9)
 
 
 def test_legs_swing_in_anti_phase_and_arms_against_legs():
     kp = walking(np.array([np.pi / 2]))[0]  # left thigh at its most forward
-    assert kp[K.LEFT_KNEE, 0] > 0.1 > -0.1 > kp[K.RIGHT_KNEE, 0]
-    assert kp[K.LEFT_WRIST, 0] < kp[K.RIGHT_WRIST, 0]
-    assert kp[K.LEFT_SHOULDER, 1] > 0 > kp[K.RIGHT_SHOULDER, 1]  # the person's left is +y
+    assert kp[KP.LEFT_KNEE, 0] > 0.1 > -0.1 > kp[KP.RIGHT_KNEE, 0]
+    assert kp[KP.LEFT_WRIST, 0] < kp[KP.RIGHT_WRIST, 0]
+    assert kp[KP.LEFT_SHOULDER, 1] > 0 > kp[KP.RIGHT_SHOULDER, 1]  # the person's left is +y
 
 
 def test_standing_sway_is_small_and_walking_moves_the_limbs():
@@ -73,6 +73,6 @@ def test_world_keypoints_turn_to_the_heading_and_stand_on_the_ground_point(headi
     body = standing(1.8)[None]
     ground = np.array([[10.0, -4.0, 2.5]])
     kp = world_keypoints(ground, np.array([heading]), body)[0]
-    nose_offset = kp[K.NOSE, :2] - 0.5 * (kp[K.LEFT_EAR, :2] + kp[K.RIGHT_EAR, :2])
+    nose_offset = kp[KP.NOSE, :2] - 0.5 * (kp[KP.LEFT_EAR, :2] + kp[KP.RIGHT_EAR, :2])
     assert np.dot(nose_offset / np.linalg.norm(nose_offset), forward) == pytest.approx(1.0, abs=1e-9)
-    assert kp[K.LEFT_ANKLE, 2] == pytest.approx(2.5 + 0.046 * 1.8)
+    assert kp[KP.LEFT_ANKLE, 2] == pytest.approx(2.5 + 0.046 * 1.8)

@@ -19,7 +19,7 @@ import numpy as np
 
 from pedenv.behaviour.config import BehaviourConfig
 from pedenv.body import EAR_FORWARD, HIP_HALF_WIDTH, NOSE_FORWARD, SHOULDER_HALF_WIDTH
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 #: A cell's likelihood never falls below this share of the best one (an outlier never rules a heading out).
 LIKELIHOOD_FLOOR = 0.02
@@ -75,8 +75,8 @@ def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarra
     pixel_m = config.keypoint_pixel_std * rng / focal_px  # one keypoint's noise in metres at the range
     h = config.person_height_m
     ratios, weights = [], []
-    for left, right_kp, half in ((K.LEFT_SHOULDER, K.RIGHT_SHOULDER, SHOULDER_HALF_WIDTH),
-                                 (K.LEFT_HIP, K.RIGHT_HIP, HIP_HALF_WIDTH)):
+    for left, right_kp, half in ((KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER, SHOULDER_HALF_WIDTH),
+                                 (KP.LEFT_HIP, KP.RIGHT_HIP, HIP_HALF_WIDTH)):
         width_m = 2.0 * half * h
         both = ok[:, left] & ok[:, right_kp]
         ratios.append(np.where(both, (lateral[:, left] - lateral[:, right_kp]) / width_m, 0.0))
@@ -87,7 +87,7 @@ def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarra
     width = np.clip((ratios[0] * weights[0] + ratios[1] * weights[1]) / np.maximum(w, 1e-12), -1.2, 1.2)
     width_std = np.where(width_ok, 1.0 / np.sqrt(np.maximum(w, 1e-12)), 1.0)
     face, face_std, face_ok = _face_offset(lateral, ok, pixel_m, config)
-    face_seen = confidences[:, [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE]].min(axis=1)
+    face_seen = confidences[:, [KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE]].min(axis=1)
     return SkeletonCue(toward, right, width, width_std, width_ok, face, face_std, face_ok,
                        np.clip(np.where(np.isnan(face_seen), 0.0, face_seen), 0.0, 1.0))
 
@@ -97,13 +97,13 @@ def _face_offset(lateral: np.ndarray, ok: np.ndarray, pixel_m: np.ndarray,
     """The nose's sideways offset ratio (N,) from the ears' midpoint (both ears seen) or else
     the shoulders' midpoint, its spread (N,) and where it exists (N,) bool."""
     h = config.person_height_m
-    ears = ok[:, K.LEFT_EAR] & ok[:, K.RIGHT_EAR]
-    shoulders = ok[:, K.LEFT_SHOULDER] & ok[:, K.RIGHT_SHOULDER]
-    ear_mid = 0.5 * (lateral[:, K.LEFT_EAR] + lateral[:, K.RIGHT_EAR])
-    shoulder_mid = 0.5 * (lateral[:, K.LEFT_SHOULDER] + lateral[:, K.RIGHT_SHOULDER])
+    ears = ok[:, KP.LEFT_EAR] & ok[:, KP.RIGHT_EAR]
+    shoulders = ok[:, KP.LEFT_SHOULDER] & ok[:, KP.RIGHT_SHOULDER]
+    ear_mid = 0.5 * (lateral[:, KP.LEFT_EAR] + lateral[:, KP.RIGHT_EAR])
+    shoulder_mid = 0.5 * (lateral[:, KP.LEFT_SHOULDER] + lateral[:, KP.RIGHT_SHOULDER])
     full = np.where(ears, NOSE_FORWARD - EAR_FORWARD, NOSE_FORWARD) * h  # the offset in full profile, metres
-    offset = lateral[:, K.NOSE] - np.where(ears, ear_mid, shoulder_mid)
-    face_ok = ok[:, K.NOSE] & (ears | shoulders)
+    offset = lateral[:, KP.NOSE] - np.where(ears, ear_mid, shoulder_mid)
+    face_ok = ok[:, KP.NOSE] & (ears | shoulders)
     face = np.where(face_ok, np.clip(offset / full, -1.5, 1.5), 0.0)
     std = np.sqrt(config.face_offset_std**2 + 1.5 * (pixel_m / full) ** 2)
     return face, std, face_ok

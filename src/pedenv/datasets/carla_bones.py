@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.skeleton import NUM_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 #: The 20 bones of a recording, in the order of ``2d_skel`` / ``3d_skel``.
 BONE_NAMES: tuple[str, ...] = (
@@ -31,7 +31,8 @@ assert len(COCO_FROM_BONE) == NUM_KEYPOINTS
 
 #: COCO keypoints that are the same joint as their bone (they survive a write and a read);
 #: the nose (read from the head's centre) and the ears are not.
-EXACT_KEYPOINTS: np.ndarray = np.array([k for k in range(NUM_KEYPOINTS) if k not in (K.NOSE, K.LEFT_EAR, K.RIGHT_EAR)])
+EXACT_KEYPOINTS: np.ndarray = np.array([k for k in range(NUM_KEYPOINTS)
+                                        if k not in (KP.NOSE, KP.LEFT_EAR, KP.RIGHT_EAR)])
 
 #: Where the clavicle bones sit between the neck (mid-shoulder) and the shoulder joint.
 CLAVICLE_FRACTION = 0.5
@@ -51,7 +52,7 @@ def visible_keypoints(bones_2d: np.ndarray, width: int, height: int) -> np.ndarr
     """
     uv = bones_to_coco(bones_2d)
     inside = (uv[..., 0] > 0) & (uv[..., 0] < width - 1) & (uv[..., 1] > 0) & (uv[..., 1] < height - 1)
-    inside[:, [K.LEFT_EAR, K.RIGHT_EAR]] = False
+    inside[:, [KP.LEFT_EAR, KP.RIGHT_EAR]] = False
     return inside
 
 
@@ -65,14 +66,14 @@ def coco_to_bones(keypoints_3d: np.ndarray) -> np.ndarray:
     kp = np.asarray(keypoints_3d, float)
     bones = np.zeros((kp.shape[0], NUM_BONES, kp.shape[2]))
     for coco, bone in enumerate(COCO_FROM_BONE):
-        if coco not in (K.NOSE, K.LEFT_EAR, K.RIGHT_EAR):
+        if coco not in (KP.NOSE, KP.LEFT_EAR, KP.RIGHT_EAR):
             bones[:, bone] = kp[:, coco]
-    hips = 0.5 * (kp[:, K.LEFT_HIP] + kp[:, K.RIGHT_HIP])
-    neck = 0.5 * (kp[:, K.LEFT_SHOULDER] + kp[:, K.RIGHT_SHOULDER])
+    hips = 0.5 * (kp[:, KP.LEFT_HIP] + kp[:, KP.RIGHT_HIP])
+    neck = 0.5 * (kp[:, KP.LEFT_SHOULDER] + kp[:, KP.RIGHT_SHOULDER])
     bones[:, B["hips"]] = hips
     bones[:, B["spine"]] = hips + (neck - hips) / 3.0
     bones[:, B["spine01"]] = hips + 2.0 * (neck - hips) / 3.0
-    bones[:, B["shoulder_L"]] = neck + CLAVICLE_FRACTION * (kp[:, K.LEFT_SHOULDER] - neck)
-    bones[:, B["shoulder_R"]] = neck + CLAVICLE_FRACTION * (kp[:, K.RIGHT_SHOULDER] - neck)
-    bones[:, B["head"]] = 0.5 * (kp[:, K.LEFT_EAR] + kp[:, K.RIGHT_EAR])
+    bones[:, B["shoulder_L"]] = neck + CLAVICLE_FRACTION * (kp[:, KP.LEFT_SHOULDER] - neck)
+    bones[:, B["shoulder_R"]] = neck + CLAVICLE_FRACTION * (kp[:, KP.RIGHT_SHOULDER] - neck)
+    bones[:, B["head"]] = 0.5 * (kp[:, KP.LEFT_EAR] + kp[:, KP.RIGHT_EAR])
     return bones

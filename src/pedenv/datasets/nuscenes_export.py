@@ -29,7 +29,7 @@ from pedenv.errors import InputError
 from pedenv.geometry import rotation_to_quaternion, rotation_z
 from pedenv.records import Frame, GroundTruth, Scene
 from pedenv.skeleton import COCO_BONES
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 log = logging.getLogger(__name__)
 
@@ -191,7 +191,7 @@ def _annotation(gt: GroundTruth, m: int, instance_token: str, sample_token: str,
     height = float(gt.heights[m]) if gt.heights is not None else DEFAULT_HEIGHT_M
     yaw = 0.0
     if gt.keypoints_3d is not None:
-        left = gt.keypoints_3d[m, K.LEFT_SHOULDER] - gt.keypoints_3d[m, K.RIGHT_SHOULDER]
+        left = gt.keypoints_3d[m, KP.LEFT_SHOULDER] - gt.keypoints_3d[m, KP.RIGHT_SHOULDER]
         yaw = float(np.arctan2(-left[0], left[1]))  # facing = left x up
     seen = float(gt.visible[m].mean()) if gt.keypoints is not None and gt.visible is not None else 1.0
     visibility = max(t for t, (_, low) in VISIBILITY.items() if seen >= low)

@@ -32,15 +32,15 @@ import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.records import Detections, Frame, boxes_from_keypoints
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.synthetic.detector_profiles import DEFAULT_PROFILE, PROFILES, profile_parameters
 from pedenv.synthetic.walker import body_keypoints
 from pedenv.validation import check_number
 
 __all__ = ["DEFAULT_PROFILE", "PROFILES", "DetectorModel"]
 
-_EXTREMITIES = np.array([K.LEFT_WRIST, K.RIGHT_WRIST, K.LEFT_ANKLE, K.RIGHT_ANKLE])
-_FACE = np.array([K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR])
+_EXTREMITIES = np.array([KP.LEFT_WRIST, KP.RIGHT_WRIST, KP.LEFT_ANKLE, KP.RIGHT_ANKLE])
+_FACE = np.array([KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE, KP.LEFT_EAR, KP.RIGHT_EAR])
 
 
 def _check(name: str, value: float, low: float, high: float) -> float:

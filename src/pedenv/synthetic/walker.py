@@ -36,7 +36,7 @@ from pedenv.body import (
     UPPER_ARM,
 )
 from pedenv.skeleton import NUM_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 # Thigh (hip joint to knee) and shank (knee to ankle), as shares of the body height H.
 THIGH, SHANK = HIP - KNEE, KNEE - ANKLE
@@ -92,9 +92,9 @@ def body_keypoints(height: np.ndarray, phase: np.ndarray, gait: np.ndarray, sway
     hips = np.stack([np.zeros((n, 2)), side * HIP_HALF_WIDTH * h, np.broadcast_to(hip_z, (n, 2))], axis=-1)
     knees = hips + np.stack([THIGH * np.sin(thigh), np.zeros_like(thigh), -THIGH * np.cos(thigh)], -1) * h[..., None]
     ankles = knees + np.stack([SHANK * np.sin(shank), np.zeros_like(shank), -SHANK * np.cos(shank)], -1) * h[..., None]
-    kp[:, [K.LEFT_HIP, K.RIGHT_HIP]] = hips
-    kp[:, [K.LEFT_KNEE, K.RIGHT_KNEE]] = knees
-    kp[:, [K.LEFT_ANKLE, K.RIGHT_ANKLE]] = ankles
+    kp[:, [KP.LEFT_HIP, KP.RIGHT_HIP]] = hips
+    kp[:, [KP.LEFT_KNEE, KP.RIGHT_KNEE]] = knees
+    kp[:, [KP.LEFT_ANKLE, KP.RIGHT_ANKLE]] = ankles
 
     torso_z = hip_z + (SHOULDER - HIP) * h  # (N, 1)
     shoulders = np.stack([np.zeros((n, 2)), side * SHOULDER_HALF_WIDTH * h, np.broadcast_to(torso_z, (n, 2))], -1)
@@ -102,21 +102,21 @@ def body_keypoints(height: np.ndarray, phase: np.ndarray, gait: np.ndarray, sway
     forearm = arm + ELBOW_FLEX_RAD * (0.6 + 0.4 * a) * (1.0 + 0.5 * np.sin(-leg_phase))
     elbows = shoulders + _limb(arm, side * ARM_ABDUCTION_RAD, UPPER_ARM * h)
     wrists = elbows + _limb(forearm, side * ARM_ABDUCTION_RAD / 2, FOREARM * h)
-    kp[:, [K.LEFT_SHOULDER, K.RIGHT_SHOULDER]] = shoulders
-    kp[:, [K.LEFT_ELBOW, K.RIGHT_ELBOW]] = elbows
-    kp[:, [K.LEFT_WRIST, K.RIGHT_WRIST]] = wrists
+    kp[:, [KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER]] = shoulders
+    kp[:, [KP.LEFT_ELBOW, KP.RIGHT_ELBOW]] = elbows
+    kp[:, [KP.LEFT_WRIST, KP.RIGHT_WRIST]] = wrists
 
     head_base = torso_z - SHOULDER * h  # the head follows the torso's bob
     face = np.array([
         [NOSE_FORWARD, 0.0, NOSE], [EYE_FORWARD, EYE_HALF_WIDTH, EYE], [EYE_FORWARD, -EYE_HALF_WIDTH, EYE],
         [EAR_FORWARD, EAR_HALF_WIDTH, EAR], [EAR_FORWARD, -EAR_HALF_WIDTH, EAR],
     ])
-    kp[:, [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR]] = face * h[..., None]
-    kp[:, [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR], 2] += head_base
+    kp[:, [KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE, KP.LEFT_EAR, KP.RIGHT_EAR]] = face * h[..., None]
+    kp[:, [KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE, KP.LEFT_EAR, KP.RIGHT_EAR], 2] += head_base
 
     # Upper body leans forward with speed, pivoting at the hips.
-    upper = [K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR, K.LEFT_SHOULDER, K.RIGHT_SHOULDER,
-             K.LEFT_ELBOW, K.RIGHT_ELBOW, K.LEFT_WRIST, K.RIGHT_WRIST]
+    upper = [KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE, KP.LEFT_EAR, KP.RIGHT_EAR, KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER,
+             KP.LEFT_ELBOW, KP.RIGHT_ELBOW, KP.LEFT_WRIST, KP.RIGHT_WRIST]
     kp[:, upper] = _tilt(kp[:, upper], FORWARD_LEAN_RAD * a[:, 0], hip_z, axis=0)
     # Sway: a small lean of the whole body about the ankles (inverted pendulum).
     sway = np.asarray(sway, float)

@@ -5,7 +5,7 @@ from pedenv.config import FusedConfig
 from pedenv.geometry import pixel_rays
 from pedenv.localization.fused.ground import ground_cue, plane_intersection
 from pedenv.skeleton import ANKLE_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 from fused_frames import make_frame, skeletons_of
 
@@ -84,7 +84,7 @@ def test_where_the_feet_stand_against_the_body_is_the_per_person_part():
     np.testing.assert_allclose(lateral.bias_covariances[0], 0.05**2 * np.eye(2), atol=1e-12)
 
 
-@pytest.mark.parametrize("hidden, share", [((), 0.25), ((K.LEFT_ANKLE,), 1.0)])
+@pytest.mark.parametrize("hidden, share", [((), 0.25), ((KP.LEFT_ANKLE,), 1.0)])
 def test_a_lone_standing_foot_may_lie_half_a_step_from_the_body(hidden, share):
     """Frame to frame, the ground point of one standing foot spreads by stance_std_m each way
     about the body's; the midpoint of two standing feet by half of it."""

@@ -4,7 +4,7 @@ import pytest
 from pedenv.config import FusedConfig
 from pedenv.localization.fused.height import height_cue
 from pedenv.skeleton import ANKLE_KEYPOINTS, HEAD_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 from fused_frames import make_frame, skeletons_of
 
@@ -47,7 +47,7 @@ def test_a_shorter_keypoint_span_brings_the_height_cue_nearer():
 
 
 def test_height_cue_without_ankles_uses_head_shoulders_and_hips():
-    cue = run_height(make_frame(np.array([[15.0, 0.0, 0.0]]), hidden=ANKLE_KEYPOINTS + (K.LEFT_KNEE, K.RIGHT_KNEE)))
+    cue = run_height(make_frame(np.array([[15.0, 0.0, 0.0]]), hidden=ANKLE_KEYPOINTS + (KP.LEFT_KNEE, KP.RIGHT_KNEE)))
     assert cue.valid[0]
     assert np.linalg.norm(cue.positions[0]) == pytest.approx(15.0, rel=0.02)
 
@@ -79,7 +79,7 @@ def lift_left_ankle(frame, share):
 
     from pedenv.records import Detections
     kp = frame.detections.keypoints.copy()
-    kp[:, K.LEFT_ANKLE, 1] -= share * np.ptp(kp[..., 1], axis=1)
+    kp[:, KP.LEFT_ANKLE, 1] -= share * np.ptp(kp[..., 1], axis=1)
     return replace(frame, detections=Detections(kp, frame.detections.confidences))
 
 

@@ -27,7 +27,7 @@ from pedenv.localization.fused.cue import (
     range_bearing_covariance,
 )
 from pedenv.skeleton import ANKLE_KEYPOINTS, NUM_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 
 NAME = "height"
 
@@ -35,10 +35,10 @@ NAME = "height"
 #: the gait, a foot lifted in the swing phase), as a share of body height; NaN: the
 #: keypoint has no fixed height (knees, arms) and the cue does not use it.
 KEYPOINT_FRACTION_STD = np.full(NUM_KEYPOINTS, np.nan)
-KEYPOINT_FRACTION_STD[[K.NOSE, K.LEFT_EYE, K.RIGHT_EYE, K.LEFT_EAR, K.RIGHT_EAR, K.LEFT_SHOULDER,
-                       K.RIGHT_SHOULDER]] = 0.012
-KEYPOINT_FRACTION_STD[[K.LEFT_HIP, K.RIGHT_HIP]] = 0.015
-KEYPOINT_FRACTION_STD[[K.LEFT_ANKLE, K.RIGHT_ANKLE]] = 0.025
+KEYPOINT_FRACTION_STD[[KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE, KP.LEFT_EAR, KP.RIGHT_EAR, KP.LEFT_SHOULDER,
+                       KP.RIGHT_SHOULDER]] = 0.012
+KEYPOINT_FRACTION_STD[[KP.LEFT_HIP, KP.RIGHT_HIP]] = 0.015
+KEYPOINT_FRACTION_STD[[KP.LEFT_ANKLE, KP.RIGHT_ANKLE]] = 0.025
 #: Height above the ground of an upright adult's keypoints, as a share of body height
 #: (the body template, :data:`pedenv.body.STANDING`); NaN where the cue uses none.
 KEYPOINT_HEIGHT_FRACTION = np.where(np.isfinite(KEYPOINT_FRACTION_STD), STANDING[:, 2], np.nan)
@@ -46,7 +46,7 @@ KEYPOINT_HEIGHT_FRACTION = np.where(np.isfinite(KEYPOINT_FRACTION_STD), STANDING
 #: foot, lifted up to ~0.15 (of two seen ankles only the lower, the stance foot, is used).
 LONE_ANKLE_FRACTION_STD = 0.025
 #: The ankles' share of body height (where the table's span starts).
-ANKLE_FRACTION = float(KEYPOINT_HEIGHT_FRACTION[K.LEFT_ANKLE])
+ANKLE_FRACTION = float(KEYPOINT_HEIGHT_FRACTION[KP.LEFT_ANKLE])
 #: Keypoints the height cue can use.
 HEIGHT_KEYPOINTS = np.flatnonzero(np.isfinite(KEYPOINT_HEIGHT_FRACTION))
 #: Columns of :data:`HEIGHT_KEYPOINTS` that are the ankles (left, right), and a mask of them.

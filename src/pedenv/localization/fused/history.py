@@ -14,12 +14,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.skeleton import NUM_KEYPOINTS
-from pedenv.skeleton import CocoKeypoint as K
+from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.tracking.table import ColumnGroup
 
 #: The keypoints whose triangulation places the person: shoulders and hips, the
 #: steadiest points of a walking body (arms and legs swing, the head turns).
-TORSO_KEYPOINTS = np.array([K.LEFT_SHOULDER, K.RIGHT_SHOULDER, K.LEFT_HIP, K.RIGHT_HIP])
+TORSO_KEYPOINTS = np.array([KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER, KP.LEFT_HIP, KP.RIGHT_HIP])
 #: Layout of a ray's least-squares terms: the upper triangle of ``I - d d^T`` (xx, xy,
 #: xz, yy, yz, zz) then ``(I - d d^T) o`` (3), d the ray, o the camera centre.
 NUM_TERMS = 9
