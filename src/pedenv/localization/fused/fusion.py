@@ -20,8 +20,10 @@ position, the fused covariance across the ray is floored at that cue's (the bear
 frame-to-frame and per-person parts each; without it two cues halve a sideways variance
 whose error they share (on the real KITTI frames: sideways sigma 3 cm, errors 2-9 cm).
 
-The 2x2 algebra is written out on the components ``(xx, xy, yy)`` of (N, C) arrays:
-on a few pedestrians a frame, stacking small matrices costs more than the arithmetic.
+The 2x2 algebra is written on the components ``(xx, xy, yy)`` of (N, C) arrays
+(:class:`~pedenv.localization.fused.cue.Sym2`): on a few pedestrians a frame, stacking
+small matrices costs more than the arithmetic. :class:`StackedCues` holds each cue's
+mean and covariance side by side; :func:`outvote` is the gate, :func:`combine` the fusion.
 """
 
 from __future__ import annotations
@@ -153,12 +155,11 @@ def gate_distances(x: np.ndarray, y: np.ndarray, total: Sym2, information: Sym2,
     information: (N, C) each used cue's, zero for the others. testable: (N, C) bool, the
     cue and another are used (elsewhere the result is meaningless).
     """
-    vx, vy = information.times(x, y)  # each cue's information times its mean
-    # the others' information and information-weighted mean (identity where none)
+    wx, wy = information.times(x, y)  # each cue's information times its mean
+    # the fusion of the others: its covariance (identity where there is none) and its mean
     others = (information.sum(keepdims=True) - information).where(testable, IDENTITY).inverse()
-    rx, ry = vx.sum(1, keepdims=True) - vx, vy.sum(1, keepdims=True) - vy
-    mx, my = others.times(rx, ry)
-    return (total + others).inverse().quadratic(x - mx, y - my)
+    others_x, others_y = others.times(wx.sum(1, keepdims=True) - wx, wy.sum(1, keepdims=True) - wy)
+    return (total + others).inverse().quadratic(x - others_x, y - others_y)
 
 
 def combine(use: np.ndarray, x: np.ndarray, y: np.ndarray, information: Sym2, cue_frame: Sym2):
@@ -170,8 +171,8 @@ def combine(use: np.ndarray, x: np.ndarray, y: np.ndarray, information: Sym2, cu
     """
     valid = use.any(axis=1)
     fused = information.sum().where(valid, IDENTITY).inverse()
-    vx, vy = information.times(x, y)
-    positions = np.column_stack(fused.times(vx.sum(1), vy.sum(1)))
+    wx, wy = information.times(x, y)  # each cue's information times its mean
+    positions = np.column_stack(fused.times(wx.sum(1), wy.sum(1)))
     frame = fused.sandwich(information.sandwich(cue_frame).sum())  # S (sum S_c^-1 F_c S_c^-1) S
     return positions, frame.matrices(), (fused - frame).matrices()
 
