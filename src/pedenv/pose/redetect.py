@@ -8,7 +8,7 @@ the pose network once per such track on an upscaled crop around the predicted bo
 (:func:`crop_pass`), keeps the one whole person there nearest the predicted box (and nearer
 it than any other track's), and merges them with the main detections by the skeleton-aware
 NMS (:func:`pedenv.pose.merge.merge_detections`), so no person appears twice.
-Settings: :class:`pedenv.config.RedetectConfig` (the ``fused`` preset turns it on).
+Settings: :class:`pedenv.pose.redetect_config.RedetectConfig` (the ``fused`` preset turns it on).
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from typing import Protocol
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.config import RedetectConfig
 from pedenv.pose.merge import merge_detections
 from pedenv.pose.multipass import cut_by_inner_edge, run_pass
 from pedenv.pose.postprocess import frame_image
+from pedenv.pose.redetect_config import RedetectConfig
 from pedenv.pose.tiling import STRIDE, Pass
 from pedenv.records import Detections, Frame
 
