@@ -151,7 +151,7 @@ class RedetectingPose:
         b = self.backend
         step = crop_pass(box, image_size, self.config)
         size = step.input_size if b.dynamic else b.input_size
-        dets = run_pass(b._infer, image, step, size, b.score_threshold, b.iou_threshold, b.max_detections)
+        dets = run_pass(b.infer, image, step, size, b.score_threshold, b.iou_threshold, b.max_detections)
         if not len(dets):
             return dets
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
@@ -174,6 +174,6 @@ def with_redetection(backend, model: TrackPredictor, config: RedetectConfig):
     if hasattr(backend, "attach_model"):
         backend.attach_model(model)
         return backend
-    if not config.enabled or not hasattr(backend, "_infer") or not hasattr(model, "predicted_boxes"):
+    if not config.enabled or not hasattr(backend, "infer") or not hasattr(model, "predicted_boxes"):
         return backend
     return RedetectingPose(backend, model, config)
