@@ -31,6 +31,7 @@ from pedenv.geometry import rotation_to_quaternion, rotation_z
 from pedenv.records import Frame, GroundTruth, Scene
 from pedenv.skeleton import COCO_BONES
 from pedenv.skeleton import CocoKeypoint as K
+from pedenv.validation import check_count
 
 log = logging.getLogger(__name__)
 
@@ -66,8 +67,7 @@ def write_nuscenes(scenes: Iterable[Scene], output_dir: str | Path, version: str
     ``human.pedestrian.adult``: box centre = position + half the height, size ``[w, l, h]``,
     yaw from the shoulders' line where the 3D skeleton is known, one instance per (scene, id).
     """
-    if not 1 <= jpeg_quality <= 100:
-        raise InputError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
+    check_count("jpeg_quality", jpeg_quality, 1, 100)
     root = Path(output_dir)
     tables: dict[str, list[dict]] = {name: [] for name in (
         "category", "attribute", "visibility", "instance", "sensor", "calibrated_sensor", "ego_pose",
