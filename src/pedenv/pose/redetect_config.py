@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from pedenv.errors import InputError
-from pedenv.validation import check_below, check_bool, check_count, check_number
+from pedenv.validation import check_below, check_fields, count, flag, number
 
 
 @dataclass(frozen=True)
@@ -44,30 +44,20 @@ class RedetectConfig:
         one-frame false positive is not chased.
     """
 
-    enabled: bool = False
-    crop_margin: float = 0.5
-    crop_scale: float = 2.0
-    min_crop_px: int = 128
-    max_crop_px: int = 960
-    max_input_px: int = 640
-    max_crops: int = 4
-    missed_iou: float = 0.3
-    match_distance: float = 0.6
-    match_height_ratio: float = 1.5
-    min_hits: int = 2
+    enabled: bool = flag(False)
+    crop_margin: float = number(0.5, 0.0, 2.0)
+    crop_scale: float = number(2.0, 0.25, 4.0)
+    min_crop_px: int = count(128, 32, 4096)
+    max_crop_px: int = count(960, 32, 4096)
+    max_input_px: int = count(640, 64, 1280)
+    max_crops: int = count(4, 0, 64)
+    missed_iou: float = number(0.3, 0.0, 1.0)
+    match_distance: float = number(0.6, 0.0, 2.0)
+    match_height_ratio: float = number(1.5, 1.0, 5.0)
+    min_hits: int = count(2, 1, 1000)
 
     def __post_init__(self) -> None:
-        check_bool("redetect.enabled", self.enabled)
-        check_number("redetect.crop_margin", self.crop_margin, 0.0, 2.0)
-        check_number("redetect.crop_scale", self.crop_scale, 0.25, 4.0)
-        check_count("redetect.min_crop_px", self.min_crop_px, 32, 4096)
-        check_count("redetect.max_crop_px", self.max_crop_px, 32, 4096)
-        check_count("redetect.max_input_px", self.max_input_px, 64, 1280)
-        check_count("redetect.max_crops", self.max_crops, 0, 64)
-        check_count("redetect.min_hits", self.min_hits, 1, 1000)
+        check_fields("redetect", self)
         check_below("redetect.min_crop_px", self.min_crop_px, "redetect.max_crop_px", self.max_crop_px, equal_ok=True)
         if self.max_input_px % 32:
             raise InputError(f"redetect.max_input_px must be a multiple of 32, got {self.max_input_px}")
-        check_number("redetect.missed_iou", self.missed_iou, 0.0, 1.0)
-        check_number("redetect.match_distance", self.match_distance, 0.0, 2.0)
-        check_number("redetect.match_height_ratio", self.match_height_ratio, 1.0, 5.0)
