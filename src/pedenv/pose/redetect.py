@@ -38,6 +38,27 @@ class TrackPredictor(Protocol):
     def predicted_boxes(self, frame: Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
+def searchable(predicted: np.ndarray, hits: np.ndarray, found: np.ndarray, image_size: tuple[int, int], *,
+               min_hits: int, min_height_px: float, missed_iou: float) -> np.ndarray:
+    """(T,) bool: the tracks worth searching for in a crop (here and in the ``stream`` mode).
+
+    predicted: (T, 4) px, the tracks' expected boxes; hits: (T,) detections so far; found: (N, 4)
+    px, the boxes detected in the frame; image_size: (height, width) px. A track is searchable
+    when at least :data:`MIN_VISIBLE_SHARE` of its box lies inside the image and at least
+    ``min_height_px`` of its height, it has at least ``min_hits`` hits, and no found box overlaps
+    it by more than ``missed_iou``.
+    """
+    h, w = image_size
+    clipped = np.clip(predicted, 0.0, [w, h, w, h])
+    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
+    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
+    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= min_height_px)
+    usable &= np.asarray(hits) >= min_hits
+    if len(found):
+        usable &= iou_matrix(predicted, np.asarray(found, float).reshape(-1, 4)).max(axis=1) <= missed_iou
+    return usable
+
+
 def missed_tracks(predicted: np.ndarray, hits: np.ndarray, detections: np.ndarray, image_size: tuple[int, int],
                   config: RedetectConfig) -> np.ndarray:
     """Rows of the tracks to search for, most-seen first, at most ``config.max_crops``.
@@ -51,14 +72,8 @@ def missed_tracks(predicted: np.ndarray, hits: np.ndarray, detections: np.ndarra
     predicted = np.asarray(predicted, float).reshape(-1, 4)
     if not len(predicted) or config.max_crops == 0:
         return np.zeros(0, np.int64)
-    h, w = image_size
-    clipped = np.clip(predicted, 0.0, [w, h, w, h])
-    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
-    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
-    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= MIN_BOX_HEIGHT_PX)
-    usable &= np.asarray(hits) >= config.min_hits
-    if len(detections):
-        usable &= iou_matrix(predicted, np.asarray(detections, float).reshape(-1, 4)).max(axis=1) <= config.missed_iou
+    usable = searchable(predicted, hits, detections, image_size, min_hits=config.min_hits,
+                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=config.missed_iou)
     rows = np.flatnonzero(usable)
     rows = rows[np.argsort(-np.asarray(hits)[rows], kind="stable")]
     return rows[: config.max_crops]
