@@ -10,6 +10,7 @@ front where the box placed the pedestrian, e.g. ``ground+height;triangulation:no
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,17 +45,20 @@ class CueSources:
     def spell(self) -> np.ndarray:
         """(N,) str, each estimate's ``sources`` text (module notes); each distinct
         combination of flags (a few a frame) is spelled once."""
-        flags = np.column_stack([self.boxed, self.used, self.outvoted, self.degenerate, self.reasons]).astype(np.int64)
-        distinct, inverse = np.unique(flags, axis=0, return_inverse=True)
-        c, texts = len(self.names), []
-        for row in distinct.tolist():  # boxed, then C flags each of used, outvoted, degenerate, reasons
-            used, outvoted, degenerate, reasons = (row[1 + i * c:1 + (i + 1) * c] for i in range(4))
-            texts.append(spell_one(self.names, bool(row[0]), used, outvoted, degenerate, reasons))
-        return np.array(texts)[inverse.reshape(-1)]
+        # one row per estimate: boxed, then C flags each of used, outvoted, degenerate, reasons
+        flags = np.column_stack([self.boxed, self.used, self.outvoted, self.degenerate, self.reasons])
+        rows = [tuple(row) for row in flags.astype(np.int64).tolist()]
+        texts = {row: self._spell_row(row) for row in set(rows)}
+        return np.array([texts[row] for row in rows])
+
+    def _spell_row(self, row: tuple[int, ...]) -> str:
+        c = len(self.names)
+        used, outvoted, degenerate, reasons = (row[1 + i * c:1 + (i + 1) * c] for i in range(4))
+        return spell_one(self.names, bool(row[0]), used, outvoted, degenerate, reasons)
 
 
-def spell_one(names: tuple[str, ...], boxed: bool, used: list, outvoted: list, degenerate: list,
-              reasons: list) -> str:
+def spell_one(names: tuple[str, ...], boxed: bool, used: Sequence[int], outvoted: Sequence[int],
+              degenerate: Sequence[int], reasons: Sequence[int]) -> str:
     """One estimate's ``sources`` text from its flags: one entry per cue in each list."""
     head = "+".join(name for name, u in zip(names, used) if u)
     why = [left_out_reason(*flags) for flags in zip(used, outvoted, degenerate, reasons)]
@@ -62,9 +66,9 @@ def spell_one(names: tuple[str, ...], boxed: bool, used: list, outvoted: list, d
     return ("box" if boxed else "") + head + tail
 
 
-def left_out_reason(used: bool, outvoted: bool, degenerate: bool, reason: int) -> str:
-    """Why a cue is not in an estimate: ``outvoted`` by the gate, ``degenerate`` numbers, else
-    its own reason; empty where it was used (or declined without a reason)."""
+def left_out_reason(used: int, outvoted: int, degenerate: int, reason: int) -> str:
+    """Why a cue is not in an estimate (flags 0 or 1, a reason code): ``outvoted`` by the gate,
+    ``degenerate`` numbers, else its own reason; empty where it was used (or declined without one)."""
     if used:
         return ""
     if outvoted:
