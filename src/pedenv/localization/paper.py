@@ -112,7 +112,7 @@ def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarra
 
 
 def refine_distance(distances: np.ndarray, directions: np.ndarray, origin: np.ndarray, pixel_heights: np.ndarray,
-                    camera: Reprojection, config: PaperConfig, lambdas=None) -> np.ndarray:
+                    camera: Reprojection, config: PaperConfig, lambdas: np.ndarray | None = None) -> np.ndarray:
     """Rescale distances so the re-projected person height meets the skeleton's (Eq. 7).
 
     distances: (N,) metres along ``directions`` (N, 3) from ``origin`` (3,).

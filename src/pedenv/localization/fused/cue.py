@@ -123,11 +123,11 @@ class Sym2:
         return Sym2(self.xx.sum(axis, keepdims=keepdims), self.xy.sum(axis, keepdims=keepdims),
                     self.yy.sum(axis, keepdims=keepdims))
 
-    def times(self, x, y) -> tuple[Any, Any]:
+    def times(self, x: Any, y: Any) -> tuple[Any, Any]:
         """The matrices times the vectors ``(x, y)``: components ``(x', y')``."""
         return self.xx * x + self.xy * y, self.xy * x + self.yy * y
 
-    def quadratic(self, x, y):
+    def quadratic(self, x: Any, y: Any) -> Any:
         """The quadratic form ``v^T M v`` of the vectors ``v = (x, y)``."""
         return self.xx * x * x + 2.0 * self.xy * x * y + self.yy * y * y
 

@@ -162,7 +162,8 @@ def gate_distances(x: np.ndarray, y: np.ndarray, total: Sym2, information: Sym2,
     return (total + others).inverse().quadratic(x - others_x, y - others_y)
 
 
-def combine(use: np.ndarray, x: np.ndarray, y: np.ndarray, information: Sym2, cue_frame: Sym2):
+def combine(use: np.ndarray, x: np.ndarray, y: np.ndarray, information: Sym2,
+            cue_frame: Sym2) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The information-weighted mean of the used cues and its covariance's two parts.
 
     use: (N, C) bool. x, y: (N, C) means, metres. information: (N, C) the used cues', zero

@@ -133,7 +133,7 @@ def triangulate(now: RaysNow, start: np.ndarray, has_start: np.ndarray, past: Hi
 
 
 def ray_weights(now: RaysNow, start: np.ndarray, past: HistoryView, candidate: np.ndarray, start_dots: np.ndarray,
-                age: np.ndarray, config: FusedConfig):
+                age: np.ndarray, config: FusedConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The past rays that pass the outlier test and the least-squares weights.
 
     candidate: (N, K, L) bool, past rays with baseline and parallax. start_dots: (N, K, L)
