@@ -8,6 +8,7 @@ from pathlib import Path
 
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.apps.evaluation_outputs import write_outputs
+from pedenv.apps.options import MethodOptions, OutputFlags, OutputOptions
 from pedenv.config import Config
 from pedenv.datasets.memory import MemoryDataset
 from pedenv.errors import InputError
@@ -99,6 +100,20 @@ def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = N
         {m: r.metrics.error_by_distance for m, r in result.extras["methods"].items()},
         output_dir / "error_by_distance.png", title="Absolute error over distance (synthetic)")
     return result
+
+
+def demo_command(*, output: OutputOptions, flags: OutputFlags, method: MethodOptions, seed: int = 0,
+                 terrain: bool = False, pose_backend: str = "detector-model") -> EvaluationResult:
+    """``pedenv demo``: :func:`run_demo` into ``output.folder`` with the command's outputs (``flags``,
+    the bird's-eye video of :data:`VIDEO_SCENE`), after the outputs and the folder are checked."""
+    from pedenv.outputs.output_dir import prepare_output_dir
+
+    config = method.load()
+    extra = flags.extra_outputs(output, matches=True, video_scene=VIDEO_SCENE)
+    extra.check()
+    prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv demo")
+    return run_demo(output.folder, seed=seed, config=config, terrain=terrain, pose_backend=pose_backend,
+                    extra_outputs=extra)
 
 
 def _demo_order(method: str) -> int:
