@@ -52,7 +52,8 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     InputError; what was computed before it stays on disk. ``progress(done, total)`` is called
     per frame written.
     ``output.folder`` must be empty or new, unless ``output.overwrite`` (then an earlier pedenv run there is
-    deleted once the inputs are checked: :func:`pedenv.outputs.output_dir.prepare_output_dir`).
+    deleted once every frame's size and ego pose are checked:
+    :func:`pedenv.outputs.output_dir.prepare_output_dir`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``pose.detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
@@ -103,11 +104,16 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     source.check_realtime(pipe.realtime)
     rec = source.load()
     backend = backend or _make_backend(pose, cfg, rec)
-    if hasattr(rec, "check"):  # a folder or video recording: every frame's size and ego pose, before an
-        rec.check()  # earlier run is replaced (a bag is read once, as it runs)
+    if hasattr(rec, "check") and _holds_files(Path(output.folder)):  # an earlier run there: every frame's size
+        rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
+        # the frames before a bad one are run and stay on disk
     out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     return rec, backend, out
+
+
+def _holds_files(folder: Path) -> bool:
+    return folder.is_dir() and any(folder.iterdir())
 
 
 def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording) -> PoseBackend:
