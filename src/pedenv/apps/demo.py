@@ -116,6 +116,24 @@ def demo_command(*, output: OutputOptions, flags: OutputFlags, method: MethodOpt
                     extra_outputs=extra)
 
 
+def simulate_command(*, output: OutputOptions, scenes: int | None = None, seed: int = 0, fmt: str = "synthetic",
+                     terrain: bool = False, frame_rate: float | None = None) -> SceneCounter:
+    """``pedenv simulate``: the built-in scenes written to ``output.folder`` in format ``fmt``
+    (:data:`pedenv.datasets.SCENE_WRITERS`), each as it is made, at ``frame_rate`` Hz (default 10,
+    12 for nuscenes); the format and the options are checked before the folder is prepared.
+    Returns what was written, counted."""
+    from pedenv.datasets import scene_writer
+    from pedenv.outputs.output_dir import prepare_output_dir
+
+    write = scene_writer(fmt)
+    rate = frame_rate if frame_rate is not None else (12.0 if fmt == "nuscenes" else 10.0)
+    stream = iter_builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
+    prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv simulate")
+    counter = SceneCounter()
+    write((counter.add(scene) for scene in stream), Path(output.folder))
+    return counter
+
+
 def _demo_order(method: str) -> int:
     return DEMO_METHODS.index(method) if method in DEMO_METHODS else len(DEMO_METHODS)
 

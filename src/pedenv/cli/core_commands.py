@@ -84,16 +84,11 @@ def simulate(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Write the built-in synthetic scenes to disk in one of the supported formats, each as it is made."""
-    from pedenv.apps.demo import SceneCounter, iter_builtin_scenes
-    from pedenv.datasets import scene_writer
-    from pedenv.outputs.output_dir import prepare_output_dir
+    from pedenv.apps.demo import simulate_command
+    from pedenv.apps.options import OutputOptions
 
-    write = scene_writer(fmt)
-    rate = frame_rate if frame_rate is not None else (12.0 if fmt == "nuscenes" else 10.0)
-    stream = iter_builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
-    prepare_output_dir(output, overwrite=overwrite, command="pedenv simulate")
-    counter = SceneCounter()
-    write((counter.add(scene) for scene in stream), output)
+    counter = simulate_command(output=OutputOptions(output, overwrite=overwrite), scenes=scenes, seed=seed, fmt=fmt,
+                               terrain=terrain, frame_rate=frame_rate)
     _out.print(f"wrote {counter.summary()} as {fmt} to {output}", highlight=False)
 
 
@@ -190,28 +185,10 @@ def bench(
     device: Device = "auto",
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
-    from pedenv.apps.bench import bench_core, format_bench
-    from pedenv.errors import InputError
+    from pedenv.apps.bench_command import bench_tables
 
-    rows = bench_core(n_frames=frames)
-    pose_rows = []
-    if pose:
-        from pedenv.apps.bench import bench_end_to_end
-
-        try:
-            pose_rows = bench_end_to_end(device=device)
-        except (ImportError, InputError) as exc:
-            console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
-    _out.print(format_bench(rows, pose_rows))
-    providers = sorted({r["provider"] for r in pose_rows if r.get("provider")})
-    if providers:
-        _out.print(f"pose networks ran on: {', '.join(providers)} (--device {device})", highlight=False)
-    from pedenv.apps.bench import format_behaviour_cost
-    from pedenv.config import Config
-
-    _out.print(format_behaviour_cost(bench_core(n_frames=frames, config=Config())))
-    if pose and pose_rows:
-        from pedenv.apps.bench import bench_detection_modes, format_detection_modes
-
-        root = samples if samples is not None and samples.is_dir() else None
-        _out.print(format_detection_modes(bench_detection_modes(root, device=device)))
+    for output in bench_tables(frames=frames, pose=pose, samples=samples, device=device):
+        if output.note:
+            console.print(output.item, highlight=False, markup=False)
+        else:
+            _out.print(output.item, highlight=False)
