@@ -100,7 +100,7 @@ def test_a_huge_message(kitti, tmp_path):
         _frames(bag, BagOptions(max_message_bytes=10))
 
 
-def _rewrite(bag, out, keep=lambda topic: True, change=lambda topic, msg: msg):
+def _rewrite(bag, out, keep=lambda topic: True, change=lambda topic, msg: msg):  # noqa: ARG005 - keep all, change none
     """A copy of the rosbag2 ``bag`` with only the topics ``keep`` accepts, each message through ``change``."""
     from rosbags.rosbag2 import Reader, Writer
     from rosbags.typesys import Stores, get_typestore
