@@ -74,6 +74,10 @@ class McapWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._context = foxglove.Context()
         self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=self._context)
+        self._open_channels()
+
+    def _open_channels(self) -> None:
+        """The topics above in ``self._context`` (a file's or a live server's), and a fresh scene."""
         ctx = self._context
         self._tf = fc.FrameTransformsChannel("/tf", context=ctx)
         self._peds = fc.SceneUpdateChannel("/pedestrians", context=ctx)
