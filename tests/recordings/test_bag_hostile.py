@@ -4,12 +4,11 @@ import shutil
 import struct
 
 import pytest
-from bag_samples import BagForm, _Messages, quaternion_calibration, write_bag
+from bag_samples import BagForm, _Messages, kitti_recording, write_bag
 
 from pedenv.errors import InputError
 from pedenv.recordings.bag import load_bag_recording
 from pedenv.recordings.bag_topics import BagOptions
-from pedenv.recordings.footage_writer import write_kitti_recording
 
 from shared_paths import REAL_SAMPLES
 
@@ -18,10 +17,7 @@ pytest.importorskip("rosbags", reason="the ros extra")
 
 @pytest.fixture(scope="module")
 def kitti(tmp_path_factory):
-    rec = write_kitti_recording(REAL_SAMPLES / "kitti" / "tracking_mini" / "training", "0016",
-                                tmp_path_factory.mktemp("kitti") / "rec")
-    quaternion_calibration(rec)
-    return rec
+    return kitti_recording(tmp_path_factory.mktemp("kitti") / "rec", REAL_SAMPLES)
 
 
 def _frames(path, options=None) -> int:
