@@ -199,7 +199,7 @@ def test_frame_outside_the_poses_keeps_the_frames_before(tmp_path):
     (lambda t: {"images": t / "nothing"}, "image folder not found"),
     (lambda t: {"video": t / "none.mp4"}, "none.mp4: video file not found"),
     (lambda t: {"video": _write(t / "junk.avi", "not a video")}, "junk.avi: cannot open the video"),
-    (lambda t: {}, "exactly one of"),
+    (lambda t: {}, "exactly one of"),  # noqa: ARG005 - every setup takes tmp_path
 ])
 def test_recording_source_errors(tmp_path, setup, message):
     with pytest.raises(InputError, match=message):
