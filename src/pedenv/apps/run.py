@@ -213,7 +213,7 @@ class _Outputs:
             write_image(self.out / "overlays" / f"{frame.index:06d}.png", drawn)
         self.last = (state, frame)
 
-    def done(self, result) -> None:
+    def done(self, result) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
         self.summary["frames_done"] += 1
         if self.progress is not None:
             self.progress(self.summary["frames_done"], self.summary["frames_total"])
