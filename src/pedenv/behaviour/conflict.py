@@ -73,21 +73,20 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     plus half width, from the ego now) gets probability 0 without the per-step computation.
     """
     n, k = positions.shape[:2]
-    px, py = positions[..., 0], positions[..., 1]
-    cxx, cxy, cyy = covariances[..., 0, 0], covariances[..., 0, 1], covariances[..., 1, 1]
-    sx, sy = px - path.xy[:, 0], py - path.xy[:, 1]
-    dist = np.hypot(sx, sy)
-    at = np.arange(n) * k + dist.argmin(axis=1)  # the closest step, as a flat index
-    j = at % k if n else at
-    closest = dist.ravel()[at]
-    ux, uy = sx.ravel()[at] / np.maximum(closest, 1e-9), sy.ravel()[at] / np.maximum(closest, 1e-9)
-    closest_var = (ux * ux * cxx.ravel()[at] + 2.0 * ux * uy * cxy.ravel()[at] + uy * uy * cyy.ravel()[at]
-                   + path.lateral_std[j] ** 2)
+    sep = positions - path.xy
+    j = np.hypot(sep[..., 0], sep[..., 1]).argmin(axis=1)  # the closest step (reductions over a last axis
+    at = np.arange(n) * k + j                              # of 2 are slow: components are summed by hand)
+    near_sep, near_cov = sep.reshape(n * k, 2)[at], covariances.reshape(n * k, 2, 2)[at]
+    closest = np.hypot(near_sep[:, 0], near_sep[:, 1])
+    across = (near_sep[:, None, :] @ near_cov @ near_sep[:, :, None]).reshape(n)  # u C u times closest^2
+    closest_var = across / np.maximum(closest, 1e-9) ** 2 + path.lateral_std[j] ** 2
     horizon = path.times[-1]
     prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
     reach = path.length + front_m + half_width_m
-    spread_max = np.sqrt(np.maximum((cxx + cyy).max(axis=1), 0.0) + path.lateral_std[-1] ** 2)
-    near = np.hypot(px - path.xy[0, 0], py - path.xy[0, 1]).min(axis=1) < reach + GATE_SIGMAS * spread_max
+    spread_max = np.sqrt(np.maximum((covariances[..., 0, 0] + covariances[..., 1, 1]).max(axis=1), 0.0)
+                         + path.lateral_std[-1] ** 2)
+    e0 = path.xy[0]
+    near = np.hypot(positions[..., 0] - e0[0], positions[..., 1] - e0[1]).min(axis=1) < reach + GATE_SIGMAS * spread_max
     if near.all():
         prob, mean, spread = _entry(path, positions, covariances, half_width_m, path.length + front_m)
     elif near.any():
@@ -103,18 +102,24 @@ GATE_SIGMAS = 6.0
 def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
            length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s."""
+    m, k = positions.shape[:2]
     s, d, nx, ny = _coordinates(path, positions[..., 0], positions[..., 1])
-    var = (nx * nx * covariances[..., 0, 0] + 2.0 * nx * ny * covariances[..., 0, 1]
-           + ny * ny * covariances[..., 1, 1] + path.lateral_std**2)
-    sd = np.sqrt(np.maximum(var, 1e-8))
+    if np.ndim(nx) == 0:  # a straight path: one normal
+        var = covariances.reshape(m, k, 4) @ np.array([nx * nx, nx * ny, nx * ny, ny * ny])
+    else:
+        var = (nx * nx * covariances[..., 0, 0] + 2.0 * nx * ny * covariances[..., 0, 1]
+               + ny * ny * covariances[..., 1, 1])
+    sd = np.sqrt(np.maximum(var + path.lateral_std**2, 1e-8))
     inside = ndtr((half_width_m - d) / sd) - ndtr((-half_width_m - d) / sd)
-    inside[~((s >= 0.0) & (s <= length))] = 0.0  # behind the ego or beyond the corridor
+    inside *= (s >= 0.0) & (s <= length)  # behind the ego or beyond the corridor: 0
     running = np.maximum.accumulate(inside, axis=1)
     prob = np.minimum(np.maximum(running[:, -1], 0.0), 1.0)
+    some = prob > 1e-3
+    t = path.times
+    if not some.any():
+        return prob, np.full(m, t[-1]), np.zeros(m)
     rise = running.copy()
     rise[:, 1:] -= running[:, :-1]
-    t = path.times
-    some = prob > 1e-3
     mean = np.where(some, (rise @ t) / np.maximum(prob, 1e-12), t[-1])
     spread = np.sqrt(np.maximum((rise * (t - mean[:, None]) ** 2).sum(1) / np.maximum(prob, 1e-12), 0.0))
     return prob, mean, np.where(some, spread, 0.0)

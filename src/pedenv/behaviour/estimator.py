@@ -16,9 +16,9 @@ from pedenv.behaviour.config import BehaviourConfig
 from pedenv.behaviour.conflict import corridor_conflict
 from pedenv.behaviour.ego_path import EgoHistory, EgoPath, predict_ego_path
 from pedenv.behaviour.motion_state import velocity_stats
-from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, walking_likelihood
+from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
 from pedenv.behaviour.prediction import PathPredictor
-from pedenv.geometry import pixel_rays
+from pedenv.geometry import inverse_intrinsics
 from pedenv.records import Frame
 from pedenv.state import Behaviour, Pedestrians
 
@@ -82,6 +82,14 @@ class BehaviourEstimator:
         self.path_times = np.concatenate([self.conflict_times, self.horizons])  # one prediction for both
         self.predictor = PathPredictor(self.path_times, acceleration_std)
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
+        self._intrinsics: tuple[bytes, np.ndarray] = (b"", np.eye(3))  # the last camera's and their inverse
+
+    def _inverse_intrinsics(self, frame: Frame) -> np.ndarray:
+        """The inverse of the frame's camera matrix, computed again only when it changes."""
+        key = frame.camera.intrinsics.tobytes()
+        if key != self._intrinsics[0]:
+            self._intrinsics = (key, inverse_intrinsics(frame.camera.intrinsics))
+        return self._intrinsics[1]
 
     def reset(self) -> None:
         self.store.clear()
@@ -116,7 +124,7 @@ class BehaviourEstimator:
         rows = store.rows(peds.track_ids, t)
         p = heading_filter.spread(store.p[rows], t - store.time[rows], np.radians(cfg.heading_random_walk_deg), g)
         cam_to_world = frame.cam_to_world
-        rays = pixel_rays(peds.keypoints[:, CUE_KEYPOINTS], frame.camera.intrinsics, cam_to_world)
+        rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
         cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
                             float(frame.camera.intrinsics[0, 0]), cfg)
         cos_a, velocity = cue.toward @ g.cos_sin, velocity_stats(x[:, 1::2], P[:, 1::2, 1::2])

@@ -53,7 +53,7 @@ class SkeletonCue:
 #: left shoulder and hip, the right shoulder and hip, the nose and the left and right ear.
 CUE_KEYPOINTS = np.array([K.LEFT_SHOULDER, K.LEFT_HIP, K.RIGHT_SHOULDER, K.RIGHT_HIP, K.NOSE, K.LEFT_EAR,
                           K.RIGHT_EAR])
-_FACE = np.array([K.NOSE, K.LEFT_EYE, K.RIGHT_EYE])
+_ONES3 = np.ones(3)
 _HALF_WIDTHS = np.array([SHOULDER_HALF_WIDTH, HIP_HALF_WIDTH])
 _AXES = (np.array([[0, 1], [1, 0]]), np.array([[-1.0, -1.0], [-1.0, 1.0]]))  # toward -> [bearing, right] columns
 
@@ -88,12 +88,14 @@ def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarra
 
 def cue_from_rays(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarray, origin: np.ndarray,
                   focal_px: float, config: BehaviourConfig) -> SkeletonCue:
-    """:func:`skeleton_cue` from the unit viewing rays (N, 7, 3), world frame, of the
-    :data:`CUE_KEYPOINTS` only (the others are not needed); confidences (N, 17) of all."""
+    """:func:`skeleton_cue` from the viewing rays (N, 7, 3), world frame, of the
+    :data:`CUE_KEYPOINTS` only (the others are not needed; the rays need not be unit vectors);
+    confidences (N, 17) of all keypoints."""
     toward, dist = _toward(positions, origin)
     rng = np.maximum(dist, 0.5)
     # each ray's component along the bearing (away from the camera) and to the right
-    proj = rays[..., :2] @ (toward[:, _AXES[0]] * _AXES[1])  # (N, 7, 2)
+    length = np.sqrt((rays * rays) @ _ONES3)
+    proj = (rays[..., :2] @ (toward[:, _AXES[0]] * _AXES[1])) / length[..., None]  # (N, 7, 2)
     along = proj[..., 0]
     # the sideways offset (metres, N x 7) where the ray meets the person's range, less the camera's
     # own (which cancels in every difference taken below)
@@ -104,12 +106,14 @@ def cue_from_rays(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarr
     both = ok[:, 0:2] & ok[:, 2:4]
     ratios = np.where(both, (lateral[:, 0:2] - lateral[:, 2:4]) / width_m, 0.0)
     weights = np.where(both, 1.0 / (config.width_ratio_std**2 + 2.0 * (pixel_m[:, None] / width_m) ** 2), 0.0)
-    w = weights.sum(axis=1)
+    w = weights[:, 0] + weights[:, 1]  # (a reduction over a last axis of 2 is slow)
     width_ok = w > 0
-    width = np.minimum(np.maximum((ratios * weights).sum(axis=1) / np.maximum(w, 1e-12), -1.2), 1.2)
+    weighted = ratios * weights
+    width = np.minimum(np.maximum((weighted[:, 0] + weighted[:, 1]) / np.maximum(w, 1e-12), -1.2), 1.2)
     width_std = np.where(width_ok, 1.0 / np.sqrt(np.maximum(w, 1e-12)), 1.0)
     face, face_std, face_ok = _face_offset(lateral, ok, pixel_m, config)
-    face_seen = np.minimum(np.fmax(confidences[:, _FACE].min(axis=1), 0.0), 1.0)  # NaN -> 0
+    seen = np.minimum(np.minimum(confidences[:, K.NOSE], confidences[:, K.LEFT_EYE]), confidences[:, K.RIGHT_EYE])
+    face_seen = np.minimum(np.fmax(seen, 0.0), 1.0)  # NaN -> 0
     return SkeletonCue(toward, toward[:, ::-1] * _AXES[1][1], width, width_std, width_ok, face, face_std, face_ok,
                        face_seen)
 
@@ -127,6 +131,14 @@ def _face_offset(lateral: np.ndarray, ok: np.ndarray, pixel_m: np.ndarray,
     face = np.where(face_ok, np.minimum(np.maximum((lateral[:, 4] - mid) / full, -1.5), 1.5), 0.0)
     std = np.sqrt(config.face_offset_std**2 + 1.5 * (pixel_m / full) ** 2)
     return face, std, face_ok
+
+
+def keypoint_rays(keypoints: np.ndarray, inverse_intrinsics: np.ndarray, cam_to_world: np.ndarray) -> np.ndarray:
+    """Viewing rays (N, J, 3), world frame, not of unit length, of pixels (N, J, 2) (the camera's
+    inverse intrinsics (3, 3), its (4, 4) camera-to-world transform): :func:`pedenv.geometry.pixel_rays`
+    without the normalisation :func:`cue_from_rays` does itself."""
+    m = cam_to_world[:3, :3] @ inverse_intrinsics
+    return keypoints @ m[:, :2].T + m[:, 2]
 
 
 def skeleton_likelihood(cue: SkeletonCue, cells: np.ndarray, config: BehaviourConfig) -> np.ndarray:
