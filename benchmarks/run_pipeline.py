@@ -16,7 +16,7 @@ before the clock starts):
    PNG per frame, or ``--video-out``), wall time from the call to its return;
 3. with ``--realtime``: the run once more at the recording's own rate: frames done and dropped.
 
-The network's time is the backend's session runs (``_infer`` wrapped here, so the same
+The network's time is the backend's session runs (``infer`` wrapped here, so the same
 script times main's serial loop: ``PYTHONPATH=/path/to/main/src``); ``ratio`` is run ms per
 frame over the network's ms per frame in the same run, and over the network-alone ms per frame.
 Timings depend on the load: it is printed (1-minute load average before and after).
@@ -76,11 +76,11 @@ def write_recording(video: Path, out: Path, frames: int, size: tuple[int, int] |
 
 
 class NetworkClock:
-    """Wraps a backend's ``_infer`` (its session runs) to add up their seconds and count them."""
+    """Wraps a backend's ``infer`` (its session runs) to add up their seconds and count them."""
 
     def __init__(self, backend) -> None:
         self.seconds, self.runs = 0.0, 0
-        infer = backend._infer
+        infer = backend.infer
 
         def timed(tensor):
             start = time.perf_counter()
@@ -90,7 +90,7 @@ class NetworkClock:
                 self.seconds += time.perf_counter() - start
                 self.runs += 1
 
-        backend._infer = timed
+        backend.infer = timed
 
     def reset(self) -> None:
         self.seconds, self.runs = 0.0, 0

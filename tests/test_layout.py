@@ -96,3 +96,26 @@ def test_module_map_matches_the_tree():
              and (p / "__init__.py").exists()}
     assert sorted(tree - named) == []
     assert sorted(named - tree) == []
+
+
+def package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """Sub-package (or top-level module) -> those it imports: ``pedenv.pose.redetect`` counts as
+    ``pose``, ``pedenv.config`` as ``config``; the package root ``pedenv`` itself is left out."""
+    def part(module: str) -> str | None:
+        names = module.split(".")
+        return names[1] if len(names) > 1 else None
+
+    packages: dict[str, set[str]] = {}
+    for module, targets in graph.items():
+        source = part(module)
+        if source is not None:
+            packages.setdefault(source, set()).update(t for t in map(part, targets) if t not in (None, source))
+    return packages
+
+
+def test_no_sub_package_imports_one_that_imports_it_back():
+    """Not only modules: the sub-packages (and top-level modules) form no cycle either, so every
+    arrow between them runs one way (``config`` takes its sections from ``pose``, never back)."""
+    packages = package_graph(import_graph())
+    assert "pose" in packages["config"]
+    assert cycles(packages) == []

@@ -23,9 +23,10 @@ from pedenv.config_position import FUSED_CUES, INITIAL_ESTIMATES, FusedConfig, P
 from pedenv.config_tracking import KalmanConfig, TrackingConfig
 from pedenv.errors import InputError
 from pedenv.pose.merge import MergeConfig
+from pedenv.pose.redetect_config import RedetectConfig
 from pedenv.pose.tiling import DetectionConfig
 from pedenv.structured_text import load_json
-from pedenv.validation import check_below, check_bool, check_count, check_number, shown
+from pedenv.validation import shown
 
 __all__ = ["DEFAULT_METHOD", "FUSED_CUES", "INITIAL_ESTIMATES", "METHOD_PRESETS", "SECTIONS", "Config",
            "BehaviourConfig", "DetectionConfig", "FusedConfig", "KalmanConfig", "MergeConfig", "PaperConfig",
@@ -48,70 +49,6 @@ METHOD_PRESETS: dict[str, dict[str, dict]] = {
                            "ground_gate": 4.0, "memory_s": 2.0},
               "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}, "behaviour": {"enabled": True}},
 }
-
-
-@dataclass(frozen=True)
-class RedetectConfig:
-    """Re-detection of missed tracks in high-resolution crops (``pedenv.pose.redetect``).
-
-    Beyond the paper, off by default; the ``fused`` preset turns it on. Before the model
-    takes a frame, every live track whose predicted box overlaps no detection of the main
-    pass is searched for again: the pose network runs on an upscaled crop around the
-    predicted box, and the person found there is merged with the frame's detections by the
-    skeleton-aware NMS (``pedenv.pose.merge``), so nobody appears twice. Needs the ``onnx``
-    backend; each crop is one extra network pass.
-
-    enabled: run the re-detection.
-    crop_margin: context added on every side of the predicted box, as a share of its height
-        (0..2). Raising it tolerates worse predictions, with fewer input pixels per person.
-    crop_scale: crop pixels -> network input pixels (0.25..4; 2 = twice the native size),
-        lowered where the input would exceed ``max_input_px``. Raising it finds smaller people.
-    min_crop_px, max_crop_px: each side of the crop region is clamped to this range, image
-        pixels (32..4096); a tiny box still gets context, a huge one a bounded crop.
-    max_input_px: the longest side of a crop's network input, pixels (multiple of 32,
-        64..1280). Raising it keeps the scale for larger people, at more cost per crop.
-    max_crops: at most this many crops per frame (0..64); the tracks seen most often go
-        first. Bounds the extra cost per frame.
-    missed_iou: a track whose predicted box overlaps every detection by at most this IoU
-        (0..1) counts as missed. Raising it searches more tracks.
-    match_distance: a whole person found in a crop re-detects the track when their box
-        centre lies within this many predicted box heights of the predicted box's centre
-        (0..2); the nearest is kept, the rest of the crop ignored (people the main pass found
-        are merged away in any case). Raising it tolerates worse predictions (frames far
-        apart, a turning walker), with more chance of taking a neighbour.
-    match_height_ratio: and when their box height lies within this factor of the predicted
-        box's (1..5). Lowering it refuses more re-detections of another size.
-    min_hits: only tracks detected at least this many times are searched (1..1000), so a
-        one-frame false positive is not chased.
-    """
-
-    enabled: bool = False
-    crop_margin: float = 0.5
-    crop_scale: float = 2.0
-    min_crop_px: int = 128
-    max_crop_px: int = 960
-    max_input_px: int = 640
-    max_crops: int = 4
-    missed_iou: float = 0.3
-    match_distance: float = 0.6
-    match_height_ratio: float = 1.5
-    min_hits: int = 2
-
-    def __post_init__(self) -> None:
-        check_bool("redetect.enabled", self.enabled)
-        check_number("redetect.crop_margin", self.crop_margin, 0.0, 2.0)
-        check_number("redetect.crop_scale", self.crop_scale, 0.25, 4.0)
-        check_count("redetect.min_crop_px", self.min_crop_px, 32, 4096)
-        check_count("redetect.max_crop_px", self.max_crop_px, 32, 4096)
-        check_count("redetect.max_input_px", self.max_input_px, 64, 1280)
-        check_count("redetect.max_crops", self.max_crops, 0, 64)
-        check_count("redetect.min_hits", self.min_hits, 1, 1000)
-        check_below("redetect.min_crop_px", self.min_crop_px, "redetect.max_crop_px", self.max_crop_px, equal_ok=True)
-        if self.max_input_px % 32:
-            raise InputError(f"redetect.max_input_px must be a multiple of 32, got {self.max_input_px}")
-        check_number("redetect.missed_iou", self.missed_iou, 0.0, 1.0)
-        check_number("redetect.match_distance", self.match_distance, 0.0, 2.0)
-        check_number("redetect.match_height_ratio", self.match_height_ratio, 1.0, 5.0)
 
 
 @dataclass(frozen=True)

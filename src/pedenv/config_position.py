@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from pedenv.validation import check_bool, check_choice, check_count, check_number, check_sequence
+from pedenv.validation import check_choice, check_fields, check_sequence, choice, count, flag, number
 
 #: Most refinement iterations per frame (``paper.refinement_steps``).
 MAX_REFINEMENT_STEPS = 200
@@ -53,28 +53,19 @@ class PaperConfig:
     measurement_std_rel [0, 10]; refine true or false.
     """
 
-    low_confidence_fraction: float = 0.3
-    initial_estimate: str = "all-keypoints"
-    refine: bool = True
-    person_height_m: float = 1.7
-    refinement_steps: int = 15
-    refinement_lambda_offset: float = 5.0
-    min_parallax_rad: float = 1e-6
-    max_distance_m: float = 500.0
-    measurement_std_m: float = 0.5
-    measurement_std_rel: float = 0.1
+    low_confidence_fraction: float = number(0.3, 0.0, 1.0, high_open=True)
+    initial_estimate: str = choice("all-keypoints", INITIAL_ESTIMATES)
+    refine: bool = flag(True)
+    person_height_m: float = number(1.7, 0.3, 2.5)
+    refinement_steps: int = count(15, 0, MAX_REFINEMENT_STEPS)
+    refinement_lambda_offset: float = number(5.0, 0.0, 1000.0, low_open=True)
+    min_parallax_rad: float = number(1e-6, 0.0, 0.1)
+    max_distance_m: float = number(500.0, 1.0, 10000.0)
+    measurement_std_m: float = number(0.5, 0.0, 100.0, low_open=True)
+    measurement_std_rel: float = number(0.1, 0.0, 10.0)
 
     def __post_init__(self) -> None:
-        check_number("paper.low_confidence_fraction", self.low_confidence_fraction, 0.0, 1.0, high_open=True)
-        check_choice("paper.initial_estimate", self.initial_estimate, INITIAL_ESTIMATES)
-        check_bool("paper.refine", self.refine)
-        check_number("paper.person_height_m", self.person_height_m, 0.3, 2.5)
-        check_count("paper.refinement_steps", self.refinement_steps, 0, MAX_REFINEMENT_STEPS)
-        check_number("paper.refinement_lambda_offset", self.refinement_lambda_offset, 0.0, 1000.0, low_open=True)
-        check_number("paper.min_parallax_rad", self.min_parallax_rad, 0.0, 0.1)
-        check_number("paper.max_distance_m", self.max_distance_m, 1.0, 10000.0)
-        check_number("paper.measurement_std_m", self.measurement_std_m, 0.0, 100.0, low_open=True)
-        check_number("paper.measurement_std_rel", self.measurement_std_rel, 0.0, 10.0)
+        check_fields("paper", self)
 
 
 FUSED_CUES = ("ground", "triangulation", "height")
@@ -180,27 +171,27 @@ class FusedConfig:
     """
 
     cues: tuple[str, ...] = FUSED_CUES
-    person_height_mean_m: float = 1.72
-    person_height_std_m: float = 0.09
-    keypoint_pixel_std: float = 3.0
-    min_keypoint_confidence: float = 0.3
-    ankle_height_std_m: float = 0.04
-    road_height_std_m: float = 0.08
-    road_curvature_std_per_m: float = 0.008
-    ground_max_distance_m: float = 20.0
-    static_ground_max_relative_std: float = 0.2
-    static_ground_height_std_m: float = 0.02
-    history_length: int = 6
-    min_baseline_m: float = 0.3
-    min_parallax_rad: float = 0.01
-    pedestrian_speed_std_mps: float = 0.8
-    outlier_sigma: float = 3.0
-    gate_probability: float = 0.999
-    lateral_std_m: float = 0.05
-    stance_std_m: float = 0.14
-    keypoint_span_scale: float = 1.0
-    keypoint_span_std: float = 0.017
-    max_range_m: float = 200.0
+    person_height_mean_m: float = number(1.72, 0.5, 2.5)
+    person_height_std_m: float = number(0.09, 0.0, 0.5, low_open=True)
+    keypoint_pixel_std: float = number(3.0, 0.0, 100.0, low_open=True)
+    min_keypoint_confidence: float = number(0.3, 0.0, 1.0, high_open=True)
+    ankle_height_std_m: float = number(0.04, 0.0, 1.0)
+    road_height_std_m: float = number(0.08, 0.0, 2.0)
+    road_curvature_std_per_m: float = number(0.008, 0.0, 0.1)
+    ground_max_distance_m: float = number(20.0, 1.0, 1000.0)
+    static_ground_max_relative_std: float = number(0.2, 0.0, 1.0, low_open=True)
+    static_ground_height_std_m: float = number(0.02, 0.0, 1.0)
+    history_length: int = count(6, 1, MAX_HISTORY_LENGTH)
+    min_baseline_m: float = number(0.3, 0.0, 100.0)
+    min_parallax_rad: float = number(0.01, 0.0, 0.5)
+    pedestrian_speed_std_mps: float = number(0.8, 0.0, 10.0)
+    outlier_sigma: float = number(3.0, 0.0, 100.0, low_open=True)
+    gate_probability: float = number(0.999, 0.0, 1.0, low_open=True, high_open=True)
+    lateral_std_m: float = number(0.05, 0.0, 5.0)
+    stance_std_m: float = number(0.14, 0.0, 2.0)
+    keypoint_span_scale: float = number(1.0, 0.5, 1.5)
+    keypoint_span_std: float = number(0.017, 0.0, 0.5)
+    max_range_m: float = number(200.0, 5.0, 10000.0)
 
     def __post_init__(self) -> None:
         cues = [c for c in self.cues.split(",") if c] if isinstance(self.cues, str) else self.cues
@@ -208,25 +199,4 @@ class FusedConfig:
         for cue in cues:
             check_choice("fused.cues entry", cue, FUSED_CUES)
         object.__setattr__(self, "cues", cues)
-        check_number("fused.person_height_mean_m", self.person_height_mean_m, 0.5, 2.5)
-        check_number("fused.person_height_std_m", self.person_height_std_m, 0.0, 0.5, low_open=True)
-        check_number("fused.keypoint_pixel_std", self.keypoint_pixel_std, 0.0, 100.0, low_open=True)
-        check_number("fused.min_keypoint_confidence", self.min_keypoint_confidence, 0.0, 1.0, high_open=True)
-        check_number("fused.ankle_height_std_m", self.ankle_height_std_m, 0.0, 1.0)
-        check_number("fused.road_height_std_m", self.road_height_std_m, 0.0, 2.0)
-        check_number("fused.road_curvature_std_per_m", self.road_curvature_std_per_m, 0.0, 0.1)
-        check_number("fused.ground_max_distance_m", self.ground_max_distance_m, 1.0, 1000.0)
-        check_number("fused.static_ground_max_relative_std", self.static_ground_max_relative_std, 0.0, 1.0,
-                     low_open=True)
-        check_number("fused.static_ground_height_std_m", self.static_ground_height_std_m, 0.0, 1.0)
-        check_count("fused.history_length", self.history_length, 1, MAX_HISTORY_LENGTH)
-        check_number("fused.min_baseline_m", self.min_baseline_m, 0.0, 100.0)
-        check_number("fused.min_parallax_rad", self.min_parallax_rad, 0.0, 0.5)
-        check_number("fused.pedestrian_speed_std_mps", self.pedestrian_speed_std_mps, 0.0, 10.0)
-        check_number("fused.outlier_sigma", self.outlier_sigma, 0.0, 100.0, low_open=True)
-        check_number("fused.gate_probability", self.gate_probability, 0.0, 1.0, low_open=True, high_open=True)
-        check_number("fused.lateral_std_m", self.lateral_std_m, 0.0, 5.0)
-        check_number("fused.stance_std_m", self.stance_std_m, 0.0, 2.0)
-        check_number("fused.keypoint_span_scale", self.keypoint_span_scale, 0.5, 1.5)
-        check_number("fused.keypoint_span_std", self.keypoint_span_std, 0.0, 0.5)
-        check_number("fused.max_range_m", self.max_range_m, 5.0, 10000.0)
+        check_fields("fused", self)

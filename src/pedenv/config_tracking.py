@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from pedenv.validation import check_bool, check_count, check_number
+from pedenv.validation import check_fields, check_number, count, flag, number
 
 #: Most frames a track may go undetected before it is dropped (``tracking.max_misses``).
 MAX_MISSES = 300
@@ -90,19 +90,19 @@ class TrackingConfig:
     ground_cost_weight [0, 10]; memory_s [0, 60]; camera_check [0, 1]; the switches true or false.
     """
 
-    giou_threshold: float = -0.3
-    max_misses: int = 3
-    yaw_compensation: bool = True
-    max_height_ratio: float = 0.0
-    predict_motion: bool = False
+    giou_threshold: float = number(-0.3, -1.0, 1.0, high_open=True)
+    max_misses: int = count(3, 1, MAX_MISSES)
+    yaw_compensation: bool = flag(True)
+    max_height_ratio: float = number(0.0, 1.0, 100.0, low_open=True, off=0.0)
+    predict_motion: bool = flag(False)
     low_score_threshold: float = 0.0
-    start_score_threshold: float = 0.25
-    low_score_cost: float = 0.5
-    ground_gate: float = 0.0
-    ground_cost_weight: float = 1.0
-    memory_s: float = 0.0
-    memory_gate: float = 9.21
-    camera_check: float = 0.34
+    start_score_threshold: float = number(0.25, 0.0, 1.0)
+    low_score_cost: float = number(0.5, 0.0, 2.0)
+    ground_gate: float = number(0.0, 0.0, 1000.0)
+    ground_cost_weight: float = number(1.0, 0.0, 10.0)
+    memory_s: float = number(0.0, 0.0, 60.0)
+    memory_gate: float = number(9.21, 0.0, 1000.0, low_open=True)
+    camera_check: float = number(0.34, 0.0, 1.0)
 
     @property
     def pose_score_threshold(self) -> float | None:
@@ -112,20 +112,9 @@ class TrackingConfig:
         return self.low_score_threshold if self.low_score_threshold > 0 else None
 
     def __post_init__(self) -> None:
-        check_number("tracking.giou_threshold", self.giou_threshold, -1.0, 1.0, high_open=True)
-        check_count("tracking.max_misses", self.max_misses, 1, MAX_MISSES)
-        check_bool("tracking.yaw_compensation", self.yaw_compensation)
-        check_number("tracking.max_height_ratio", self.max_height_ratio, 1.0, 100.0, low_open=True, off=0.0)
-        check_bool("tracking.predict_motion", self.predict_motion)
-        check_number("tracking.start_score_threshold", self.start_score_threshold, 0.0, 1.0)
+        check_fields("tracking", self)
         check_number("tracking.low_score_threshold", self.low_score_threshold, 0.0, self.start_score_threshold,
                      low_open=True, off=0.0)
-        check_number("tracking.low_score_cost", self.low_score_cost, 0.0, 2.0)
-        check_number("tracking.ground_gate", self.ground_gate, 0.0, 1000.0)
-        check_number("tracking.ground_cost_weight", self.ground_cost_weight, 0.0, 10.0)
-        check_number("tracking.memory_s", self.memory_s, 0.0, 60.0)
-        check_number("tracking.memory_gate", self.memory_gate, 0.0, 1000.0, low_open=True)
-        check_number("tracking.camera_check", self.camera_check, 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -150,13 +139,10 @@ class KalmanConfig:
     restart_gate [0, 10000] (0 = off); enabled true or false.
     """
 
-    enabled: bool = True
-    acceleration_std_mps2: float = 1.0
-    initial_velocity_std_mps: float = 2.0
-    restart_gate: float = 0.0
+    enabled: bool = flag(True)
+    acceleration_std_mps2: float = number(1.0, 0.0, 100.0, low_open=True)
+    initial_velocity_std_mps: float = number(2.0, 0.0, 100.0, low_open=True)
+    restart_gate: float = number(0.0, 0.0, 10000.0)
 
     def __post_init__(self) -> None:
-        check_bool("kalman.enabled", self.enabled)
-        check_number("kalman.acceleration_std_mps2", self.acceleration_std_mps2, 0.0, 100.0, low_open=True)
-        check_number("kalman.initial_velocity_std_mps", self.initial_velocity_std_mps, 0.0, 100.0, low_open=True)
-        check_number("kalman.restart_gate", self.restart_gate, 0.0, 10000.0)
+        check_fields("kalman", self)

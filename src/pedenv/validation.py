@@ -1,8 +1,10 @@
 """The one way settings are checked: type, finiteness, range, count, choice and order.
 
 Every settings class (the sections of :class:`pedenv.config.Config`, the detection and merge
-settings, the synthetic scenes' rules) calls these in its ``__post_init__`` with the name
-``section.field`` as the user writes it in ``config.json``. Each check raises one
+settings, the synthetic scenes' rules) declares each field's range beside its default
+(:func:`number`, :func:`count`, :func:`flag`, :func:`choice`) and calls :func:`check_fields` in
+its ``__post_init__``, which checks them with the name ``section.field`` as the user writes it
+in ``config.json``; checks between fields call the ``check_*`` functions themselves. Each check raises one
 :class:`pedenv.errors.InputError` naming that field and the value given, shortened by
 :func:`shown` (a config value can be a list of a million numbers; the message stays one
 short line). A boolean is never a number and a number never a boolean; NaN and infinity are
@@ -11,9 +13,11 @@ refused; every range has an upper bound, so no value can make a run's memory or 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import reprlib
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
 from pedenv.errors import InputError
@@ -97,3 +101,38 @@ def check_below(low_name: str, low: float, high_name: str, high: float, *, equal
     if low > high or (low == high and not equal_ok):
         relation = "must not exceed" if equal_ok else "must be below"
         raise InputError(f"{low_name} ({shown(low)}) {relation} {high_name} ({shown(high)})")
+
+
+#: The key of a field's check in its dataclass field's metadata (:func:`check_fields` runs it).
+CHECK = "pedenv.check"
+
+
+def number(default: float, low: float, high: float, *, low_open: bool = False, high_open: bool = False,
+           off: float | None = None) -> float:
+    """A settings field holding a finite number in ``[low, high]`` (:func:`check_number`'s options)."""
+    return dataclasses.field(default=default, metadata={CHECK: partial(
+        check_number, low=low, high=high, low_open=low_open, high_open=high_open, off=off)})
+
+
+def count(default: int, low: int, high: int) -> int:
+    """A settings field holding an integer in ``[low, high]`` (:func:`check_count`)."""
+    return dataclasses.field(default=default, metadata={CHECK: partial(check_count, low=low, high=high)})
+
+
+def flag(default: bool) -> bool:
+    """A settings field holding true or false (:func:`check_bool`)."""
+    return dataclasses.field(default=default, metadata={CHECK: check_bool})
+
+
+def choice(default: str, choices: Sequence[str]) -> str:
+    """A settings field holding one of ``choices`` (:func:`check_choice`)."""
+    return dataclasses.field(default=default, metadata={CHECK: partial(check_choice, choices=choices)})
+
+
+def check_fields(section: str, settings: Any) -> None:
+    """Check every field of the dataclass instance ``settings`` declared with :func:`number`,
+    :func:`count`, :func:`flag` or :func:`choice`, in field order, naming it ``section.field``."""
+    for f in dataclasses.fields(settings):
+        check = f.metadata.get(CHECK)
+        if check is not None:
+            check(f"{section}.{f.name}", getattr(settings, f.name))

@@ -27,10 +27,12 @@ def test_detection_modes_side_by_side_with_their_cost():
     from pedenv.apps.bench import bench_detection_modes, format_detection_modes
 
     rows = bench_detection_modes(repeats=1)
-    fast, far = rows
-    assert (fast["mode"], far["mode"]) == ("fast", "far")
+    fast, far, stream = rows
+    assert (fast["mode"], far["mode"], stream["mode"]) == ("fast", "far", "stream")
     assert fast["passes"] == 1 and fast["units"] == pytest.approx(1.0)
     # far on a level camera 1.5 m high: the whole frame, the x1 band and the x2 band
     assert far["passes"] == 3 and 3.0 < far["units"] < 7.0
+    # stream after its cold start: the whole frame and band tiles in rotation, within its budget of 3 units
+    assert 1.0 < stream["units"] <= 3.0 + 1.0
     assert all(r["ms"] > 0 and r["cpus"] >= 1 and "recall" not in r for r in rows)
-    assert format_detection_modes(rows).row_count == 2
+    assert format_detection_modes(rows).row_count == 3

@@ -50,9 +50,17 @@ def test_images_and_videos_under_names_that_are_not_utf8(tmp_path):
     assert sorted(os.fsencode(p.name) for p in folder.iterdir()) == [b"x\xff.mp4", b"x\xff.png"]
 
 
-def test_the_pixel_limit_is_read_from_the_header_before_decoding(tmp_path):
+def test_the_pixel_limit_is_read_from_the_header_before_decoding(tmp_path, monkeypatch):
+    from PIL import Image
+
     huge = tmp_path / "huge.png"
     _png_header(huge, 30000, 30000)  # 2.7 GB once decoded; 1 KB on disk
+    # ultralytics switches Pillow's own limit off (Image.MAX_IMAGE_PIXELS = None) once imported:
+    # both ways give one clear error
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", None)
+    with pytest.raises(InputError, match=r"huge\.png: the image is 30000x30000 pixels, above the limit of 64 "):
+        image_size(huge)
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 89_478_485)  # Pillow's default
     for read in (image_size, read_image_rgb):
         with pytest.raises(InputError, match=r"huge\.png: the image has 900000000 pixels, above the limit of 64 "
                                              r"megapixels \(pedenv\.images\.MAX_IMAGE_PIXELS\)"):

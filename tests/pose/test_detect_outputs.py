@@ -24,7 +24,7 @@ def test_corrupt_image_is_named_and_the_good_ones_are_written(tmp_path, use_pose
     code, _, err = pedenv(monkeypatch, capsys, "detect", tmp_path / "a" / "img.jpg", tmp_path / "b" / "img.jpg",
                           corrupt, "--output", out, "--pose-input-size", "384x640")
     lines = err.strip().splitlines()
-    assert code == 2 and len(lines) == 1 and "1 of 3 images could not be read" in lines[0]
+    assert code == 2 and len(lines) == 1 and "1 of 3 images could not be processed" in lines[0]
     assert "corrupt.png: cannot read the image" in lines[0] and "detections.json" in lines[0]
     data = json.loads((out / "detections.json").read_text())
     counts = [len(d["persons"]) for d in data["images"]]

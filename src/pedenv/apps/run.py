@@ -51,7 +51,7 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
     InputError; what was computed before it stays on disk. ``progress(done, total)`` is called
     per frame written.
     ``output`` must be empty or new, unless ``overwrite`` (then an earlier pedenv run there is
-    deleted once the inputs are checked: :func:`pedenv.outputs.output_dir.prepare_output_dir`).
+    deleted once every frame's size and ego pose are checked: :func:`pedenv.outputs.output_dir.prepare_output_dir`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
@@ -86,8 +86,9 @@ def run_recording(*, calibration=None, ego_poses=None, output, images=None, vide
         backend = create_pose_backend(pose_backend, **backend_options(
             pose_backend, pose_model, pose_input_size, cfg.detection if detection else None,
             cfg.tracking.pose_score_threshold, cfg.merge, device=device))
-    if hasattr(rec, "check"):  # a folder or video recording: every frame's size and ego pose, before an
-        rec.check()  # earlier run is replaced (a bag is read once, as it runs)
+    if hasattr(rec, "check") and _holds_files(Path(output)):  # an earlier run there: every frame's size and
+        rec.check()  # ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
+        # the frames before a bad one are run and stay on disk
     out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     model = PedestrianEnvironmentModel(cfg)
@@ -124,6 +125,10 @@ def detection_mode(cfg: Config, pose_backend: str, detection: str | None) -> Con
     """``cfg`` with ``detection.mode`` set to a command's ``--detection`` (onnx backend), so the
     ``config.json`` of the run records the passes that ran."""
     return cfg.replace(detection={"mode": detection}) if pose_backend == "onnx" and detection else cfg
+
+
+def _holds_files(folder: Path) -> bool:
+    return folder.is_dir() and any(folder.iterdir())
 
 
 def _load_bag(bag, options):

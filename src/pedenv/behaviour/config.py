@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from pedenv.errors import InputError
-from pedenv.validation import check_below, check_bool, check_count, check_number, check_sequence, shown
+from pedenv.validation import check_below, check_fields, check_number, check_sequence, count, flag, number, shown
 
 #: Horizons (s) of the predicted path.
 DEFAULT_HORIZONS_S = (0.5, 1.0, 2.0, 3.0)
@@ -63,42 +63,39 @@ class BehaviourConfig:
         horizon is at least this is flagged ``conflict``.
     """
 
-    enabled: bool = False
-    orientation_bins: int = 72
-    person_height_m: float = 1.72
-    keypoint_pixel_std: float = 3.0
-    min_keypoint_confidence: float = 0.3
-    width_ratio_std: float = 0.25
-    face_offset_std: float = 0.5
-    left_right_swap_probability: float = 0.1
-    walking_direction_std_deg: float = 20.0
-    min_walking_speed_mps: float = 0.5
-    speed_sigmas: float = 1.5
-    heading_random_walk_deg: float = 45.0
-    available_std_deg: float = 40.0
-    facing_half_angle_deg: float = 60.0
-    walk_enter_mps: float = 0.6
-    walk_exit_mps: float = 0.35
-    run_enter_mps: float = 2.8
-    run_exit_mps: float = 2.3
+    enabled: bool = flag(False)
+    orientation_bins: int = count(72, 12, 360)
+    person_height_m: float = number(1.72, 0.5, 2.5)
+    keypoint_pixel_std: float = number(3.0, 0.01, 100.0)
+    min_keypoint_confidence: float = number(0.3, 0.0, 0.99)
+    width_ratio_std: float = number(0.25, 0.01, 2.0)
+    face_offset_std: float = number(0.5, 0.01, 5.0)
+    left_right_swap_probability: float = number(0.1, 0.0, 0.5)
+    walking_direction_std_deg: float = number(20.0, 1.0, 90.0)
+    min_walking_speed_mps: float = number(0.5, 0.0, 5.0)
+    speed_sigmas: float = number(1.5, 0.0, 10.0)
+    heading_random_walk_deg: float = number(45.0, 0.0, 360.0)
+    available_std_deg: float = number(40.0, 1.0, 90.0)
+    facing_half_angle_deg: float = number(60.0, 1.0, 90.0)
+    walk_enter_mps: float = number(0.6, 0.0, 5.0)
+    walk_exit_mps: float = number(0.35, 0.0, 5.0)
+    run_enter_mps: float = number(2.8, 0.0, 15.0)
+    run_exit_mps: float = number(2.3, 0.0, 15.0)
     horizons_s: tuple[float, ...] = DEFAULT_HORIZONS_S
-    ego_window_s: float = 0.5
-    max_ego_gap_s: float = 1.0
-    max_yaw_rate_radps: float = 1.0
-    max_ego_acceleration_mps2: float = 4.0
-    ego_speed_std_mps: float = 0.5
-    ego_yaw_rate_std_radps: float = 0.05
-    corridor_half_width_m: float = 1.5
-    corridor_front_m: float = 2.5
-    conflict_horizon_s: float = 2.0
-    conflict_step_s: float = 0.1
-    conflict_probability: float = 0.5
+    ego_window_s: float = number(0.5, 0.05, 5.0)
+    max_ego_gap_s: float = number(1.0, 0.05, 30.0)
+    max_yaw_rate_radps: float = number(1.0, 0.01, 5.0)
+    max_ego_acceleration_mps2: float = number(4.0, 0.0, 15.0)
+    ego_speed_std_mps: float = number(0.5, 0.0, 10.0)
+    ego_yaw_rate_std_radps: float = number(0.05, 0.0, 2.0)
+    corridor_half_width_m: float = number(1.5, 0.1, 10.0)
+    corridor_front_m: float = number(2.5, 0.0, 20.0)
+    conflict_horizon_s: float = number(2.0, 0.1, 10.0)
+    conflict_step_s: float = number(0.1, 0.01, 1.0)
+    conflict_probability: float = number(0.5, 0.01, 0.99)
 
     def __post_init__(self) -> None:
-        check_bool("behaviour.enabled", self.enabled)
-        check_count("behaviour.orientation_bins", self.orientation_bins, 12, 360)
-        for name, low, high in _RANGES:
-            check_number(f"behaviour.{name}", getattr(self, name), low, high)
+        check_fields("behaviour", self)
         if not self.walk_exit_mps < self.walk_enter_mps <= self.run_exit_mps < self.run_enter_mps:
             raise InputError("behaviour: walk_exit_mps < walk_enter_mps <= run_exit_mps < run_enter_mps must hold, got "
                              f"{self.walk_exit_mps}, {self.walk_enter_mps}, {self.run_exit_mps}, {self.run_enter_mps}")
@@ -110,17 +107,3 @@ class BehaviourConfig:
             raise InputError(f"behaviour.horizons_s must be increasing times, got {shown(h)}")
         check_below("behaviour.conflict_step_s", self.conflict_step_s,
                     "behaviour.conflict_horizon_s", self.conflict_horizon_s, equal_ok=True)
-
-
-_RANGES = (
-    ("person_height_m", 0.5, 2.5), ("keypoint_pixel_std", 0.01, 100.0), ("min_keypoint_confidence", 0.0, 0.99),
-    ("width_ratio_std", 0.01, 2.0), ("face_offset_std", 0.01, 5.0), ("left_right_swap_probability", 0.0, 0.5),
-    ("walking_direction_std_deg", 1.0, 90.0), ("min_walking_speed_mps", 0.0, 5.0), ("speed_sigmas", 0.0, 10.0),
-    ("heading_random_walk_deg", 0.0, 360.0), ("available_std_deg", 1.0, 90.0), ("facing_half_angle_deg", 1.0, 90.0),
-    ("walk_enter_mps", 0.0, 5.0), ("walk_exit_mps", 0.0, 5.0), ("run_enter_mps", 0.0, 15.0),
-    ("run_exit_mps", 0.0, 15.0), ("ego_window_s", 0.05, 5.0), ("max_ego_gap_s", 0.05, 30.0),
-    ("max_yaw_rate_radps", 0.01, 5.0),
-    ("max_ego_acceleration_mps2", 0.0, 15.0), ("ego_speed_std_mps", 0.0, 10.0), ("ego_yaw_rate_std_radps", 0.0, 2.0),
-    ("corridor_half_width_m", 0.1, 10.0), ("corridor_front_m", 0.0, 20.0), ("conflict_horizon_s", 0.1, 10.0),
-    ("conflict_step_s", 0.01, 1.0), ("conflict_probability", 0.01, 0.99),
-)

@@ -28,6 +28,7 @@ from pedenv.datasets import kitti_files as kitti
 from pedenv.errors import InputError
 from pedenv.images import image_size
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
+from pedenv.validation import check_number
 
 #: Optical / KITTI camera axes (x right, y down, z forward) -> vehicle axes (x forward, y left, z up).
 CAMERA_TO_VEHICLE_AXES = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -58,8 +59,7 @@ class KittiTrackingDataset:
     default_pose_backend = "onnx"
 
     def __init__(self, data_root: str | Path, camera_height_m: float = 1.65) -> None:
-        if not 0.1 <= camera_height_m <= 10.0:
-            raise ValueError(f"camera_height_m must be in [0.1, 10], got {camera_height_m!r}")
+        check_number("camera_height_m", camera_height_m, 0.1, 10.0)
         self.training = _training_dir(Path(data_root))
         self.camera_height_m = float(camera_height_m)
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pedenv.datasets.text_fields import frozen_arrays, numbers, read_lines
+from pedenv.datasets.text_fields import RowTable, numbers, read_lines
 from pedenv.errors import InputError
 
 #: Calibration keys -> (shape, accepted spellings: the object benchmark's and the tracking originals').
@@ -81,7 +81,7 @@ def read_calib(path: str | Path) -> KittiCalib:
 
 
 @dataclass(frozen=True)
-class KittiLabels:
+class KittiLabels(RowTable):
     """KITTI object labels, one row per object (N rows).
 
     frame, track_id: (N,) int64; -1 where the file has no such column (object benchmark)
@@ -102,25 +102,6 @@ class KittiLabels:
     dimensions: np.ndarray
     locations: np.ndarray
     rotation_y: np.ndarray
-
-    def __post_init__(self) -> None:
-        n = len(self.types)
-        for name in ("frame", "track_id", "truncated", "occluded", "alpha", "boxes", "dimensions", "locations",
-                     "rotation_y"):
-            if len(getattr(self, name)) != n:
-                raise InputError(f"KittiLabels.{name} must have {n} rows, got {len(getattr(self, name))}")
-        frozen_arrays(self, **{name: getattr(self, name) for name in self.__dataclass_fields__})
-
-    def __len__(self) -> int:
-        return len(self.types)
-
-    def take(self, mask: np.ndarray) -> KittiLabels:
-        """The rows selected by a boolean mask or index array."""
-        return KittiLabels(**{name: getattr(self, name)[mask] for name in self.__dataclass_fields__})
-
-    def in_frame(self, frame: int) -> KittiLabels:
-        """The rows of one tracking frame."""
-        return self.take(self.frame == frame)
 
     def of_type(self, *types: str) -> KittiLabels:
         """The rows whose type is one of ``types`` (e.g. ``"Pedestrian"``, ``"DontCare"``)."""

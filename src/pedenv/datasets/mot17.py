@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from pedenv.datasets.text_fields import frozen_arrays, numbers, read_lines
+from pedenv.datasets.text_fields import RowTable, numbers, read_lines
 from pedenv.errors import InputError
 
 #: MOT17 classes (column 8 of the ground truth).
@@ -73,7 +73,7 @@ def read_seqinfo(path: str | Path) -> SeqInfo:
 
 
 @dataclass(frozen=True)
-class MotBoxes:
+class MotBoxes(RowTable):
     """MOT ground-truth rows (N).
 
     frame: (N,) int64, 1-based. ids: (N,) int64. boxes: (N, 4) float, amodal
@@ -87,24 +87,6 @@ class MotBoxes:
     consider: np.ndarray
     classes: np.ndarray
     visibility: np.ndarray
-
-    def __post_init__(self) -> None:
-        n = len(self.frame)
-        for name in self.__dataclass_fields__:
-            if len(getattr(self, name)) != n:
-                raise InputError(f"MotBoxes.{name} must have {n} rows, got {len(getattr(self, name))}")
-        frozen_arrays(self, **{name: getattr(self, name) for name in self.__dataclass_fields__})
-
-    def __len__(self) -> int:
-        return len(self.frame)
-
-    def take(self, mask: np.ndarray) -> MotBoxes:
-        """The rows selected by a boolean mask or index array."""
-        return MotBoxes(**{name: getattr(self, name)[mask] for name in self.__dataclass_fields__})
-
-    def in_frame(self, frame: int) -> MotBoxes:
-        """The rows of one (1-based) frame."""
-        return self.take(self.frame == frame)
 
     def of_class(self, *classes: int) -> MotBoxes:
         """The rows whose class is one of ``classes``."""

@@ -19,6 +19,7 @@ import logging
 import re
 import warnings
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
@@ -30,6 +31,7 @@ from pedenv.geometry import rotation_to_quaternion, rotation_z
 from pedenv.records import Frame, GroundTruth, Scene
 from pedenv.skeleton import COCO_BONES
 from pedenv.skeleton import CocoKeypoint as K
+from pedenv.validation import check_count
 
 log = logging.getLogger(__name__)
 
@@ -65,8 +67,7 @@ def write_nuscenes(scenes: Iterable[Scene], output_dir: str | Path, version: str
     ``human.pedestrian.adult``: box centre = position + half the height, size ``[w, l, h]``,
     yaw from the shoulders' line where the 3D skeleton is known, one instance per (scene, id).
     """
-    if not 1 <= jpeg_quality <= 100:
-        raise InputError(f"jpeg_quality must be in [1, 100], got {jpeg_quality}")
+    check_count("jpeg_quality", jpeg_quality, 1, 100)
     root = Path(output_dir)
     tables: dict[str, list[dict]] = {name: [] for name in (
         "category", "attribute", "visibility", "instance", "sensor", "calibrated_sensor", "ego_pose",
@@ -101,8 +102,8 @@ def _scene_names(scenes: Sequence[Scene]) -> list[str]:
     return names
 
 
-def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: dict, sensor_token: str,
-                 jpeg_quality: int) -> None:
+def _exported_frames(scene: Scene) -> list[Frame]:
+    """The frames of ``scene`` up to its last keyframe (a warning when it does not run at 12 Hz)."""
     frames = scene.frames
     if not frames:
         raise InputError(f"scene {scene.name!r} has no frames to write")
@@ -110,13 +111,19 @@ def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: d
         rate = (len(frames) - 1) / (frames[-1].timestamp - frames[0].timestamp)
         if abs(rate - EXPECTED_RATE_HZ) > 0.1 * EXPECTED_RATE_HZ:
             warnings.warn(f"scene {scene.name!r} runs at {rate:.1f} Hz, not {EXPECTED_RATE_HZ:g} Hz: its keyframes "
-                          f"(every {KEYFRAME_EVERY}th frame) will not be 2 Hz", stacklevel=3)
+                          f"(every {KEYFRAME_EVERY}th frame) will not be 2 Hz", stacklevel=4)
     n = (len(frames) - 1) // KEYFRAME_EVERY * KEYFRAME_EVERY + 1
     if n < len(frames):
         log.info(
             "scene %s: the last %d frame(s) follow the last keyframe and are not exported", scene.name, len(frames) - n
         )
-    frames = frames[:n]
+    return list(frames[:n])
+
+
+def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: dict, sensor_token: str,
+                 jpeg_quality: int) -> None:
+    frames = _exported_frames(scene)
+    n = len(frames)
     scene_token, log_token = token("scene", name), token("log", name)
     tables["log"].append({"token": log_token, "logfile": f"pedenv-{name}", "vehicle": "pedenv",
                           "date_captured": "2024-01-01", "location": "pedenv-synthetic"})
@@ -132,20 +139,14 @@ def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: d
                             "first_sample_token": sample_tokens[keys[0]], "last_sample_token": sample_tokens[keys[-1]]})
     sd_tokens = [token("sample_data", name, i) for i in range(n)]
     calibrations: dict[bytes, str] = {}
-    annotations: dict[str, list[dict]] = {}
-    ordered: list[dict] = []  # frame by frame, in ground-truth order: the devkit lists a sample's anns in table order
+    anns = _Annotations()
     for i, frame in enumerate(frames):
         is_key = i % KEYFRAME_EVERY == 0
         cs_token = _calibration(frame, name, tables, calibrations, sensor_token)
         ego_token = token("ego_pose", name, i)
-        tables["ego_pose"].append(
-            {
-                "token": ego_token,
-                "timestamp": stamps[i],
-                "translation": frame.ego.translation.tolist(),
-                "rotation": rotation_to_quaternion(frame.ego.rotation).tolist(),
-            }
-        )
+        tables["ego_pose"].append({"token": ego_token, "timestamp": stamps[i],
+                                   "translation": frame.ego.translation.tolist(),
+                                   "rotation": rotation_to_quaternion(frame.ego.rotation).tolist()})
         filename = f"{'samples' if is_key else 'sweeps'}/CAM_FRONT/{name}__CAM_FRONT__{stamps[i]}.jpg"
         _write_image(frame, root / filename, jpeg_quality)
         tables["sample_data"].append({
@@ -153,21 +154,38 @@ def _write_scene(scene: Scene, name: str, root: Path, tables: dict, skeletons: d
             "ego_pose_token": ego_token, "calibrated_sensor_token": cs_token, "timestamp": stamps[i],
             "fileformat": "jpg", "is_key_frame": is_key, "height": frame.camera.height, "width": frame.camera.width,
             "filename": filename, "prev": sd_tokens[i - 1] if i else "", "next": sd_tokens[i + 1] if i + 1 < n else ""})
-        gt = frame.ground_truth
-        if gt is None:
-            continue
-        if gt.keypoints is not None and gt.visible is not None:
-            skeletons[sd_tokens[i]] = [skeleton_entry(_instance_key(name, gt.ids[m], i, m), gt.keypoints[m],
-                                                      gt.visible[m], gt.boxes[m]) for m in range(len(gt))]
-        if is_key:
-            for m in range(len(gt)):
-                key = _instance_key(name, gt.ids[m], i, m)
-                ordered.append(_annotation(gt, m, key, sample_tokens[i], stamps[i]))
-                annotations.setdefault(key, []).append(ordered[-1])
-    _link_instances(annotations, tables)
-    for ann in ordered:
+        _add_ground_truth(frame, name, i, stamps[i], sample_tokens[i] if is_key else None, sd_tokens[i],
+                          skeletons, anns)
+    _link_instances(anns.by_instance, tables)
+    for ann in anns.ordered:
         del ann["_time"]
-    tables["sample_annotation"].extend(ordered)
+    tables["sample_annotation"].extend(anns.ordered)
+
+
+@dataclass
+class _Annotations:
+    """A scene's keyframe annotations: frame by frame in ground-truth order (the devkit lists a
+    sample's annotations in table order), and the same records per instance token."""
+
+    ordered: list[dict] = field(default_factory=list)
+    by_instance: dict[str, list[dict]] = field(default_factory=dict)
+
+
+def _add_ground_truth(frame: Frame, name: str, index: int, stamp: int, sample_token: str | None, sd_token: str,
+                      skeletons: dict, anns: _Annotations) -> None:
+    """Frame ``index`` (``stamp`` us) of scene ``name``: its skeletons into ``skeletons`` (the side
+    file's, by sample-data token) and, on a keyframe (``sample_token`` given), its annotations into ``anns``."""
+    gt = frame.ground_truth
+    if gt is None:
+        return
+    if gt.keypoints is not None and gt.visible is not None:
+        skeletons[sd_token] = [skeleton_entry(_instance_key(name, gt.ids[m], index, m), gt.keypoints[m],
+                                              gt.visible[m], gt.boxes[m]) for m in range(len(gt))]
+    if sample_token is not None:
+        for m in range(len(gt)):
+            key = _instance_key(name, gt.ids[m], index, m)
+            anns.ordered.append(_annotation(gt, m, key, sample_token, stamp))
+            anns.by_instance.setdefault(key, []).append(anns.ordered[-1])
 
 
 def _instance_key(scene: str, pid: int, frame: int, m: int) -> str:

@@ -16,7 +16,8 @@ import numpy as np
 
 from pedenv.boxes import iou_matrix
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import DecodeSettings, Placement, crop_around, pack, run_mosaics
+from pedenv.pose.mosaic import Placement, crop_around, pack, run_mosaics
+from pedenv.pose.postprocess import DecodeSettings
 from pedenv.pose.stream_config import CascadeConfig
 from pedenv.pose.tiling import Pass
 from pedenv.records import Detections

@@ -17,7 +17,7 @@ import numpy as np
 
 from pedenv.boxes import box_areas, intersection_matrix, iou_matrix
 from pedenv.records import Detections
-from pedenv.validation import check_number
+from pedenv.validation import check_fields, number
 
 #: COCO keypoint sigmas (nose, eyes, ears, shoulders, elbows, wrists, hips, knees, ankles).
 COCO_SIGMAS = np.array([0.026, 0.025, 0.025, 0.035, 0.035, 0.079, 0.079, 0.072, 0.072, 0.062, 0.062,
@@ -36,14 +36,13 @@ class MergeConfig:
     keypoint_min_confidence: keypoints below this confidence are not compared (0..1; 0.3).
     """
 
-    iou: float = 0.5
-    containment: float = 0.7
-    oks: float = 0.3
-    keypoint_min_confidence: float = 0.3
+    iou: float = number(0.5, 0.0, 1.0)
+    containment: float = number(0.7, 0.0, 1.0)
+    oks: float = number(0.3, 0.0, 1.0)
+    keypoint_min_confidence: float = number(0.3, 0.0, 1.0)
 
     def __post_init__(self) -> None:
-        for name in ("iou", "containment", "oks", "keypoint_min_confidence"):
-            check_number(f"merge.{name}", getattr(self, name), 0.0, 1.0)
+        check_fields("merge", self)
 
 
 def _iou_and_containment(box: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

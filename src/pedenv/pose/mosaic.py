@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from pedenv.pose.postprocess import PAD_VALUE, Letterbox, decode, to_input_tensor
+from pedenv.pose.postprocess import PAD_VALUE, DecodeSettings, Letterbox, decode, to_input_tensor
 from pedenv.pose.tiling import Pass
 from pedenv.records import Detections
 
@@ -145,16 +145,6 @@ def unpack(dets: Detections, placements: list[Placement], image_size: tuple[int,
         part = Detections(kps, part.confidences, boxes, part.scores)
         out.append((part, cut_by_inner_edge(part.boxes, p.crop.region, image_size, edge_margin_px / p.crop.scale)))
     return out
-
-
-@dataclass(frozen=True)
-class DecodeSettings:
-    """How a pass's raw output is decoded: score threshold, NMS IoU, max persons, cut margin (input px)."""
-
-    score_threshold: float = 0.25
-    iou_threshold: float = 0.7
-    max_detections: int = 300
-    edge_margin_px: float = 16.0
 
 
 def run_mosaics(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, placements: list[Placement],

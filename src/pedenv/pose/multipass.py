@@ -13,6 +13,7 @@ calibration each level's rows come from a line fitted to the people found so far
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -20,13 +21,15 @@ import numpy as np
 from pedenv.pose.cascade import candidates, concat, verify
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.merge import MergeConfig, merge_detections
-from pedenv.pose.mosaic import DecodeSettings, cut_by_inner_edge
-from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
+from pedenv.pose.mosaic import cut_by_inner_edge
+from pedenv.pose.postprocess import DecodeSettings, decode, letterbox, to_input_tensor
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
 #: The default merge settings (frozen, shared).
 DEFAULT_MERGE = MergeConfig()
+#: The default decoding (frozen, shared).
+DEFAULT_DECODING = DecodeSettings()
 
 
 def spans_the_region(boxes: np.ndarray, region: tuple[int, int, int, int], image_size: tuple[int, int],
@@ -95,13 +98,14 @@ def run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, setting
 
 
 def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, config: DetectionConfig,
-                  geometry: CameraGeometry | None = None, *, fixed_input: tuple[int, int] | None = None,
-                  score_threshold: float = 0.25, iou_threshold: float = 0.7, max_detections: int = 300,
-                  base_input: tuple[int, int] | None = None,
+                  geometry: CameraGeometry | None = None, *, decoding: DecodeSettings = DEFAULT_DECODING,
+                  fixed_input: tuple[int, int] | None = None, base_input: tuple[int, int] | None = None,
                   merge: MergeConfig = DEFAULT_MERGE) -> tuple[Detections, list[Pass], str]:
     """The pyramid over ``image`` (H, W, 3) uint8 RGB, coarse to fine, merged.
 
     geometry: the camera for the bands (None: rows fitted to the people found).
+    decoding: score threshold, NMS IoU and max persons of every pass (its cut margin is
+        ``config.edge_margin_px``).
     fixed_input: forces every pass's input size (a model with a fixed input).
     base_input: the whole-frame pass's input (height, width) instead of the config's.
     Returns the persons (px of ``image``), the passes run and a note per level.
@@ -111,7 +115,8 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
     if base_input is not None:
         first = Pass(first.region, base_input, "full")
     low: list[Detections] | None = [] if config.cascade.enabled and config.mode != "fast" else None
-    settings = DecodeSettings(score_threshold, iou_threshold, max_detections, config.edge_margin_px)
+    settings = replace(decoding, edge_margin_px=config.edge_margin_px)
+    max_detections = settings.max_detections
     run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, config=config, low=low)
     parts = run([first])
     passes, notes = [first], []
@@ -135,13 +140,3 @@ def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, 
                                     merge, max_detections)
     return dets, passes, "; ".join(notes) or "one pass"
 
-
-def detect_multipass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass], *,
-                     fixed_input: tuple[int, int] | None, score_threshold: float, iou_threshold: float,
-                     max_detections: int, edge_margin_px: float, merge: MergeConfig = DEFAULT_MERGE) -> Detections:
-    """Given passes over ``image`` (H, W, 3) uint8 RGB, merged, no level filter; ``fixed_input``
-    forces every pass's input size."""
-    config = DetectionConfig(edge_margin_px=int(edge_margin_px), max_person_px=4000.0, plausible_keypoint_conf=0.0)
-    parts = run_level(infer, image, passes, fixed_input, DecodeSettings(score_threshold, iou_threshold, max_detections),
-                      config)
-    return parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)

@@ -9,6 +9,7 @@ the frame's aspect; ``far`` adds tiles over the band where far people stand.
 from __future__ import annotations
 
 import time
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -18,16 +19,10 @@ from pedenv.pose import models
 from pedenv.pose.levels import plan_passes
 from pedenv.pose.merge import MergeConfig
 from pedenv.pose.multipass import detect_levels
-from pedenv.pose.postprocess import decode, frame_image, letterbox, parse_input_size, to_input_tensor
+from pedenv.pose.postprocess import DecodeSettings, decode, frame_image, letterbox, parse_input_size, to_input_tensor
 from pedenv.pose.providers import CPU, SessionConfig, create_session
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
 from pedenv.records import Detections, Frame
-
-
-def _check_unit(name: str, value: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value <= 1.0:
-        raise InputError(f"{name} must be in [0, 1], got {value!r}")
-    return float(value)
 
 
 class OnnxPose:
@@ -41,11 +36,9 @@ class OnnxPose:
     detection: ``"fast"``, ``"far"`` or a :class:`DetectionConfig`; None means ``"far"``
         unless ``input_size`` is given. A model with a fixed input runs every pass at that size.
     merge: how the passes' detections are merged (:class:`MergeConfig`; None: its defaults).
-    score_threshold: persons scoring at or below this are dropped (0.25). Raising it
-        keeps fewer, surer persons.
-    iou_threshold: a box overlapping a higher-scoring one by more than this IoU is
-        suppressed (0.7). Lowering it merges nearby persons more readily.
-    max_detections: at most this many persons per image (300).
+    decoding: ``score_threshold`` (0.25), ``iou_threshold`` (0.7) and ``max_detections`` (300)
+        (:class:`~pedenv.pose.postprocess.DecodeSettings`); its fields may also be given as
+        keywords (``OnnxPose(score_threshold=0.1)``).
     session: where and how the network runs (:class:`~pedenv.pose.providers.SessionConfig`:
         ``device`` auto/cpu/cuda, ``threads``, ``spin_wait``, ``batch``); its fields may also be
         given as keywords (``OnnxPose(device="cuda", threads=4)``). :attr:`provider` is the
@@ -54,17 +47,12 @@ class OnnxPose:
 
     name = "onnx"
 
-    def __init__(self, model_path: str | Path | None = None, input_size=None, score_threshold: float = 0.25,
-                 iou_threshold: float = 0.7, max_detections: int = 300,
+    def __init__(self, model_path: str | Path | None = None, input_size=None, *,
                  detection: str | DetectionConfig | None = None, merge: MergeConfig | None = None,
-                 session: SessionConfig | None = None, **session_options) -> None:
+                 decoding: DecodeSettings | None = None, session: SessionConfig | None = None, **options) -> None:
         require_extra("onnxruntime", "pose", "the onnx pose backend")
-        self.session_config = SessionConfig.of(session, session_options)
-        self.score_threshold = _check_unit("score_threshold", score_threshold)
-        self.iou_threshold = _check_unit("iou_threshold", iou_threshold)
-        if isinstance(max_detections, bool) or not isinstance(max_detections, int) or max_detections < 1:
-            raise InputError(f"max_detections must be an integer >= 1, got {max_detections!r}")
-        self.max_detections = max_detections
+        decode_names = {f.name for f in fields(DecodeSettings)} - {"edge_margin_px"}
+        self.session_config = SessionConfig.of(session, {k: v for k, v in options.items() if k not in decode_names})
         self.threads = self.session_config.threads
         wanted = None if input_size is None else parse_input_size(input_size)
         if detection is None and wanted is None:
@@ -72,8 +60,12 @@ class OnnxPose:
         if isinstance(detection, str):
             detection = DetectionConfig.named(detection)
         elif detection is not None and not isinstance(detection, DetectionConfig):
-            raise ValueError(f"detection must be 'fast', 'far' or a DetectionConfig, got {detection!r}")
+            raise InputError(f"detection must be 'fast', 'far' or a DetectionConfig, got {detection!r}")
         self.detection: DetectionConfig | None = detection
+        margin = {} if detection is None else {"edge_margin_px": detection.edge_margin_px}
+        #: The passes' decoding; its cut margin is the detection config's.
+        self.decoding = replace(decoding or DecodeSettings(),
+                                **{k: v for k, v in options.items() if k in decode_names}, **margin)
         self.merge = MergeConfig() if merge is None else merge
         if model_path is None:
             model_path = models.find_onnx_model(wanted)
@@ -101,10 +93,25 @@ class OnnxPose:
         self.last_passes: list[Pass] = []
         self.last_note = ""
 
+    @property
+    def score_threshold(self) -> float:
+        return self.decoding.score_threshold
+
+    @property
+    def iou_threshold(self) -> float:
+        return self.decoding.iou_threshold
+
+    @property
+    def max_detections(self) -> int:
+        return self.decoding.max_detections
+
     def __call__(self, frame: Frame) -> Detections:
         return self.detect(frame_image(frame), CameraGeometry.from_frame(frame))
 
-    def _infer(self, tensor: np.ndarray) -> np.ndarray:
+    def infer(self, tensor: np.ndarray) -> np.ndarray:
+        """The network on ``tensor`` (B, 3, h, w) float32, RGB in [0, 1] (letterboxed,
+        :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N) (FORMATS.md,
+        "Pose network"; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
         start = time.perf_counter()
         out = self._session.run(None, {self._input_name: tensor})[0]
         self.network_s += time.perf_counter() - start
@@ -128,12 +135,12 @@ class OnnxPose:
             groups.setdefault(tuple(tensor.shape), []).append(i)
         for rows in groups.values():
             if len(rows) > 1 and self.batches and self._batch_axis_dynamic:
-                out = self._infer(np.concatenate([tensors[i] for i in rows]))
+                out = self.infer(np.concatenate([tensors[i] for i in rows]))
                 for k, i in enumerate(rows):
                     outputs[i] = out[k:k + 1]
             else:
                 for i in rows:
-                    outputs[i] = self._infer(tensors[i])
+                    outputs[i] = self.infer(tensors[i])
         return [o for o in outputs if o is not None]
 
     def plan(self, width: int, height: int, geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
@@ -157,12 +164,11 @@ class OnnxPose:
         if self.detection is None:
             padded, box = letterbox(image_rgb, self.input_size)
             self.last_passes = [Pass((0, 0, image_rgb.shape[1], image_rgb.shape[0]), self.input_size, "full")]
-            return decode(self._infer(to_input_tensor(padded)), box, self.score_threshold, self.iou_threshold,
+            return decode(self.infer(to_input_tensor(padded)), box, self.score_threshold, self.iou_threshold,
                           self.max_detections)
         dets, self.last_passes, self.last_note = detect_levels(
-            self._infer, image_rgb, self.detection, geometry, fixed_input=None if self.dynamic else self.input_size,
-            score_threshold=self.score_threshold, iou_threshold=self.iou_threshold,
-            max_detections=self.max_detections, base_input=self._base_input, merge=self.merge)
+            self.infer, image_rgb, self.detection, geometry, fixed_input=None if self.dynamic else self.input_size,
+            decoding=self.decoding, base_input=self._base_input, merge=self.merge)
         return dets
 
     def describe(self) -> dict:

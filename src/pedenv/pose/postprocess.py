@@ -18,6 +18,7 @@ from pedenv.errors import InputError
 from pedenv.images import read_image_rgb
 from pedenv.records import Detections, Frame
 from pedenv.skeleton import NUM_KEYPOINTS
+from pedenv.validation import check_count, check_number
 
 #: Grey value of the letterbox padding the YOLO networks were trained with.
 PAD_VALUE = 114
@@ -113,6 +114,35 @@ def letterbox(image: np.ndarray, input_size: tuple[int, int], pad_value: int = P
     padded = cv2.copyMakeBorder(image, box.pad_top, in_h - new_h - box.pad_top, box.pad_left,
                                 in_w - new_w - box.pad_left, cv2.BORDER_CONSTANT, value=(pad_value,) * 3)
     return padded, box
+
+
+#: The most persons one network input may report (``max_detections``' upper bound).
+MAX_DETECTIONS = 10000
+
+
+@dataclass(frozen=True)
+class DecodeSettings:
+    """How a pass's raw output is decoded (options of the ``onnx`` and ``ultralytics`` backends).
+
+    score_threshold: persons scoring at or below this are dropped (0..1; 0.25). Raising it
+        keeps fewer, surer persons.
+    iou_threshold: a box overlapping a higher-scoring one by more than this IoU is
+        suppressed (0..1; 0.7). Lowering it merges nearby persons more readily.
+    max_detections: at most this many persons per input (1..10000; 300).
+    edge_margin_px: a person within this many input px of an inner tile edge counts as cut (0..64;
+        the detection config's ``edge_margin_px``).
+    """
+
+    score_threshold: float = 0.25
+    iou_threshold: float = 0.7
+    max_detections: int = 300
+    edge_margin_px: float = 16.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "score_threshold", float(check_number("score_threshold", self.score_threshold, 0, 1)))
+        object.__setattr__(self, "iou_threshold", float(check_number("iou_threshold", self.iou_threshold, 0, 1)))
+        check_count("max_detections", self.max_detections, 1, MAX_DETECTIONS)
+        check_number("edge_margin_px", self.edge_margin_px, 0, 64)
 
 
 def to_input_tensor(padded: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from pedenv.errors import InputError
 from pedenv.pose.models import cache_dir
+from pedenv.validation import check_bool, check_count
 
 #: The valid values of ``device``.
 DEVICES = ("auto", "cpu", "cuda")
@@ -53,12 +54,10 @@ class SessionConfig:
 
     def __post_init__(self) -> None:
         check_device(self.device)
-        if isinstance(self.threads, bool) or not isinstance(self.threads, int) or not 1 <= self.threads <= 64:
-            raise InputError(f"threads must be an integer in [1, 64], got {self.threads!r}")
-        for name in ("spin_wait", "batch"):
-            value = getattr(self, name)
-            if not isinstance(value, bool) and not (name == "batch" and value is None):
-                raise InputError(f"{name} must be true or false, got {value!r}")
+        check_count("threads", self.threads, 1, 64)
+        check_bool("spin_wait", self.spin_wait)
+        if self.batch is not None:
+            check_bool("batch", self.batch)
 
     @classmethod
     def of(cls, session: SessionConfig | None, options: dict) -> SessionConfig:

@@ -8,7 +8,7 @@ the pose network once per such track on an upscaled crop around the predicted bo
 (:func:`crop_pass`), keeps the one whole person there nearest the predicted box (and nearer
 it than any other track's), and merges them with the main detections by the skeleton-aware
 NMS (:func:`pedenv.pose.merge.merge_detections`), so no person appears twice.
-Settings: :class:`pedenv.config.RedetectConfig` (the ``fused`` preset turns it on).
+Settings: :class:`pedenv.pose.redetect_config.RedetectConfig` (the ``fused`` preset turns it on).
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from typing import Protocol
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.config import RedetectConfig
 from pedenv.pose.merge import merge_detections
 from pedenv.pose.multipass import cut_by_inner_edge, run_pass
 from pedenv.pose.postprocess import frame_image
+from pedenv.pose.redetect_config import RedetectConfig
 from pedenv.pose.tiling import STRIDE, Pass
 from pedenv.records import Detections, Frame
 
@@ -38,6 +38,27 @@ class TrackPredictor(Protocol):
     def predicted_boxes(self, frame: Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
+def searchable(predicted: np.ndarray, hits: np.ndarray, found: np.ndarray, image_size: tuple[int, int], *,
+               min_hits: int, min_height_px: float, missed_iou: float) -> np.ndarray:
+    """(T,) bool: the tracks worth searching for in a crop (here and in the ``stream`` mode).
+
+    predicted: (T, 4) px, the tracks' expected boxes; hits: (T,) detections so far; found: (N, 4)
+    px, the boxes detected in the frame; image_size: (height, width) px. A track is searchable
+    when at least :data:`MIN_VISIBLE_SHARE` of its box lies inside the image and at least
+    ``min_height_px`` of its height, it has at least ``min_hits`` hits, and no found box overlaps
+    it by more than ``missed_iou``.
+    """
+    h, w = image_size
+    clipped = np.clip(predicted, 0.0, [w, h, w, h])
+    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
+    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
+    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= min_height_px)
+    usable &= np.asarray(hits) >= min_hits
+    if len(found):
+        usable &= iou_matrix(predicted, np.asarray(found, float).reshape(-1, 4)).max(axis=1) <= missed_iou
+    return usable
+
+
 def missed_tracks(predicted: np.ndarray, hits: np.ndarray, detections: np.ndarray, image_size: tuple[int, int],
                   config: RedetectConfig) -> np.ndarray:
     """Rows of the tracks to search for, most-seen first, at most ``config.max_crops``.
@@ -51,14 +72,8 @@ def missed_tracks(predicted: np.ndarray, hits: np.ndarray, detections: np.ndarra
     predicted = np.asarray(predicted, float).reshape(-1, 4)
     if not len(predicted) or config.max_crops == 0:
         return np.zeros(0, np.int64)
-    h, w = image_size
-    clipped = np.clip(predicted, 0.0, [w, h, w, h])
-    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
-    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
-    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= MIN_BOX_HEIGHT_PX)
-    usable &= np.asarray(hits) >= config.min_hits
-    if len(detections):
-        usable &= iou_matrix(predicted, np.asarray(detections, float).reshape(-1, 4)).max(axis=1) <= config.missed_iou
+    usable = searchable(predicted, hits, detections, image_size, min_hits=config.min_hits,
+                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=config.missed_iou)
     rows = np.flatnonzero(usable)
     rows = rows[np.argsort(-np.asarray(hits)[rows], kind="stable")]
     return rows[: config.max_crops]
@@ -151,7 +166,7 @@ class RedetectingPose:
         b = self.backend
         step = crop_pass(box, image_size, self.config)
         size = step.input_size if b.dynamic else b.input_size
-        dets = run_pass(b._infer, image, step, size, b.score_threshold, b.iou_threshold, b.max_detections)
+        dets = run_pass(b.infer, image, step, size, b.score_threshold, b.iou_threshold, b.max_detections)
         if not len(dets):
             return dets
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
@@ -174,6 +189,6 @@ def with_redetection(backend, model: TrackPredictor, config: RedetectConfig):
     if hasattr(backend, "attach_model"):
         backend.attach_model(model)
         return backend
-    if not config.enabled or not hasattr(backend, "_infer") or not hasattr(model, "predicted_boxes"):
+    if not config.enabled or not hasattr(backend, "infer") or not hasattr(model, "predicted_boxes"):
         return backend
     return RedetectingPose(backend, model, config)

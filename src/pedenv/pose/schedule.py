@@ -17,14 +17,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from pedenv.boxes import iou_matrix
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
+from pedenv.pose.redetect import searchable
 from pedenv.pose.stream_config import StreamConfig
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
 
-#: A predicted box shorter than this (px, clipped to the image) or mostly outside it is not searched.
+#: A predicted box shorter than this (px, clipped to the image) is not searched (``redetect.searchable``).
 MIN_TRACK_PX = 8.0
-MIN_VISIBLE_SHARE = 0.5
 #: Units of one network input of ``(height, width)`` px.
 UNIT_PX = 384 * 640
 
@@ -74,14 +73,8 @@ def tracks_at_risk(predicted: np.ndarray, hits: np.ndarray, unseen_s: np.ndarray
     predicted = np.asarray(predicted, float).reshape(-1, 4)
     if not len(predicted):
         return np.zeros(0, np.int64)
-    h, w = image_size
-    clipped = np.clip(predicted, 0.0, [w, h, w, h])
-    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
-    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
-    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= MIN_TRACK_PX)
-    usable &= np.asarray(hits) >= config.track_min_hits
-    if len(found):
-        usable &= iou_matrix(predicted, np.asarray(found, float).reshape(-1, 4)).max(axis=1) <= config.missed_iou
+    usable = searchable(predicted, hits, found, image_size, min_hits=config.track_min_hits, min_height_px=MIN_TRACK_PX,
+                        missed_iou=config.missed_iou)
     rows = np.flatnonzero(usable)
     return rows[np.lexsort((-np.asarray(hits)[rows], -np.asarray(unseen_s, float)[rows]))]
 

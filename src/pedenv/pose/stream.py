@@ -18,10 +18,11 @@ from functools import partial
 
 import numpy as np
 
+from pedenv.errors import InputError
 from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
 from pedenv.pose.levels import HeightLine
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import DecodeSettings, crop_around, pack, run_mosaics
+from pedenv.pose.mosaic import crop_around, pack, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
 from pedenv.pose.schedule import band_tiles, plan_frame, tracks_at_risk, units
@@ -50,7 +51,7 @@ class StreamPose:
         detection = options.pop("detection", "stream")
         config = DetectionConfig.named("stream") if detection == "stream" else detection
         if not isinstance(config, DetectionConfig) or config.mode != "stream":
-            raise ValueError(f"StreamPose needs detection 'stream' or a DetectionConfig in mode stream, "
+            raise InputError(f"StreamPose needs detection 'stream' or a DetectionConfig in mode stream, "
                              f"got {detection!r}")
         self.backend = OnnxPose(detection=config, **options)
         self.config: DetectionConfig = config
@@ -115,9 +116,9 @@ class StreamPose:
         cold = self._restart_if_needed((height, width), float(timestamp)) and cfg.stream.cold_start
         first = full_pass(width, height, cfg)
         low: list[Detections] = []
-        settings = DecodeSettings(b.score_threshold, b.iou_threshold, b.max_detections, cfg.edge_margin_px)
+        settings = b.decoding
         fixed = None if b.dynamic else b.input_size
-        run = partial(run_level, b._infer, image, fixed_input=fixed, settings=settings, config=cfg,
+        run = partial(run_level, b.infer, image, fixed_input=fixed, settings=settings, config=cfg,
                       low=low if cfg.cascade.enabled else None)
         parts = run([first])
         line = HeightLine.fit(self._fit_boxes, cfg.fit_min_people, height)
@@ -168,7 +169,7 @@ class StreamPose:
         placements = pack([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
         if not placements:
             return Detections.empty(), [], 0, 0
-        results, passes = run_mosaics(self.backend._infer, image, placements, mosaic, settings)
+        results, passes = run_mosaics(self.backend.infer, image, placements, mosaic, settings)
         n = len(tracks)
         track_parts = [(p, r) for p, r in zip(placements, results) if p.item < n]
         found = self.finder.pick(predicted, [rows[tracks[p.item].item] for p, _ in track_parts],

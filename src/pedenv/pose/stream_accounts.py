@@ -7,9 +7,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.config import RedetectConfig
 from pedenv.pose.cascade import concat
 from pedenv.pose.redetect import nearest_person, nearest_track
+from pedenv.pose.redetect_config import RedetectConfig
 from pedenv.pose.schedule import units
 from pedenv.records import Detections
 
@@ -23,7 +23,7 @@ class TrackFinder:
     """When each track was last detected, and which person in its crop is the track.
 
     A person found in a track's crop re-detects it when whole, sure or plausible, nearest the
-    predicted box (within :class:`~pedenv.config.RedetectConfig`'s ``match_distance`` and
+    predicted box (within :class:`~pedenv.pose.redetect_config.RedetectConfig`'s ``match_distance`` and
     ``match_height_ratio``) and nearer it than any other track's.
     """
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 from pedenv.errors import InputError
-from pedenv.validation import check_below, check_bool, check_count, check_number
+from pedenv.validation import check_below, check_fields, count, flag, number
 
 
 def section_of(kind: type, name: str, value):
@@ -57,26 +57,20 @@ class CascadeConfig:
     ``far`` 40-80 px recall 53 -> 65 %, precision 94 -> 90 %, about 1 unit per image more.
     """
 
-    enabled: bool = True
-    min_score: float = 0.05
-    min_height_px: float = 16.0
-    max_height_px: float = 160.0
-    person_px: float = 96.0
-    max_zoom: float = 3.5
-    margin: float = 0.3
-    match_iou: float = 0.6
-    verify_score: float = 0.28
-    plausible_keypoint_conf: float = 0.6
-    max_units: int = 3
+    enabled: bool = flag(True)
+    min_score: float = number(0.05, 0.01, 0.5)
+    min_height_px: float = number(16.0, 8.0, 400.0)
+    max_height_px: float = number(160.0, 8.0, 400.0)
+    person_px: float = number(96.0, 32.0, 384.0)
+    max_zoom: float = number(3.5, 1.0, 8.0)
+    margin: float = number(0.3, 0.0, 1.0)
+    match_iou: float = number(0.6, 0.0, 1.0)
+    verify_score: float = number(0.28, 0.0, 1.0)
+    plausible_keypoint_conf: float = number(0.6, 0.0, 1.0)
+    max_units: int = count(3, 1, 16)
 
     def __post_init__(self) -> None:
-        check_bool("detection.cascade.enabled", self.enabled)
-        ranges = {"min_score": (0.01, 0.5), "min_height_px": (8.0, 400.0), "max_height_px": (8.0, 400.0),
-                  "person_px": (32.0, 384.0), "max_zoom": (1.0, 8.0), "margin": (0.0, 1.0), "match_iou": (0.0, 1.0),
-                  "verify_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0)}
-        for name, (low, high) in ranges.items():
-            check_number(f"detection.cascade.{name}", getattr(self, name), low, high)
-        check_count("detection.cascade.max_units", self.max_units, 1, 16)
+        check_fields("detection.cascade", self)
         check_below("detection.cascade.min_height_px", self.min_height_px,
                     "detection.cascade.max_height_px", self.max_height_px)
 
@@ -112,28 +106,22 @@ class StreamConfig:
     mosaic_height, mosaic_width: the packed input's size, px (multiples of 32, 128..1280).
     """
 
-    budget_units: float = 3.0
-    scan_period_s: float = 1.0
-    track_person_px: float = 96.0
-    track_margin: float = 0.35
-    track_min_hits: int = 1
-    missed_iou: float = 0.3
-    max_gap_s: float = 2.0
-    cold_start: bool = True
-    mosaic_height: int = 384
-    mosaic_width: int = 640
+    budget_units: float = number(3.0, 1.0, 64.0)
+    scan_period_s: float = number(1.0, 0.05, 60.0)
+    track_person_px: float = number(96.0, 32.0, 384.0)
+    track_margin: float = number(0.35, 0.0, 2.0)
+    track_min_hits: int = count(1, 1, 1000)
+    missed_iou: float = number(0.3, 0.0, 1.0)
+    max_gap_s: float = number(2.0, 0.1, 3600.0)
+    cold_start: bool = flag(True)
+    mosaic_height: int = count(384, 128, 1280)
+    mosaic_width: int = count(640, 128, 1280)
 
     def __post_init__(self) -> None:
-        for name, (low, high) in {"budget_units": (1.0, 64.0), "scan_period_s": (0.05, 60.0),
-                                  "track_person_px": (32.0, 384.0), "track_margin": (0.0, 2.0),
-                                  "missed_iou": (0.0, 1.0), "max_gap_s": (0.1, 3600.0)}.items():
-            check_number(f"detection.stream.{name}", getattr(self, name), low, high)
-        check_count("detection.stream.track_min_hits", self.track_min_hits, 1, 1000)
+        check_fields("detection.stream", self)
         for name in ("mosaic_height", "mosaic_width"):
-            check_count(f"detection.stream.{name}", getattr(self, name), 128, 1280)
             if getattr(self, name) % 32:
                 raise InputError(f"detection.stream.{name} must be a multiple of 32, got {getattr(self, name)}")
-        check_bool("detection.stream.cold_start", self.cold_start)
 
     @property
     def mosaic_size(self) -> tuple[int, int]:

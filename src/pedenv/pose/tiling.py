@@ -17,22 +17,12 @@ import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.pose.stream_config import CascadeConfig, StreamConfig, section_of
-from pedenv.validation import check_below, check_choice, check_count, check_number, shown
+from pedenv.validation import check_below, check_choice, check_fields, check_number, choice, count, number, shown
 
 MODES = ("fast", "far", "stream")
 STRIDE = 32
 #: Most levels of the pyramid (``level_scales``): each costs at least one network pass per frame.
 MAX_LEVELS = 8
-#: Integer fields of :class:`DetectionConfig` -> their range (the upper bounds cap a frame's passes).
-_COUNTS = {"base_long_side": (160, 2048), "tile_width": (160, 4096), "band_margin_px": (0, 200),
-           "fit_min_people": (2, 100), "max_tiles": (1, 64), "edge_margin_px": (0, 64)}
-#: Number fields of :class:`DetectionConfig` -> their range.
-_NUMBERS = {"tile_overlap": (0.0, 0.5), "min_person_px": (20.0, 400.0), "max_person_px": (100.0, 4000.0),
-            "whole_image_max_mpx": (0.1, 50.0), "whole_image_finest_mpx": (0.1, 50.0), "near_m": (0.5, 1000.0),
-            "far_m": (0.5, 1000.0),
-            "top_m": (0.5, 5.0), "short_person_m": (0.5, 2.5), "fit_min_score": (0.0, 1.0),
-            "fit_margin": (0.0, 2.0), "sure_score": (0.0, 1.0), "plausible_keypoint_conf": (0.0, 1.0),
-            "max_pitch_down_deg": (1.0, 89.0), "max_pitch_up_deg": (1.0, 89.0)}
 
 
 @dataclass(frozen=True)
@@ -94,40 +84,36 @@ class DetectionConfig:
     stream: the ``stream`` mode's budget and rotation: :class:`StreamConfig`.
     """
 
-    mode: str = "far"
-    base_long_side: int = 640
-    tile_width: int = 3840
-    tile_overlap: float = 0.25
+    mode: str = choice("far", MODES)
+    base_long_side: int = count(640, 160, 2048)
+    tile_width: int = count(3840, 160, 4096)
+    tile_overlap: float = number(0.25, 0.0, 0.5)
     level_scales: tuple[float, ...] = (1.0, 2.0)
-    min_person_px: float = 80.0
-    max_person_px: float = 480.0
-    whole_image_max_mpx: float = 2.1
-    whole_image_finest_mpx: float = 6.0
-    near_m: float = 5.0
-    far_m: float = 150.0
-    top_m: float = 2.2
-    short_person_m: float = 1.5
-    band_margin_px: int = 16
-    fit_min_people: int = 3
-    fit_min_score: float = 0.35
-    fit_margin: float = 0.5
-    sure_score: float = 0.5
-    plausible_keypoint_conf: float = 0.5
-    max_pitch_down_deg: float = 20.0
-    max_pitch_up_deg: float = 30.0
-    max_tiles: int = 12
-    edge_margin_px: int = 16
+    min_person_px: float = number(80.0, 20.0, 400.0)
+    max_person_px: float = number(480.0, 100.0, 4000.0)
+    whole_image_max_mpx: float = number(2.1, 0.1, 50.0)
+    whole_image_finest_mpx: float = number(6.0, 0.1, 50.0)
+    near_m: float = number(5.0, 0.5, 1000.0)
+    far_m: float = number(150.0, 0.5, 1000.0)
+    top_m: float = number(2.2, 0.5, 5.0)
+    short_person_m: float = number(1.5, 0.5, 2.5)
+    band_margin_px: int = count(16, 0, 200)
+    fit_min_people: int = count(3, 2, 100)
+    fit_min_score: float = number(0.35, 0.0, 1.0)
+    fit_margin: float = number(0.5, 0.0, 2.0)
+    sure_score: float = number(0.5, 0.0, 1.0)
+    plausible_keypoint_conf: float = number(0.5, 0.0, 1.0)
+    max_pitch_down_deg: float = number(20.0, 1.0, 89.0)
+    max_pitch_up_deg: float = number(30.0, 1.0, 89.0)
+    max_tiles: int = count(12, 1, 64)
+    edge_margin_px: int = count(16, 0, 64)
     cascade: CascadeConfig = CascadeConfig()
     stream: StreamConfig = StreamConfig()
 
     def __post_init__(self) -> None:
-        check_choice("detection.mode", self.mode, MODES)
         object.__setattr__(self, "cascade", section_of(CascadeConfig, "cascade", self.cascade))
         object.__setattr__(self, "stream", section_of(StreamConfig, "stream", self.stream))
-        for name, (low, high) in _COUNTS.items():
-            check_count(f"detection.{name}", getattr(self, name), low, high)
-        for name, (lo, hi) in _NUMBERS.items():
-            check_number(f"detection.{name}", getattr(self, name), lo, hi)
+        check_fields("detection", self)
         scales = self.level_scales
         if not isinstance(scales, tuple) or not 1 <= len(scales) <= MAX_LEVELS:
             raise InputError(f"detection.level_scales must be a non-empty tuple of at most {MAX_LEVELS} numbers, "

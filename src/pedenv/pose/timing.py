@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.validation import check_count
 
 FRAME_SIZE = (900, 1600)  # (height, width)
 
@@ -57,8 +58,7 @@ def benchmark_pose(repeats: int = 10, threads: int = 2, device: str = "auto") ->
     a backend that cannot run here (no prepared model, no ultralytics) gets ``ms_per_frame``
     None and the reason in ``skipped``.
     """
-    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
-        raise InputError(f"repeats must be an integer >= 1, got {repeats!r}")
+    check_count("repeats", repeats, 1, 10000)
     os.environ["YOLO_OFFLINE"] = "1"
     from pedenv.pose.onnx_backend import OnnxPose
 

@@ -13,8 +13,7 @@ import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.pose import models
-from pedenv.pose.onnx_backend import _check_unit
-from pedenv.pose.postprocess import frame_image, parse_input_size
+from pedenv.pose.postprocess import DecodeSettings, frame_image, parse_input_size
 from pedenv.records import Detections, Frame
 
 
@@ -33,11 +32,9 @@ class UltralyticsPose:
     def __init__(self, weights: str | Path | None = None, input_size=640, score_threshold: float = 0.25,
                  iou_threshold: float = 0.7, max_detections: int = 300, device: str = "cpu") -> None:
         os.environ["YOLO_OFFLINE"] = "1"
-        self.score_threshold = _check_unit("score_threshold", score_threshold)
-        self.iou_threshold = _check_unit("iou_threshold", iou_threshold)
-        if isinstance(max_detections, bool) or not isinstance(max_detections, int) or max_detections < 1:
-            raise InputError(f"max_detections must be an integer >= 1, got {max_detections!r}")
-        self.max_detections = max_detections
+        decoding = DecodeSettings(score_threshold, iou_threshold, max_detections)
+        self.score_threshold, self.iou_threshold = decoding.score_threshold, decoding.iou_threshold
+        self.max_detections = decoding.max_detections
         self.input_size = parse_input_size(input_size)
         self.weights = models.find_weights(weights)
         self.device = device

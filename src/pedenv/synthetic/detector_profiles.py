@@ -43,7 +43,11 @@ False positives: detections lying mostly outside every annotated person and igno
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields, replace
 from types import MappingProxyType
+
+from pedenv.errors import InputError
+from pedenv.validation import check_number
 
 DEFAULT_PROFILE = "default"
 
@@ -74,7 +78,67 @@ PROFILES = MappingProxyType({
 
 
 def profile_parameters(name: str) -> dict[str, float]:
-    """The parameter values of profile ``name``; ValueError naming the valid profiles."""
+    """The parameter values of profile ``name``; InputError naming the valid profiles."""
     if name not in PROFILES:
-        raise ValueError(f"unknown detector-model profile {name!r}; valid: {', '.join(PROFILES)}")
+        raise InputError(f"unknown detector-model profile {name!r}; valid: {', '.join(PROFILES)}")
     return dict(PROFILES[name])
+
+
+#: Parameter -> its accepted range (low, high).
+_RANGES = {"noise_px_large": (0.0, 50.0), "noise_px_small": (0.0, 50.0), "extremity_noise_factor": (1.0, 10.0),
+           "unseen_noise_factor": (1.0, 20.0), "half_detection_height_px": (0.0, 1000.0),
+           "detection_slope_px": (0.1, 500.0), "false_positives_per_frame": (0.0, 20.0),
+           "box_noise_fraction": (0.0, 1.0), "box_min_confidence": (0.0, 1.0), "person_offset_u": (0.0, 0.5),
+           "person_offset_v": (0.0, 0.5)}
+
+
+@dataclass(frozen=True)
+class DetectorParameters:
+    """The numbers of the detector model (:class:`~pedenv.synthetic.detector.DetectorModel`), each
+    checked against its range (in brackets).
+
+    noise_px_large: keypoint noise standard deviation (px) for a 300 px tall person [0, 50].
+    noise_px_small: the same for a 30 px tall person [0, 50]. Raising either makes every
+        position estimate noisier; the noise follows a power law in between and beyond.
+    extremity_noise_factor: wrists and ankles get this times more noise [1, 10].
+    unseen_noise_factor: keypoints the camera does not see get this times more noise [1, 20].
+    half_detection_height_px: pixel height at which half of the persons are detected [0, 1000].
+        Raising it misses more distant pedestrians.
+    detection_slope_px: width of the logistic detection curve in pixels [0.1, 500]; the
+        default puts 98 % detection at about 80 px.
+    false_positives_per_frame: mean number of spurious skeletons per frame (Poisson) [0, 20].
+    box_noise_fraction: standard deviation of each edge of a detected person's box, as a
+        share of its height [0, 1] (the box comes from the network's box head, not from the
+        noisy keypoints). Raising it makes boxes, and so the association, less precise.
+    box_min_confidence: a false positive's box spans its keypoints at least this confident [0, 1].
+    person_offset_u, person_offset_v: standard deviations of each person's persistent
+        skeleton offset, sideways and vertical, as shares of the person's keypoint extent
+        [0, 0.5] (0 in the hand-set profile). Raising them makes each track's bias, which no
+        filter averages away, larger.
+    """
+
+    noise_px_large: float
+    noise_px_small: float
+    extremity_noise_factor: float
+    unseen_noise_factor: float
+    half_detection_height_px: float
+    detection_slope_px: float
+    false_positives_per_frame: float
+    box_noise_fraction: float
+    box_min_confidence: float
+    person_offset_u: float
+    person_offset_v: float
+
+    def __post_init__(self) -> None:
+        for name, (low, high) in _RANGES.items():
+            object.__setattr__(self, name, float(check_number(f"DetectorModel {name}", getattr(self, name), low, high)))
+
+    @classmethod
+    def of(cls, profile: str, overrides: dict[str, float | None]) -> DetectorParameters:
+        """Profile ``profile``'s values with ``overrides`` set (None entries keep the profile's)."""
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(overrides) - names)
+        if unknown:
+            raise InputError(f"unknown detector-model option(s) {', '.join(unknown)}; valid: seed, profile, "
+                             f"{', '.join(sorted(names))}")
+        return replace(cls(**profile_parameters(profile)), **{k: v for k, v in overrides.items() if v is not None})

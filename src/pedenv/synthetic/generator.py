@@ -20,6 +20,7 @@ from pedenv.synthetic.scenarios import ALL_SCENARIOS, SCENARIOS, build_scenario,
 from pedenv.synthetic.terrain import Terrain, random_terrain
 from pedenv.synthetic.visibility import VisibilityRules, visible_pedestrians
 from pedenv.synthetic.walker import body_keypoints, gait_amplitude, stride_length
+from pedenv.validation import check_number
 
 #: Standing people lean about their ankles by up to this angle (radians) with this period (s).
 SWAY_RAD, SWAY_PERIOD_S = 0.012, 4.0
@@ -52,7 +53,7 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
     :data:`~pedenv.synthetic.scenarios.STATIC_SCENARIOS` only when named). frame_rate_hz: camera frame
     rate. duration_s: length of every scene (default: each scenario's own, 15-20 s).
     terrain: rolling terrain with grades up to 5 % instead of the flat plane z = 0.
-    Raises ValueError for an unknown name or an out-of-range option.
+    Raises InputError for an unknown name or an out-of-range option.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
         raise InputError(f"seed must be an integer, got {seed!r}")
@@ -62,10 +63,9 @@ def generate_scenes(seed: int = 0, names: Sequence[str] | None = None, *, frame_
     unknown = [n for n in names if n not in ALL_SCENARIOS]
     if unknown:
         raise InputError(f"unknown scenario {unknown[0]!r}; valid: {', '.join(ALL_SCENARIOS)}")
-    if isinstance(frame_rate_hz, bool) or not 0.5 <= frame_rate_hz <= 100.0:
-        raise InputError(f"frame_rate_hz must be in [0.5, 100], got {frame_rate_hz}")
-    if duration_s is not None and not 1.0 <= duration_s <= 600.0:
-        raise InputError(f"duration_s must be in [1, 600] seconds, got {duration_s}")
+    check_number("frame_rate_hz", frame_rate_hz, 0.5, 100)
+    if duration_s is not None:
+        check_number("duration_s", duration_s, 1, 600)
     return [generate_scene(seed, name, frame_rate_hz=frame_rate_hz,
                            duration_s=default_duration(name) if duration_s is None else float(duration_s),
                            terrain=terrain) for name in names]

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.errors import InputError
+from pedenv.validation import check_count, check_number
 
 
 @dataclass(frozen=True)
@@ -66,10 +66,8 @@ def random_terrain(rng: np.random.Generator, *, max_grade: float = 0.05, compone
     ``wavelength_range_m`` and a share of the grade budget; its amplitude is that share
     divided by its wavenumber, so the summed bound equals ``0.98 * max_grade``.
     """
-    if not 0.0 <= max_grade <= 0.3:
-        raise InputError(f"max_grade must be in [0, 0.3], got {max_grade}")
-    if components < 1:
-        raise InputError(f"components must be >= 1, got {components}")
+    check_number("max_grade", max_grade, 0, 0.3)
+    check_count("components", components, 1, 100)
     wavelengths = rng.uniform(*wavelength_range_m, components)
     angles = rng.uniform(0.0, 2.0 * np.pi, components)
     k = 2.0 * np.pi / wavelengths

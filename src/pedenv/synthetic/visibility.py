@@ -15,7 +15,7 @@ import numpy as np
 
 from pedenv.geometry import invert_transform, project
 from pedenv.records import Camera
-from pedenv.validation import check_below, check_number
+from pedenv.validation import check_below, check_fields, number
 
 _GRID = (np.arange(8) + 0.5) / 8.0  # sample points across a box, per axis
 
@@ -36,21 +36,16 @@ class VisibilityRules:
     Checked by :mod:`pedenv.validation`: distances up to 1000 m, heights up to 10000 px.
     """
 
-    min_distance_m: float = 5.0
-    max_distance_m: float = 150.0
-    min_height_px: float = 15.0
-    min_inside_fraction: float = 0.6
-    max_occluded_fraction: float = 0.5
-    min_depth_m: float = 0.5
+    min_distance_m: float = number(5.0, 0.0, 1000.0)
+    max_distance_m: float = number(150.0, 0.0, 1000.0)
+    min_height_px: float = number(15.0, 0.0, 10000.0)
+    min_inside_fraction: float = number(0.6, 0.0, 1.0)
+    max_occluded_fraction: float = number(0.5, 0.0, 1.0)
+    min_depth_m: float = number(0.5, 0.0, 100.0, low_open=True)
 
     def __post_init__(self) -> None:
-        check_number("visibility.min_distance_m", self.min_distance_m, 0.0, 1000.0)
-        check_number("visibility.max_distance_m", self.max_distance_m, 0.0, 1000.0)
+        check_fields("visibility", self)
         check_below("visibility.min_distance_m", self.min_distance_m, "visibility.max_distance_m", self.max_distance_m)
-        check_number("visibility.min_height_px", self.min_height_px, 0.0, 10000.0)
-        check_number("visibility.min_inside_fraction", self.min_inside_fraction, 0.0, 1.0)
-        check_number("visibility.max_occluded_fraction", self.max_occluded_fraction, 0.0, 1.0)
-        check_number("visibility.min_depth_m", self.min_depth_m, 0.0, 100.0, low_open=True)
 
 
 @dataclass(frozen=True)
