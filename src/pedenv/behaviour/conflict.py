@@ -72,25 +72,33 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     more than :data:`GATE_SIGMAS` standard deviations beyond the corridor's reach (its length
     plus half width, from the ego now) gets probability 0 without the per-step computation.
     """
-    n, k = positions.shape[:2]
-    sep = positions - path.xy
-    j = np.hypot(sep[..., 0], sep[..., 1]).argmin(axis=1)  # the closest step (reductions over a last axis
-    at = np.arange(n) * k + j                              # of 2 are slow: components are summed by hand)
-    near_sep, near_cov = sep.reshape(n * k, 2)[at], covariances.reshape(n * k, 2, 2)[at]
-    closest = np.hypot(near_sep[:, 0], near_sep[:, 1])
-    across = (near_sep[:, None, :] @ near_cov @ near_sep[:, :, None]).reshape(n)  # u C u times closest^2
-    closest_var = across / np.maximum(closest, 1e-9) ** 2 + path.lateral_std[j] ** 2
+    parts = (positions[..., 0], positions[..., 1], covariances[..., 0, 0], covariances[..., 0, 1],
+             covariances[..., 1, 1])
+    return conflict_of(path, tuple(np.ascontiguousarray(a, float) for a in parts), half_width_m, front_m)
+
+
+def conflict_of(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, front_m: float) -> Conflict:
+    """:func:`corridor_conflict` from the predicted positions and covariances by component:
+    ``parts`` = x, y (N, K) metres and the covariances' xx, xy, yy (N, K) m^2
+    (:meth:`pedenv.behaviour.prediction.PathPredictor.components`)."""
+    px, py, cxx, cxy, cyy = parts
+    n, k = px.shape
+    sx, sy = px - path.xy[:, 0], py - path.xy[:, 1]
+    sep = np.hypot(sx, sy)
+    j = sep.argmin(axis=1)  # the closest step
+    at = np.arange(n) * k + j
+    closest, ux, uy = sep.ravel()[at], sx.ravel()[at], sy.ravel()[at]
+    across = ux * ux * cxx.ravel()[at] + 2.0 * ux * uy * cxy.ravel()[at] + uy * uy * cyy.ravel()[at]
+    closest_var = across / np.maximum(closest, 1e-9) ** 2 + path.lateral_std[j] ** 2  # along the separation
     horizon = path.times[-1]
     prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
     reach = path.length + front_m + half_width_m
-    spread_max = np.sqrt(np.maximum((covariances[..., 0, 0] + covariances[..., 1, 1]).max(axis=1), 0.0)
-                         + path.lateral_std[-1] ** 2)
-    e0 = path.xy[0]
-    near = np.hypot(positions[..., 0] - e0[0], positions[..., 1] - e0[1]).min(axis=1) < reach + GATE_SIGMAS * spread_max
+    spread_max = np.sqrt(np.maximum((cxx + cyy).max(axis=1), 0.0) + path.lateral_std[-1] ** 2)
+    near = np.hypot(px - path.xy[0, 0], py - path.xy[0, 1]).min(axis=1) < reach + GATE_SIGMAS * spread_max
     if near.all():
-        prob, mean, spread = _entry(path, positions, covariances, half_width_m, path.length + front_m)
+        prob, mean, spread = _entry(path, parts, half_width_m, path.length + front_m)
     elif near.any():
-        prob[near], mean[near], spread[near] = _entry(path, positions[near], covariances[near], half_width_m,
+        prob[near], mean[near], spread[near] = _entry(path, tuple(a[near] for a in parts), half_width_m,
                                                       path.length + front_m)
     return Conflict(prob, mean, spread, closest, np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
 
@@ -99,17 +107,14 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
 GATE_SIGMAS = 6.0
 
 
-def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
-           length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s."""
-    m, k = positions.shape[:2]
-    s, d, nx, ny = _coordinates(path, positions[..., 0], positions[..., 1])
-    if np.ndim(nx) == 0:  # a straight path: one normal
-        var = covariances.reshape(m, k, 4) @ np.array([nx * nx, nx * ny, nx * ny, ny * ny])
-    else:
-        var = (nx * nx * covariances[..., 0, 0] + 2.0 * nx * ny * covariances[..., 0, 1]
-               + ny * ny * covariances[..., 1, 1])
-    sd = np.sqrt(np.maximum(var + path.lateral_std**2, 1e-8))
+def _entry(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, length: float
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s, from
+    the positions and covariances by component (M, K) (see :func:`conflict_of`)."""
+    px, py, cxx, cxy, cyy = parts
+    s, d, nx, ny = _coordinates(path, px, py)
+    var = nx * nx * cxx + 2.0 * nx * ny * cxy + ny * ny * cyy + path.lateral_std**2
+    sd = np.sqrt(np.maximum(var, 1e-8))
     inside = ndtr((half_width_m - d) / sd) - ndtr((-half_width_m - d) / sd)
     inside *= (s >= 0.0) & (s <= length)  # behind the ego or beyond the corridor: 0
     running = np.maximum.accumulate(inside, axis=1)
@@ -117,7 +122,7 @@ def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_w
     some = prob > 1e-3
     t = path.times
     if not some.any():
-        return prob, np.full(m, t[-1]), np.zeros(m)
+        return prob, np.full(len(prob), t[-1]), np.zeros(len(prob))
     rise = running.copy()
     rise[:, 1:] -= running[:, :-1]
     mean = np.where(some, (rise @ t) / np.maximum(prob, 1e-12), t[-1])

@@ -13,7 +13,7 @@ import numpy as np
 
 from pedenv.behaviour import facing, heading_filter, motion_state
 from pedenv.behaviour.config import BehaviourConfig
-from pedenv.behaviour.conflict import corridor_conflict
+from pedenv.behaviour.conflict import conflict_of
 from pedenv.behaviour.ego_path import EgoHistory, EgoPath, predict_ego_path
 from pedenv.behaviour.motion_state import velocity_stats
 from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
@@ -79,8 +79,8 @@ class BehaviourEstimator:
         self.horizons = np.asarray(config.horizons_s, float)
         k = int(round(config.conflict_horizon_s / config.conflict_step_s))
         self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
-        self.path_times = np.concatenate([self.conflict_times, self.horizons])  # one prediction for both
-        self.predictor = PathPredictor(self.path_times, acceleration_std)
+        self.predictor = PathPredictor(self.horizons, acceleration_std)  # the predicted path reported
+        self.conflict_predictor = PathPredictor(self.conflict_times, acceleration_std)  # the corridor's steps
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
         self._intrinsics: tuple[bytes, np.ndarray] = (b"", np.eye(3))  # the last camera's and their inverse
 
@@ -137,12 +137,11 @@ class BehaviourEstimator:
         store.state[rows] = state
         half = np.radians(cfg.facing_half_angle_deg)
         ahead, ahead_cov = self.predictor(x, P)
-        k = len(self.conflict_times)
-        conflict = corridor_conflict(path, ahead[:, :k], ahead_cov[:, :k], cfg.corridor_half_width_m,
-                                     cfg.corridor_front_m)
+        conflict = conflict_of(path, self.conflict_predictor.components(x, P), cfg.corridor_half_width_m,
+                               cfg.corridor_front_m)
         return Behaviour(yaw, yaw_std, available, facing.body_facing_from(p, cos_a, np.cos(half)),
-                         facing.head_facing(cue, half), state, speed, speed_std, self.horizons, ahead[:, k:],
-                         ahead_cov[:, k:], conflict.probability, conflict.time_s, conflict.time_std_s,
+                         facing.head_facing(cue, half), state, speed, speed_std, self.horizons, ahead,
+                         ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
                          conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s,
                          float(self.conflict_times[-1]), path.motion.speed, path.motion.yaw_rate, path.xy)
 

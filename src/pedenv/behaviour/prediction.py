@@ -31,6 +31,11 @@ class PathPredictor:
                 self.covariance_map[4 * _POS[i] + _VEL[j], :, i, j] += t
                 self.covariance_map[4 * _VEL[i] + _POS[j], :, i, j] += t
                 self.covariance_map[4 * _VEL[i] + _VEL[j], :, i, j] += t * t
+        # the same by component, each (N, H) contiguous: x, y; xx, xy, yy
+        self.component_maps = (np.ascontiguousarray(self.position_map.transpose(0, 2, 1).reshape(4, 2 * h)),
+                               np.ascontiguousarray(self.covariance_map[:, :, [0, 0, 1], [0, 1, 1]]
+                                                    .transpose(0, 2, 1).reshape(16, 3 * h)),
+                               np.ascontiguousarray(self.noise[:, [0, 0, 1], [0, 1, 1]].T.reshape(3 * h)))
         self.position_map = self.position_map.reshape(4, 2 * h)
         self.covariance_map = self.covariance_map.reshape(16, 4 * h)
         self.noise = self.noise.reshape(4 * h)
@@ -42,6 +47,15 @@ class PathPredictor:
         positions = (x @ self.position_map).reshape(n, h, 2)
         cov = (P.reshape(n, 16) @ self.covariance_map + self.noise).reshape(n, h, 2, 2)
         return positions, cov
+
+
+    def components(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The same as :meth:`__call__`, by component: positions ``x, y`` (N, H) metres and the
+        covariances' ``xx, xy, yy`` (N, H) m^2."""
+        h = len(self.horizons)
+        positions = x @ self.component_maps[0]
+        cov = P.reshape(len(P), 16) @ self.component_maps[1] + self.component_maps[2]
+        return positions[:, :h], positions[:, h:], cov[:, :h], cov[:, h:2 * h], cov[:, 2 * h:]
 
 
 def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleration_std: float
