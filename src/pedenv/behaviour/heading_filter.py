@@ -29,23 +29,17 @@ def cell_centres(bins: int) -> np.ndarray:
 class Grid:
     """The constant tables of a B-cell grid, computed once (the estimator holds one).
 
-    cells (B,) radians; cos_sin (2, B) their cosines and sines; fourier (B, 2M) the real
-    discrete Fourier transform (cosine then sine parts, M = B // 2 + 1 frequencies) and
-    inverse (2M, B) its inverse (each frequency weighted as ``numpy.fft.irfft`` does);
-    freq_sq (2M,) the squared frequency of each column.
+    cells (B,) radians; cos_sin (2, B) their cosines and sines; freq_sq (M,) the squared
+    frequencies of the real Fourier transform (M = B // 2 + 1); the mode's neighbourhood
+    (+-3 cells) and its offsets' cosines and sines (7, 2) for :func:`summary`.
     """
 
     def __init__(self, bins: int) -> None:
         self.bins = bins
         self.cells = cell_centres(bins)
         self.cos_sin = np.stack([np.cos(self.cells), np.sin(self.cells)])
-        k = np.arange(bins // 2 + 1)
-        phase = 2.0 * np.pi * np.outer(np.arange(bins), k) / bins  # (B, M)
-        self.fourier = np.concatenate([np.cos(phase), np.sin(phase)], axis=1)
-        weight = np.where((k == 0) | (2 * k == bins), 1.0, 2.0) / bins
-        self.inverse = (self.fourier * np.concatenate([weight, weight])).T
-        self.freq_sq = np.concatenate([k, k]).astype(float) ** 2
-        self.neighbours = np.arange(-3, 4)  # the mode's neighbourhood in :func:`summary`, cells
+        self.freq_sq = np.arange(bins // 2 + 1).astype(float) ** 2
+        self.neighbours = np.arange(-3, 4)
         step = self.neighbours * (2.0 * np.pi / bins)
         self.neighbour_cos_sin = np.column_stack([np.cos(step), np.sin(step)])
 
@@ -70,8 +64,7 @@ def spread(p: np.ndarray, dt: np.ndarray, random_walk_rad: float, g: Grid) -> np
     finite), not normalised (its rows keep their sums, up to the clipped rounding)."""
     var = random_walk_rad**2 * np.minimum(np.maximum(dt, 0.0), 1e3)
     damp = np.exp(np.multiply.outer(-0.5 * np.minimum(var, 1e3), g.freq_sq))
-    flat = 1.0 / g.bins  # transformed as the deviation from flat, so a flat row stays exactly flat
-    return np.maximum((((p - flat) @ g.fourier) * damp) @ g.inverse + flat, 0.0)
+    return np.maximum(np.fft.irfft(np.fft.rfft(p, axis=1) * damp, n=g.bins, axis=1), 0.0)
 
 
 def predict(p: np.ndarray, dt: np.ndarray, random_walk_rad: float) -> np.ndarray:
