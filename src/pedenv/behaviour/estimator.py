@@ -7,6 +7,7 @@ in :class:`TrackStore`, keyed by track id; tracks the tracker has dropped are fo
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -76,6 +77,8 @@ class BehaviourEstimator:
         self.ego = EgoHistory(config)
         self.grid = heading_filter.grid(config.orientation_bins)  # the trig and Fourier tables, once
         self.cells = self.grid.cells
+        self.angles = (math.radians(config.heading_random_walk_deg), math.radians(config.available_std_deg),
+                       math.radians(config.facing_half_angle_deg))  # random walk, available spread, facing
         self.horizons = np.asarray(config.horizons_s, float)
         k = int(round(config.conflict_horizon_s / config.conflict_step_s))
         self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
@@ -122,7 +125,8 @@ class BehaviourEstimator:
     def _cues(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, path: EgoPath) -> Behaviour:
         cfg, t, store, g = self.config, frame.timestamp, self.store, self.grid
         rows = store.rows(peds.track_ids, t)
-        p = heading_filter.spread(store.p[rows], t - store.time[rows], np.radians(cfg.heading_random_walk_deg), g)
+        walk, available_std, half = self.angles
+        p = heading_filter.spread(store.p[rows], t - store.time[rows], walk, g)
         cam_to_world = frame.cam_to_world
         rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
         cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
@@ -131,15 +135,14 @@ class BehaviourEstimator:
         moving, _ = walking_likelihood(velocity, g.cos_sin, cfg)
         p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin, cfg) * moving)
         store.p[rows], store.time[rows] = p, t
-        yaw, yaw_std, available = heading_filter.summary(p, np.radians(cfg.available_std_deg))
+        yaw, yaw_std, available = heading_filter.summary(p, available_std)
         speed, speed_std = motion_state.speed_from(velocity)
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
-        half = np.radians(cfg.facing_half_angle_deg)
         ahead, ahead_cov = self.predictor(x, P)
         conflict = conflict_of(path, self.conflict_predictor.components(x, P), cfg.corridor_half_width_m,
                                cfg.corridor_front_m)
-        return Behaviour(yaw, yaw_std, available, facing.body_facing_from(p, cos_a, np.cos(half)),
+        return Behaviour(yaw, yaw_std, available, facing.body_facing_from(p, cos_a, math.cos(half)),
                          facing.head_facing(cue, half), state, speed, speed_std, self.horizons, ahead,
                          ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
                          conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s,
