@@ -68,10 +68,11 @@ def _folder(rec: Path) -> float:
 
 
 def _run(bag: Path, out: Path, backend) -> tuple[float, int]:
+    from pedenv.apps.options import OutputOptions, RecordingSource
     from pedenv.apps.run import run_recording
 
     start = time.perf_counter()
-    summary = run_recording(bag=bag, output=out, overwrite=True, backend=backend)
+    summary = run_recording(RecordingSource(bag=bag), OutputOptions(out, overwrite=True), backend=backend)
     return time.perf_counter() - start, summary["frames_done"]
 
 

@@ -86,6 +86,7 @@ def make_recordings(root: Path, frames: int) -> Path:
 
 def bench_real(workers: int, frames: int) -> dict:
     from pedenv.apps.batch import run_manifest
+    from pedenv.apps.options import ExecutorOptions
 
     root = Path(tempfile.mkdtemp(prefix="pedenv-ray-bench-"))
     try:
@@ -93,9 +94,10 @@ def bench_real(workers: int, frames: int) -> dict:
         times = {}
         for executor in ("serial", "ray"):
             t0 = time.perf_counter()
-            summary = run_manifest(manifest, root / f"out-{executor}", executor=executor,
-                                   workers=workers if executor == "ray" else None,
-                                   object_store_memory=500 * 1024**2 if executor == "ray" else None)
+            ray = executor == "ray"
+            options = ExecutorOptions(executor, workers=workers if ray else None,
+                                      object_store_memory=500 * 1024**2 if ray else None)
+            summary = run_manifest(manifest, root / f"out-{executor}", executor=options)
             times[executor] = time.perf_counter() - t0
             if summary["failed"]:
                 raise SystemExit(json.dumps(summary["recordings"], indent=2))

@@ -41,7 +41,7 @@ VTEST = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
 
 def write_recording(video: Path, out: Path, frames: int, size: tuple[int, int] | None) -> dict:
     """The first ``frames`` frames of ``video`` (scaled and centre-cropped to ``size`` (height,
-    width) when given) as a recording in ``out``: its run_recording keyword arguments."""
+    width) when given) as a recording in ``out``: its RecordingSource fields (:mod:`pedenv.apps.options`)."""
     cap = cv2.VideoCapture(str(video))
     if not cap.isOpened():
         raise SystemExit(f"{video}: cannot open the video (apt-get install opencv-doc, or give --video)")
@@ -101,6 +101,7 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bo
     also a ``--realtime`` run (this checkout's pedenv only)."""
     from dataclasses import replace
 
+    from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
     from pedenv.apps.run import run_recording
     from pedenv.config import Config
     from pedenv.model import PedestrianEnvironmentModel
@@ -124,7 +125,8 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bo
              "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / frames}
     clock.reset()
     start, cpu = time.perf_counter(), time.process_time()
-    summary = run_recording(**rec, output=work / "run", detection=detection, backend=backend, video_out=video_out)
+    summary = run_recording(RecordingSource(**rec), OutputOptions(work / "run", video_out=video_out),
+                            PoseOptions(detection=detection), backend=backend)
     run_s = time.perf_counter() - start
     load.append(os.getloadavg()[0])
     done = summary["frames_done"]
@@ -135,8 +137,8 @@ def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bo
     if realtime:  # the same recording once more, taken at its own rate (10 Hz for vtest.avi)
         from pedenv.apps.pipeline import PipelineConfig
 
-        live = run_recording(**rec, output=work / "live", detection=detection, backend=backend, video_out=video_out,
-                             pipeline=PipelineConfig(realtime=True))
+        live = run_recording(RecordingSource(**rec), OutputOptions(work / "live", video_out=video_out),
+                             PoseOptions(detection=detection), backend=backend, pipeline=PipelineConfig(realtime=True))
         run["realtime"] = {"frames_done": live["frames_done"], "frames_dropped": live["frames_dropped"],
                            "latency_ms": live["speed"]["latency_ms"]}
     return {"frames": frames, "load": load, "alone": alone, "run": run,

@@ -125,6 +125,7 @@ def main(argv=None) -> int:
 
     import motmetrics as mm
 
+    from pedenv.apps.options import PoseOptions, RecordingSource
     from pedenv.apps.run import run_recording
     from pedenv.config import Config
     from pedenv.localization import configure
@@ -141,8 +142,9 @@ def main(argv=None) -> int:
             for cname, config in configs.items():
                 out = Path(tmp) / name / cname
                 t0 = time.perf_counter()
-                summary = run_recording(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
-                                        images=rec / "images", output=out, detection=args.detection, config=config,
+                source = RecordingSource(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
+                                         images=rec / "images")
+                summary = run_recording(source, out, PoseOptions(detection=args.detection), config=config,
                                         backend=budgeted_backend(args, config))
                 seconds = time.perf_counter() - t0
                 acc, counts = score_run(out / "environment.jsonl", gt)

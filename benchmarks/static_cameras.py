@@ -49,7 +49,7 @@ def remount(scene, mount: str):
 
 def evaluate(scene, method: str, backend) -> dict:
     """One scene through a fresh model: the figures of the table."""
-    from pedenv.apps.scene_result import evaluate_scene, merge_scene_results
+    from pedenv.apps.scene_result import SceneHooks, evaluate_scene, merge_scene_results
     from pedenv.config import Config
     from pedenv.evaluation.matching import match_one_to_one, position_errors
     from pedenv.localization import configure
@@ -68,7 +68,8 @@ def evaluate(scene, method: str, backend) -> dict:
                                               state.ego.translation[:2])[1])
 
     start = time.perf_counter()
-    result = evaluate_scene(scene.name, scene.frames, config=config, backend=backend, on_frame=on_frame)
+    result = evaluate_scene(scene.name, scene.frames, config=config, backend=backend,
+                            hooks=SceneHooks(on_frame=on_frame))
     metrics = merge_scene_results([result], {"scenes": [scene.name]}).metrics
     o, c = metrics.overall, metrics.calibration
     declined = sum("ground:beyond-range" in s for s in sources)

@@ -72,6 +72,7 @@ def main(argv=None) -> int:
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
 
+    from pedenv.apps.options import PoseOptions, RecordingSource
     from pedenv.apps.run import run_recording
     from pedenv.boxes import iou_matrix
 
@@ -81,8 +82,9 @@ def main(argv=None) -> int:
         boxes = {}
         for mode in ("far", "stream"):
             t0 = time.perf_counter()
-            summary = run_recording(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
-                                    images=rec / "images", fps=rate, output=Path(tmp) / mode, detection=mode)
+            source = RecordingSource(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
+                                     images=rec / "images", fps=rate)
+            summary = run_recording(source, Path(tmp) / mode, PoseOptions(detection=mode))
             results[mode] = {"seconds_per_frame": (time.perf_counter() - t0) / max(summary["frames_done"], 1),
                              "stream": summary["pose_backend"].get("stream")}
             boxes[mode] = reported(Path(tmp) / mode / "environment.jsonl")

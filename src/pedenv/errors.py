@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib
 
 import numpy as np
+import numpy.typing as npt
 
 
 class InputError(ValueError):
@@ -24,7 +25,8 @@ def require_extra(module: str, extra: str, flag: str) -> None:
 
 
 
-def check_array(name: str, value, shape: tuple, *, dtype=np.float64, finite: bool = True) -> np.ndarray:
+def check_array(name: str, value: object, shape: tuple[int | None, ...], *, dtype: npt.DTypeLike = np.float64,
+                finite: bool = True) -> np.ndarray:
     """Return ``value`` as an array of ``dtype`` after checking its shape.
 
     ``shape`` holds ints for fixed sizes and ``None`` for free ones, e.g. ``(None, 17, 2)``.

@@ -2,8 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TypeVar, overload
+
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+#: Entries of 2x2 matrices: arrays of one shape, or scalars (:func:`inverse_2x2_entries`).
+Entries = TypeVar("Entries", np.ndarray, float)
 
 
 def pixel_rays(pixels: np.ndarray, intrinsics: np.ndarray, cam_to_world: np.ndarray) -> np.ndarray:
@@ -45,7 +51,7 @@ def inverse_intrinsics(k: np.ndarray) -> np.ndarray:
                      [0.0, 0.0, 1.0]]) / k[2, 2] if k[2, 0] == 0 and k[2, 1] == 0 and k[1, 0] == 0 else np.linalg.inv(k)
 
 
-def inverse_2x2_entries(a, b, c, d):
+def inverse_2x2_entries(a: Entries, b: Entries, c: Entries, d: Entries) -> tuple[Entries, Entries, Entries, Entries]:
     """Entries ``(a', b', c', d')`` of the inverse of ``[[a, b], [c, d]]``, in closed form.
 
     a, b, c, d: arrays of one shape (or scalars), any unit. For a symmetric matrix pass
@@ -63,7 +69,8 @@ def inverse_2x2(m: np.ndarray) -> np.ndarray:
     return np.stack([np.stack([a, b], -1), np.stack([c, d], -1)], -2)
 
 
-def closest_points(o1: np.ndarray, d1: np.ndarray, o2: np.ndarray, d2: np.ndarray, min_sin: float = 1e-9):
+def closest_points(o1: np.ndarray, d1: np.ndarray, o2: np.ndarray, d2: np.ndarray,
+                   min_sin: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Closest points between rays ``o1 + s d1`` and ``o2 + t d2`` (Eqs. 4-5).
 
     o1, o2: (..., 3) origins, metres; d1, d2: (..., 3) unit directions (broadcastable).
@@ -84,7 +91,7 @@ def closest_points(o1: np.ndarray, d1: np.ndarray, o2: np.ndarray, d2: np.ndarra
     return s, t, mid, parallel
 
 
-def project(points: np.ndarray, intrinsics: np.ndarray, world_to_cam: np.ndarray):
+def project(points: np.ndarray, intrinsics: np.ndarray, world_to_cam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Project world points to pixels (Eq. 6, written with ``K`` and the inverse extrinsics).
 
     points: (..., 3) world frame, metres. Returns ``(pixels (..., 2), depth (...,))``; depth is
@@ -120,7 +127,7 @@ def rotation_from_ypr(yaw: float, pitch: float, roll: float) -> np.ndarray:
     return Rotation.from_euler("ZYX", [yaw, pitch, roll]).as_matrix()
 
 
-def quaternion_to_rotation(q) -> np.ndarray:
+def quaternion_to_rotation(q: Sequence[float] | np.ndarray) -> np.ndarray:
     """(3, 3) rotation of a quaternion ``[w, x, y, z]`` (normalised first; not zero)."""
     return Rotation.from_quat(np.asarray(q, float), scalar_first=True).as_matrix()
 
@@ -130,6 +137,14 @@ def rotation_to_quaternion(r: np.ndarray) -> np.ndarray:
     return Rotation.from_matrix(np.asarray(r, float)).as_quat(canonical=True, scalar_first=True)
 
 
-def wrap_angle(angle):
+@overload
+def wrap_angle(angle: float) -> float: ...
+
+
+@overload
+def wrap_angle(angle: np.ndarray) -> np.ndarray: ...
+
+
+def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Angle(s) wrapped to [-pi, pi)."""
     return (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi

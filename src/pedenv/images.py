@@ -14,6 +14,7 @@ import io
 import re
 import warnings
 from pathlib import Path
+from typing import BinaryIO
 
 import cv2
 import numpy as np
@@ -45,7 +46,7 @@ def image_size(path: str | Path) -> tuple[int, int]:
         raise InputError(f"{path}: cannot read the image: {exc.strerror or exc}") from None
 
 
-def read_image_rgb(path) -> np.ndarray:
+def read_image_rgb(path: str | Path) -> np.ndarray:
     """(H, W, 3) uint8 RGB of the image file at ``path``; an unreadable or oversized file raises InputError."""
     data = _read_bytes(path)
     _checked_size(path, io.BytesIO(data))
@@ -68,7 +69,7 @@ def write_image(path: Path, image_rgb: np.ndarray) -> Path:
     return path
 
 
-def _read_bytes(path) -> bytes:
+def _read_bytes(path: str | Path) -> bytes:
     path = check_path(path, "image")
     try:
         if not path.is_file():
@@ -82,7 +83,7 @@ def _read_bytes(path) -> bytes:
         raise InputError(f"{path}: cannot read the image: {exc.strerror or exc}") from None
 
 
-def _checked_size(path, data) -> tuple[int, int]:
+def _checked_size(path: str | Path, data: BinaryIO) -> tuple[int, int]:
     """(width, height) from the header of ``data`` (a file object; Pillow reads the header only);
     InputError above MAX_IMAGE_PIXELS."""
     try:

@@ -65,6 +65,6 @@ def opencv_path(path: str | Path) -> Iterator[str]:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def _short(value, limit: int = 60) -> str:
+def _short(value: object, limit: int = 60) -> str:
     text = str(value)
     return text if len(text) <= limit else f"{text[:limit // 2]}...{text[-limit // 3:]}"

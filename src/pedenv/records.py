@@ -26,7 +26,7 @@ from pedenv.skeleton import NUM_KEYPOINTS
 MAX_PIXEL_OFFSET_IMAGE_SIZES = 10.0
 
 
-def _frozen_set(obj, name: str, value) -> None:
+def _frozen_set(obj: object, name: str, value: object) -> None:
     object.__setattr__(obj, name, value)
 
 
@@ -81,10 +81,7 @@ class Detections:
             kp = np.where(bad[..., None], 0.0, kp)
             conf = np.where(bad, 0.0, conf)
         conf = np.clip(conf, 0.0, 1.0)
-        if self.boxes is None:
-            boxes = boxes_from_keypoints(kp, conf > 0)
-        else:
-            boxes = check_array("boxes", self.boxes, (n, 4))
+        boxes = boxes_from_keypoints(kp, conf > 0) if self.boxes is None else check_array("boxes", self.boxes, (n, 4))
         if np.any(boxes[:, 2] < boxes[:, 0]) or np.any(boxes[:, 3] < boxes[:, 1]):
             raise InputError("boxes must be [u_min, v_min, u_max, v_max] with max >= min")
         scores = conf.mean(axis=1) if self.scores is None else check_array("scores", self.scores, (n,))
@@ -100,7 +97,7 @@ class Detections:
     def empty(cls) -> Detections:
         return cls(np.zeros((0, NUM_KEYPOINTS, 2)), np.zeros((0, NUM_KEYPOINTS)))
 
-    def take(self, index) -> Detections:
+    def take(self, index: np.ndarray) -> Detections:
         """The detections at ``index`` (an int array or boolean mask)."""
         return Detections(self.keypoints[index], self.confidences[index], self.boxes[index], self.scores[index])
 

@@ -80,6 +80,21 @@ def _mark(exc: yaml.YAMLError) -> str:
     return f"line {mark.line + 1}, column {mark.column + 1}: {problem}" if mark is not None else str(problem)
 
 
+def _completed_node(event: yaml.Event, sizes: list[int], names: list[str | None], anchors: dict[str, int],
+                    where: str) -> tuple[int, str | None] | None:
+    """The expanded values and the anchor of the node ``event`` completes (a collection it closes,
+    popped from ``sizes`` and ``names``; an alias; a scalar), or None for an event that completes none."""
+    if isinstance(event, _CLOSE):
+        return sizes.pop(), names.pop()
+    if isinstance(event, yaml.AliasEvent):
+        if event.anchor in names:
+            raise InputError(f"{where} holds a recursive YAML alias (*{event.anchor[:40]})")
+        return anchors.get(event.anchor, 1), None
+    if isinstance(event, yaml.ScalarEvent):
+        return 1 + len(event.value) // SCALAR_CHARS, event.anchor
+    return None
+
+
 def check_yaml_events(text: str, source: object, what: str) -> None:
     """Refuse a YAML text nested deeper than :data:`MAX_DEPTH` or expanding to more than
     :data:`MAX_VALUES` values, from its parser events alone (iterative, nothing built)."""
@@ -87,24 +102,18 @@ def check_yaml_events(text: str, source: object, what: str) -> None:
     anchors: dict[str, int] = {}  # anchor -> the expanded values of the node it names
     names: list[str | None] = []  # per open collection: its anchor
     total = 0
+    where = f"{source}: {what}"
     for event in yaml.parse(text, Loader=yaml.SafeLoader):
         if isinstance(event, _OPEN):
             if len(sizes) >= MAX_DEPTH:
-                raise InputError(f"{source}: {what} is nested deeper than {MAX_DEPTH} levels")
+                raise InputError(f"{where} is nested deeper than {MAX_DEPTH} levels")
             sizes.append(1)
             names.append(event.anchor)
             continue
-        if isinstance(event, _CLOSE):
-            size = sizes.pop()
-            anchor = names.pop()
-        elif isinstance(event, yaml.AliasEvent):
-            if event.anchor in names:
-                raise InputError(f"{source}: {what} holds a recursive YAML alias (*{event.anchor[:40]})")
-            size, anchor = anchors.get(event.anchor, 1), None
-        elif isinstance(event, yaml.ScalarEvent):
-            size, anchor = 1 + len(event.value) // SCALAR_CHARS, event.anchor
-        else:
+        node = _completed_node(event, sizes, names, anchors, where)
+        if node is None:
             continue
+        size, anchor = node
         if anchor is not None:
             anchors[anchor] = size
         if sizes:
@@ -112,7 +121,7 @@ def check_yaml_events(text: str, source: object, what: str) -> None:
         else:
             total += size
         if total + sum(sizes) > MAX_VALUES:
-            raise InputError(f"{source}: {what} expands to more than {MAX_VALUES:,} values (YAML aliases?)")
+            raise InputError(f"{where} expands to more than {MAX_VALUES:,} values (YAML aliases?)")
 
 
 def parse_yaml(text: str, source: object, what: str = "the file") -> Any:

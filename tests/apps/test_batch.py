@@ -6,6 +6,7 @@ import os
 import pytest
 
 from pedenv.apps.batch import run_manifest
+from pedenv.apps.options import ExecutorOptions, PoseOptions
 
 from cli_in_process import pedenv
 from shared_paths import REAL_SAMPLES
@@ -49,7 +50,7 @@ def test_a_bad_recording_is_named_the_other_written_and_resume_runs_only_it(requ
     if executor == "ray":
         request.getfixturevalue("ray_session")
     manifest, out = _manifest(tmp_path / "in"), tmp_path / "out"
-    summary = run_manifest(manifest, out, executor=executor, detection="fast")
+    summary = run_manifest(manifest, out, PoseOptions(detection="fast"), executor=ExecutorOptions(executor))
     good, bad = summary["recordings"]
     assert summary["failed"] == 1 and json.loads((out / "summary.json").read_text()) == summary
     assert (good["name"], good["status"], good["frames_done"], good["frames_total"]) == ("good", "done", 3, 3)
@@ -60,7 +61,8 @@ def test_a_bad_recording_is_named_the_other_written_and_resume_runs_only_it(requ
     # the data fixed, --resume keeps the good recording and runs the bad one
     _link_frames(tmp_path / "in" / "bad" / "images", "0016")
     before = (out / "good" / "environment.jsonl").stat().st_mtime_ns
-    again = run_manifest(manifest, out, executor=executor, detection="fast", resume=True)
+    again = run_manifest(manifest, out, PoseOptions(detection="fast"),
+                         executor=ExecutorOptions(executor, resume=True))
     assert [(r["name"], r["status"]) for r in again["recordings"]] == [("good", "resumed"), ("bad", "done")]
     assert again["failed"] == 0 and (out / "good" / "environment.jsonl").stat().st_mtime_ns == before
     assert (out / "bad" / "environment.jsonl").read_text() == (out / "good" / "environment.jsonl").read_text()

@@ -8,10 +8,13 @@ from pedenv.apps.distributed import SCENES_FOLDER, evaluate_distributed, evaluat
 from pedenv.apps.evaluate import evaluate_dataset
 from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.apps.executors import RayExecutor, SerialExecutor
+from pedenv.apps.options import ExecutorOptions
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.synthetic.dataset import SyntheticDataset
 from pedenv.synthetic.storage import write_scenes
+
+SERIAL, RESUME = ExecutorOptions("serial"), ExecutorOptions("serial", resume=True)
 
 
 def _without_timings(folder):
@@ -34,7 +37,7 @@ def _assert_same_outputs(serial, other):
 
 def test_serial_executor_gives_the_serial_runs_outputs(short_dataset, tmp_path):
     evaluate_dataset(short_dataset, output_dir=tmp_path / "serial")
-    result = evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "tasks")
+    result = evaluate_distributed(short_dataset, executor=SERIAL, output_dir=tmp_path / "tasks")
     _assert_same_outputs(tmp_path / "serial", tmp_path / "tasks")
     assert result.metrics.overall.count > 500 and len(result.metrics.scenes) == 3
     assert sorted(p.name for p in (tmp_path / "tasks" / SCENES_FOLDER).iterdir()) == sorted(short_dataset.scene_names())
@@ -59,7 +62,7 @@ def test_a_bad_scene_is_named_and_the_others_finish_then_resume_runs_it(request,
     frames_file = tmp_path / "data" / names[1] / "frames.npz"
     good = frames_file.read_bytes()
     frames_file.write_bytes(good[: len(good) // 2])  # a truncated file: bad data in one scene
-    result = evaluate_distributed(data, executor=executor, output_dir=tmp_path / "run")
+    result = evaluate_distributed(data, executor=ExecutorOptions(executor), output_dir=tmp_path / "run")
     assert list(result.extras["failures"]) == [names[1]]
     error = result.extras["failures"][names[1]]
     assert isinstance(error, InputError) and str(frames_file) in str(error)
@@ -69,7 +72,7 @@ def test_a_bad_scene_is_named_and_the_others_finish_then_resume_runs_it(request,
     # the data fixed, --resume runs only the failed scene and gives the full run's outputs
     frames_file.write_bytes(good)
     fixed = SyntheticDataset(tmp_path / "data")
-    resumed = evaluate_distributed(fixed, executor=executor, output_dir=tmp_path / "run", resume=True)
+    resumed = evaluate_distributed(fixed, executor=ExecutorOptions(executor, resume=True), output_dir=tmp_path / "run")
     assert resumed.extras["resumed"] == [names[0], names[2]]
     assert resumed.extras["failures"] == {}
     evaluate_dataset(fixed, output_dir=tmp_path / "serial")
@@ -79,17 +82,17 @@ def test_a_bad_scene_is_named_and_the_others_finish_then_resume_runs_it(request,
 def test_resume_refuses_a_folder_pedenv_did_not_write(short_dataset, tmp_path):
     (tmp_path / "mine.txt").write_text("a user's file\n")
     with pytest.raises(InputError, match="not written by pedenv"):
-        evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path, resume=True)
+        evaluate_distributed(short_dataset, executor=RESUME, output_dir=tmp_path)
     assert (tmp_path / "mine.txt").read_text() == "a user's file\n"
 
 
 def test_a_damaged_checkpoint_is_one_clear_error(short_dataset, tmp_path):
-    evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "run")
+    evaluate_distributed(short_dataset, executor=SERIAL, output_dir=tmp_path / "run")
     name = short_dataset.scene_names()[0]
     checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
     checkpoint.write_bytes(b"not a checkpoint")
     with pytest.raises(InputError, match=f"{checkpoint}: not a pedenv scene checkpoint .*to run scene {name} again"):
-        evaluate_distributed(short_dataset, executor="serial", output_dir=tmp_path / "run", resume=True)
+        evaluate_distributed(short_dataset, executor=RESUME, output_dir=tmp_path / "run")
 
 
 def test_serial_executor_reuses_one_pose_backend(short_dataset, tmp_path):
@@ -110,14 +113,13 @@ def test_serial_executor_reuses_one_pose_backend(short_dataset, tmp_path):
 def test_resume_refuses_a_scene_checkpointed_with_another_method(short_dataset, tmp_path):
     """Issue 19: a scene checkpointed with --method paper was merged into a fused run without a word."""
     name = short_dataset.scene_names()[0]
-    evaluate_distributed(short_dataset, executor="serial", scenes=[name], config=Config(method="paper"),
+    evaluate_distributed(short_dataset, executor=SERIAL, scenes=[name], config=Config(method="paper"),
                          output_dir=tmp_path / "run")
     checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
     with pytest.raises(InputError, match=f"{checkpoint}: scene {name} was checkpointed by another run "
                                          r'\(config.method "paper" \(this run: "fused"\), .*delete '):
-        evaluate_distributed(short_dataset, executor="serial", scenes=[name], output_dir=tmp_path / "run",
-                             resume=True)
+        evaluate_distributed(short_dataset, executor=RESUME, scenes=[name], output_dir=tmp_path / "run")
     # the same settings resume it
-    again = evaluate_distributed(short_dataset, executor="serial", scenes=[name], config=Config(method="paper"),
-                                 output_dir=tmp_path / "run", resume=True)
+    again = evaluate_distributed(short_dataset, executor=RESUME, scenes=[name], config=Config(method="paper"),
+                                 output_dir=tmp_path / "run")
     assert again.extras["resumed"] == [name] and again.metrics.info["method"] == "paper"

@@ -38,7 +38,7 @@ SIMULATE = ["simulate", "--scenes", "1", "--seed", "1"]
 @pytest.mark.parametrize("where, message", [
     (lambda f: f, "is an existing file"),
     (lambda f: f / "out", "which is a file"),
-    (lambda f: "/proc/pedenv-test/out", "cannot be written"),
+    (lambda _f: "/proc/pedenv-test/out", "cannot be written"),
 ])
 def test_bad_output_folder_is_one_error_line(monkeypatch, capsys, tmp_path, a_file, command, where, message):
     if "SIM" in command:

@@ -173,7 +173,7 @@ def _good_record() -> dict:
 @pytest.mark.parametrize(
     "mutate, message",
     [
-        (lambda r: [1, 2, 3], r"data_5\.npy: expected a pickled dict"),
+        (lambda _r: [1, 2, 3], r"data_5\.npy: expected a pickled dict"),
         (
             lambda r: {k: v for k, v in r.items() if k not in ("pos_3d", "intr_cam")},
             r"data_5\.npy: .*missing key\(s\) pos_3d, intr_cam",

@@ -57,9 +57,9 @@ def test_overwrite_never_clears_a_folder_pedenv_did_not_write(tmp_path):
 
 def test_environment_file_that_is_a_folder_is_refused(tmp_path):
     (tmp_path / "environment.jsonl").mkdir()
-    with pytest.raises(InputError, match=r"environment model .*environment\.jsonl is a folder"):
-        with EnvironmentWriter(tmp_path / "environment.jsonl"):
-            pass
+    with pytest.raises(InputError, match=r"environment model .*environment\.jsonl is a folder"), \
+            EnvironmentWriter(tmp_path / "environment.jsonl"):
+        pass
 
 
 def test_overlays_that_is_a_file_is_refused(tmp_path):

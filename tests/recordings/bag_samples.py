@@ -19,6 +19,7 @@ import numpy as np
 import yaml
 
 from pedenv.geometry import rotation_to_quaternion
+from pedenv.recordings.footage_writer import write_kitti_recording
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,14 @@ def quaternion_calibration(recording: Path) -> np.ndarray:
     data["cam_to_vehicle"]["rotation"] = [float(v) for v in q]
     path.write_text(yaml.safe_dump(data, sort_keys=False))
     return np.array(data["cam_to_vehicle"]["rotation"])
+
+
+def kitti_recording(folder: Path, real_samples: Path) -> Path:
+    """KITTI tracking 0016 of the real samples written as a recording in ``folder``, its
+    calibration's rotation as a quaternion (as bags carry it)."""
+    rec = write_kitti_recording(real_samples / "kitti" / "tracking_mini" / "training", "0016", folder)
+    quaternion_calibration(rec)
+    return rec
 
 
 def _poses(recording: Path) -> list[tuple[int, list[float], list[float]]]:

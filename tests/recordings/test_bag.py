@@ -91,10 +91,8 @@ def _distorter(k, coeffs, model, size):
     u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
     pix = np.stack([u.ravel(), v.ravel()], axis=1)[:, None, :]
     d = np.array(coeffs)
-    if model == "equidistant":
-        und = cv2.fisheye.undistortPoints(pix, k, d, P=k)
-    else:
-        und = cv2.undistortPoints(pix, k, d, P=k)
+    undistort = cv2.fisheye.undistortPoints if model == "equidistant" else cv2.undistortPoints
+    und = undistort(pix, k, d, P=k)
     mx, my = (und[:, 0, i].reshape(h, w).astype(np.float32) for i in (0, 1))
     return lambda bgr: cv2.remap(bgr, mx, my, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
 

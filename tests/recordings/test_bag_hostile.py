@@ -4,12 +4,11 @@ import shutil
 import struct
 
 import pytest
-from bag_samples import BagForm, _Messages, quaternion_calibration, write_bag
+from bag_samples import BagForm, _Messages, kitti_recording, write_bag
 
 from pedenv.errors import InputError
 from pedenv.recordings.bag import load_bag_recording
 from pedenv.recordings.bag_topics import BagOptions
-from pedenv.recordings.footage_writer import write_kitti_recording
 
 from shared_paths import REAL_SAMPLES
 
@@ -18,10 +17,7 @@ pytest.importorskip("rosbags", reason="the ros extra")
 
 @pytest.fixture(scope="module")
 def kitti(tmp_path_factory):
-    rec = write_kitti_recording(REAL_SAMPLES / "kitti" / "tracking_mini" / "training", "0016",
-                                tmp_path_factory.mktemp("kitti") / "rec")
-    quaternion_calibration(rec)
-    return rec
+    return kitti_recording(tmp_path_factory.mktemp("kitti") / "rec", REAL_SAMPLES)
 
 
 def _frames(path, options=None) -> int:
@@ -100,7 +96,7 @@ def test_a_huge_message(kitti, tmp_path):
         _frames(bag, BagOptions(max_message_bytes=10))
 
 
-def _rewrite(bag, out, keep=lambda topic: True, change=lambda topic, msg: msg):
+def _rewrite(bag, out, keep=lambda topic: True, change=lambda topic, msg: msg):  # noqa: ARG005 - keep all, change none
     """A copy of the rosbag2 ``bag`` with only the topics ``keep`` accepts, each message through ``change``."""
     from rosbags.rosbag2 import Reader, Writer
     from rosbags.typesys import Stores, get_typestore

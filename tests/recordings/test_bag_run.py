@@ -4,10 +4,10 @@ the image-folder recording, ``--ros-out`` beside it, and a bad image stopping th
 import csv
 
 import pytest
-from bag_samples import BagForm, quaternion_calibration, write_bag
+from bag_samples import BagForm, kitti_recording, quaternion_calibration, write_bag
 
 from pedenv.outputs.jsonl import read_environment
-from pedenv.recordings.footage_writer import write_kitti_recording, write_mot17_recording
+from pedenv.recordings.footage_writer import write_mot17_recording
 
 from cli_in_process import pedenv
 from shared_paths import REAL_SAMPLES
@@ -40,10 +40,7 @@ def _folder(rec):
 
 @pytest.fixture(scope="module")
 def kitti(tmp_path_factory):
-    rec = write_kitti_recording(REAL_SAMPLES / "kitti" / "tracking_mini" / "training", "0016",
-                                tmp_path_factory.mktemp("kitti") / "rec")
-    quaternion_calibration(rec)
-    return rec
+    return kitti_recording(tmp_path_factory.mktemp("kitti") / "rec", REAL_SAMPLES)
 
 
 @pytest.fixture(scope="module")

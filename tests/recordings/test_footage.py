@@ -199,7 +199,7 @@ def test_frame_outside_the_poses_keeps_the_frames_before(tmp_path):
     (lambda t: {"images": t / "nothing"}, "image folder not found"),
     (lambda t: {"video": t / "none.mp4"}, "none.mp4: video file not found"),
     (lambda t: {"video": _write(t / "junk.avi", "not a video")}, "junk.avi: cannot open the video"),
-    (lambda t: {}, "exactly one of"),
+    (lambda t: {}, "exactly one of"),  # noqa: ARG005 - every setup takes tmp_path
 ])
 def test_recording_source_errors(tmp_path, setup, message):
     with pytest.raises(InputError, match=message):
@@ -268,13 +268,14 @@ def pose_env(tmp_path_factory):
 @pytest.mark.onnx_model
 @pytest.mark.slow
 def test_run_on_real_images_keeps_track_ids(tmp_path, pose_env, monkeypatch):
+    from pedenv.apps.options import RecordingSource
     from pedenv.apps.run import run_recording
     from pedenv.outputs.jsonl import read_environment
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
     # the paper's method, whose triangulation the positions below check (the default, fused:
     # test_run_with_the_default_method_keeps_ids_and_places_people_near)
-    summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out",
+    summary = run_recording(RecordingSource(**_bus_recording(tmp_path / "rec", pose_env["bus"])), tmp_path / "out",
                             method="paper")
     assert summary["frames_done"] == 6 and summary["pose_backend"]["backend"] == "onnx"
     assert summary["method"] == "paper"
@@ -305,11 +306,12 @@ def test_run_with_the_default_method_keeps_ids_and_places_people_near(tmp_path, 
     person cut by the left edge, placed from their box alone, used to jump 6 m in frame 3
     (a box range taken as exact by the Kalman filter). The person cut by the right edge
     drifts 0.6 m over the five frames."""
+    from pedenv.apps.options import RecordingSource
     from pedenv.apps.run import run_recording
     from pedenv.outputs.jsonl import read_environment
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
-    summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=tmp_path / "out")
+    summary = run_recording(RecordingSource(**_bus_recording(tmp_path / "rec", pose_env["bus"])), tmp_path / "out")
     assert summary["method"] == "fused" and summary["frames_done"] == 6
     lines = read_environment(tmp_path / "out" / "environment.jsonl")
     tracks = [{p["track_id"]: np.array(p["position"]) for p in line["pedestrians"]} for line in lines]

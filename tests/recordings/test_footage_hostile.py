@@ -76,14 +76,16 @@ def _cut_video(path, frames: int = 12):
 @pytest.mark.onnx_model
 @pytest.mark.slow
 def test_video_cut_in_half_is_warned_and_recorded(tmp_path, pose_env, monkeypatch):  # noqa: F811
+    from pedenv.apps.options import RecordingSource
     from pedenv.apps.run import run_recording
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
     rec = _bus_recording(tmp_path / "rec", pose_env["bus"])
     video = _cut_video(tmp_path / "cut.avi")
     with pytest.warns(UserWarning, match=r"cut\.avi: the video ended after \d+ of the 12 frames"):
-        summary = run_recording(video=video, calibration=rec["calibration"], ego_poses=rec["ego_poses"],
-                                output=tmp_path / "out", start_time=49.9)
+        source = RecordingSource(video=video, calibration=rec["calibration"], ego_poses=rec["ego_poses"],
+                                 start_time=49.9)
+        summary = run_recording(source, tmp_path / "out")
     saved = json.loads((tmp_path / "out" / "run.json").read_text())
     assert 0 < saved["frames_done"] < 12 and saved["frames_total"] == 12 and "ended after" in saved["ended_early"]
     assert summary == saved
@@ -142,6 +144,7 @@ def test_ego_positions_beyond_ten_thousand_km_are_refused(tmp_path):
 @pytest.mark.ultralytics  # bus.jpg
 def test_every_frame_is_checked_before_an_earlier_run_is_replaced(tmp_path):
     """A bad image anywhere in the folder stops ``run --overwrite`` before it empties the folder."""
+    from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
     from pedenv.apps.run import run_recording
 
     rec = _bus_recording(tmp_path / "rec", BUS, frames=3)
@@ -151,7 +154,7 @@ def test_every_frame_is_checked_before_an_earlier_run_is_replaced(tmp_path):
     (out / "environment.jsonl").write_text("the earlier run's lines\n")
     (rec["images"] / "frame_002.jpg").write_bytes(b"not a jpeg")
     with pytest.raises(InputError, match=r"frame_002\.jpg: cannot read the image \(corrupt or not an image\)"):
-        run_recording(**rec, output=out, overwrite=True, pose_backend="detector-model")
+        run_recording(RecordingSource(**rec), OutputOptions(out, overwrite=True), PoseOptions("detector-model"))
     assert (out / "environment.jsonl").read_text() == "the earlier run's lines\n"
 
 

@@ -17,13 +17,15 @@ pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model, pytest.mark.slow]
 
 
 def test_run_writes_every_output_of_the_bus_recording(tmp_path, pose_env, monkeypatch):  # noqa: F811
+    from pedenv.apps.options import OutputOptions, RecordingSource
     from pedenv.apps.run import run_recording
     from pedenv.outputs.sinks import ExtraOutputs
 
     monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
     out = tmp_path / "out"
     extra = ExtraOutputs(parquet=out / "environment.parquet", rerun=out / "run.rrd", mcap=out / "run.mcap")
-    summary = run_recording(**_bus_recording(tmp_path / "rec", pose_env["bus"]), output=out, extra_outputs=extra)
+    summary = run_recording(RecordingSource(**_bus_recording(tmp_path / "rec", pose_env["bus"])),
+                            OutputOptions(out, extra=extra))
     lines = [json.loads(line) for line in (out / "environment.jsonl").read_text().splitlines()]
     assert summary["frames_done"] == len(lines) == 6
     assert sorted(summary["files"]) == sorted(str(out / n) for n in ("environment.parquet", "run.rrd", "run.mcap",
@@ -48,6 +50,7 @@ def test_run_writes_every_output_of_the_bus_recording(tmp_path, pose_env, monkey
 def test_run_realtime_drops_the_frames_that_arrive_while_the_model_is_busy(tmp_path, pose_env, monkeypatch):  # noqa: F811
     """Frames 1 ms apart arrive while the network works on the one before (a pass takes far
     longer); after a 4 s gap the model is free again. So frames 0 and 3 run, 1, 2 and 4 are dropped."""
+    from pedenv.apps.options import PoseOptions, RecordingSource
     from pedenv.apps.pipeline import PipelineConfig
     from pedenv.apps.run import run_recording
 
@@ -58,8 +61,8 @@ def test_run_realtime_drops_the_frames_that_arrive_while_the_model_is_busy(tmp_p
         "filename,timestamp\n" + "".join(f"frame_{i:03d}.jpg,{t}\n" for i, t in enumerate(stamps)))
     (tmp_path / "poses.csv").write_text("timestamp,x,y,yaw\n49,0,0,0\n55,0,0,0\n")
     out = tmp_path / "out"
-    summary = run_recording(**{**rec, "ego_poses": tmp_path / "poses.csv"}, output=out, detection="fast",
-                            pipeline=PipelineConfig(realtime=True))
+    summary = run_recording(RecordingSource(**{**rec, "ego_poses": tmp_path / "poses.csv"}), out,
+                            PoseOptions(detection="fast"), pipeline=PipelineConfig(realtime=True))
     assert (summary["frames_done"], summary["frames_dropped"], summary["frames_total"]) == (2, 3, 5)
     lines = [json.loads(line) for line in (out / "environment.jsonl").read_text().splitlines()]
     assert [line["frame"] for line in lines] == [0, 3]

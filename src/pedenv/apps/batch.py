@@ -1,6 +1,6 @@
 """``pedenv run --manifest``: many recordings, one task each, serially or on Ray.
 
-    summary = run_manifest("drives.csv", "out", executor="ray", workers=2)
+    summary = run_manifest("drives.csv", "out", executor=ExecutorOptions("ray", workers=2))
 
 Each row of the manifest (:mod:`pedenv.recordings.manifest`) is one
 :func:`~pedenv.apps.run.run_recording` into ``<output>/<name>/``, as ``pedenv run`` writes
@@ -26,44 +26,42 @@ from typing import Any
 from rich.console import Console
 
 from pedenv.apps.executors import TaskContext, create_executor
+from pedenv.apps.options import ExecutorOptions, OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.run import detection_mode, run_recording
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.localization import configure
 from pedenv.outputs.output_dir import prepare_output_dir
 from pedenv.recordings.manifest import SUMMARY, ManifestRow, read_manifest
 from pedenv.structured_text import load_json
 
 
-def run_manifest(manifest: str | Path, output: str | Path, *, executor: str = "serial", address: str | None = None,
-                 workers: int | None = None, resume: bool = False, overwrite: bool = False,
-                 pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
-                 detection: str | None = "far", video_out: bool = False, progress: bool = False,
-                 object_store_memory: int | None = None, method: str | None = None) -> dict:
-    """Run every recording of ``manifest`` into ``output``; returns the summary saved as ``summary.json``.
+def run_manifest(manifest: str | Path, output: OutputOptions | str | Path, pose: PoseOptions | None = None, *,
+                 executor: ExecutorOptions | None = None, config: Config | str | Path | None = None,
+                 method: str | None = None, progress: bool = False) -> dict:
+    """Run every recording of ``manifest`` into ``output.folder``; returns the summary saved as ``summary.json``.
 
-    The pose and model options are those of :func:`~pedenv.apps.run.run_recording`, for
-    every recording (``method``: as ``pedenv run --method``, applied to ``config``).
+    ``pose``, ``config`` and ``output.video_out`` are those of :func:`~pedenv.apps.run.run_recording`,
+    for every recording (``method``: as ``pedenv run --method``, applied to ``config``);
+    ``output.overwrite`` empties an earlier run's folder, ``executor.resume`` continues it.
     ``summary["failed"]`` counts the recordings that failed.
     """
     from pedenv.apps.distributed import prepare_resume_dir
 
+    output, pose, executor = OutputOptions.of(output), pose or PoseOptions(), executor or ExecutorOptions()
     rows = read_manifest(manifest)
-    cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
-    cfg = configure(cfg, method) if method else cfg
-    out = prepare_resume_dir(Path(output)) if resume else prepare_output_dir(
-        output, overwrite=overwrite, command="pedenv run --manifest")
+    cfg = load_config(config, method)
+    out = prepare_resume_dir(Path(output.folder)) if executor.resume else prepare_output_dir(
+        output.folder, overwrite=output.overwrite, command="pedenv run --manifest")
     entries: dict[str, dict[str, Any]] = {}
-    if resume:
+    if executor.resume:
         entries = {r.name: {**_complete(out / r.name), "status": "resumed"} for r in rows if _complete(out / r.name)}
     todo = [r for r in rows if r.name not in entries]
-    options = {"pose_backend": pose_backend, "pose_model": pose_model, "pose_input_size": pose_input_size,
-               "detection": detection, "video_out": video_out, "config": cfg}
+    options = {"pose": pose, "video_out": output.video_out, "config": cfg}
     interrupted = False
     try:
-        with create_executor(executor, address=address, workers=workers,
-                             object_store_memory=object_store_memory) as ex, \
+        with create_executor(executor.name, address=executor.address, workers=executor.workers,
+                             object_store_memory=executor.object_store_memory) as ex, \
                 progress_bar(Console(stderr=True, emoji=False, markup=False), enabled=progress) as bar:
             counter = FrameCounter(bar, len(rows), already=len(entries), noun="recordings")
             shared = {"options": options, "output": str(out)}
@@ -78,7 +76,7 @@ def run_manifest(manifest: str | Path, output: str | Path, *, executor: str = "s
         interrupted = True
         raise
     finally:  # also after Ctrl-C: the recordings finished so far are listed
-        summary = _write_summary(manifest, out, executor, rows, entries, interrupted)
+        summary = _write_summary(manifest, out, executor.name, rows, entries, interrupted)
     return summary
 
 
@@ -101,25 +99,26 @@ def _write_summary(manifest, out: Path, executor: str, rows: list[ManifestRow], 
 def _recording_task(row: ManifestRow, context: TaskContext) -> dict:
     """One recording on a worker, with the worker's pose backend (made at its first recording)."""
     o = context.shared["options"]
+    pose: PoseOptions = o["pose"]
     backend = None
-    if o["pose_backend"] != "onnx" or o["detection"] is not None or o["pose_input_size"] is not None:
+    if pose.backend != "onnx" or pose.detection is not None or pose.input_size is not None:
         # else run_recording picks the input size from each recording's camera
-        backend = context.cached(("pose", o["pose_backend"], str(o["pose_model"]), o["pose_input_size"],
-                                  o["detection"]), lambda: _make_backend(o))
-    return run_recording(calibration=row.calibration, ego_poses=row.ego_poses, images=row.images, video=row.video,
-                         fps=row.fps, start_time=row.start_time, output=Path(context.shared["output"]) / row.name,
-                         overwrite=True, pose_backend=o["pose_backend"], pose_model=o["pose_model"],
-                         pose_input_size=o["pose_input_size"], detection=o["detection"], config=o["config"],
-                         video_out=o["video_out"], backend=backend, progress=context.report)
+        backend = context.cached(("pose", pose.backend, str(pose.model), pose.input_size, pose.detection),
+                                 lambda: _make_backend(pose, o["config"]))
+    source = RecordingSource(calibration=row.calibration, ego_poses=row.ego_poses, images=row.images,
+                             video=row.video, fps=row.fps, start_time=row.start_time)
+    output = OutputOptions(Path(context.shared["output"]) / row.name, overwrite=True, video_out=o["video_out"])
+    return run_recording(source, output, pose, config=o["config"], backend=backend, progress=context.report)
 
 
-def _make_backend(o: dict):
+def _make_backend(pose: PoseOptions, config: Config):
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
 
-    cfg = detection_mode(o["config"], o["pose_backend"], o["detection"])
-    return create_pose_backend(o["pose_backend"], **backend_options(
-        o["pose_backend"], o["pose_model"], o["pose_input_size"], cfg.detection if o["detection"] else None,
+    name = pose.backend or "onnx"
+    cfg = detection_mode(config, name, pose.detection)
+    return create_pose_backend(name, **backend_options(
+        name, pose.model, pose.input_size, cfg.detection if pose.detection else None,
         cfg.tracking.pose_score_threshold, cfg.merge))
 
 

@@ -7,8 +7,10 @@ number of walking pedestrians in front of a driving ego, through the real model.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
 from dataclasses import replace
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,6 +20,9 @@ from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.records import Camera, Detections, EgoPose, Frame
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 PAPER_MS = {"tracking_per_frame": 0.35, "position_per_pedestrian": 0.29, "pose_network": 39.94, "total": 40.54}
 
@@ -52,7 +57,8 @@ def bench_frames(n_pedestrians: int, n_frames: int = 100, seed: int = 0, camera:
 MAX_BENCH_FRAMES = 10_000
 
 
-def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config | None = None) -> list[dict]:
+def bench_core(pedestrian_counts: Iterable[int] = (10, 100), n_frames: int = 100,
+               config: Config | None = None) -> list[dict]:
     """Tracking ms/frame and position ms/pedestrian of the model for each pedestrian count.
 
     ``config``: by default the paper's method (``Config(method="paper")``), whose stages the
@@ -79,7 +85,7 @@ def bench_core(pedestrian_counts=(10, 100), n_frames: int = 100, config: Config 
     return rows
 
 
-def format_behaviour_cost(rows: list[dict]):
+def format_behaviour_cost(rows: list[dict]) -> Table:
     """A rich table: ``model.update`` of the fused preset per frame and the behaviour cues' share of it."""
     from rich.table import Table
 
@@ -93,7 +99,7 @@ def format_behaviour_cost(rows: list[dict]):
     return table
 
 
-def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
+def format_bench(rows: list[dict], pose_rows: list[dict] | None = None) -> Table:
     """A rich table of the rows, with the paper's figures and the speed-up over them."""
     from rich.table import Table
 
@@ -107,7 +113,7 @@ def format_bench(rows: list[dict], pose_rows: list[dict] | None = None):
                           f"{PAPER_MS[key] / r[key]:.1f}x")
         table.add_row("model.update per frame", str(r["pedestrians"]), f"{r['update_per_frame']:.3f}", "", "")
     for r in pose_rows or []:
-        paper = PAPER_MS.get(r.get("paper_key", ""), None)
+        paper = PAPER_MS.get(r.get("paper_key", ""))
         table.add_row(r["stage"], str(r.get("pedestrians", "")), f"{r['ms']:.2f}",
                       "" if paper is None else f"{paper:.2f}", "" if paper is None else f"{paper / r['ms']:.2f}x")
     return table
@@ -143,7 +149,8 @@ def bench_end_to_end(repeats: int = 10, threads: int = 2, device: str = "auto") 
     return rows
 
 
-def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2, device: str = "auto") -> list[dict]:
+def bench_detection_modes(samples_root: str | Path | None = None, repeats: int = 5, threads: int = 2,
+                          device: str = "auto") -> list[dict]:
     """``fast``, ``far`` and ``stream`` side by side: ms and units per 1600x900 frame, recall on the real samples.
 
     The time is over ``repeats`` runs on a 1600x900 street frame seen by a level camera 1.5 m
@@ -167,7 +174,7 @@ def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2,
     rows = []
     for mode in ("fast", "far", "stream"):
         pose: Any = create_pose_backend("onnx", detection=mode, threads=threads, device=device)
-        def run(i: int, pose=pose, mode=mode) -> None:
+        def run(i: int, pose: Any = pose, mode: str = mode) -> None:
             if mode == "stream":
                 pose.detect_frame(image, geometry, 0.1 * i)
             else:
@@ -195,7 +202,7 @@ def bench_detection_modes(samples_root=None, repeats: int = 5, threads: int = 2,
     return rows
 
 
-def format_detection_modes(rows: list[dict]):
+def format_detection_modes(rows: list[dict]) -> Table:
     """A rich table of :func:`bench_detection_modes` rows, the modes side by side."""
     from rich.table import Table
 

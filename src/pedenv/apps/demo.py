@@ -8,6 +8,7 @@ from pathlib import Path
 
 from pedenv.apps.evaluate import run_evaluation
 from pedenv.apps.evaluation_outputs import write_outputs
+from pedenv.apps.options import MethodOptions, OutputFlags, OutputOptions
 from pedenv.config import Config
 from pedenv.datasets.memory import MemoryDataset
 from pedenv.errors import InputError
@@ -99,6 +100,38 @@ def run_demo(output_dir: str | Path, *, seed: int = 0, config: Config | None = N
         {m: r.metrics.error_by_distance for m, r in result.extras["methods"].items()},
         output_dir / "error_by_distance.png", title="Absolute error over distance (synthetic)")
     return result
+
+
+def demo_command(*, output: OutputOptions, flags: OutputFlags, method: MethodOptions, seed: int = 0,
+                 terrain: bool = False, pose_backend: str = "detector-model") -> EvaluationResult:
+    """``pedenv demo``: :func:`run_demo` into ``output.folder`` with the command's outputs (``flags``,
+    the bird's-eye video of :data:`VIDEO_SCENE`), after the outputs and the folder are checked."""
+    from pedenv.outputs.output_dir import prepare_output_dir
+
+    config = method.load()
+    extra = flags.extra_outputs(output, matches=True, video_scene=VIDEO_SCENE)
+    extra.check()
+    prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv demo")
+    return run_demo(output.folder, seed=seed, config=config, terrain=terrain, pose_backend=pose_backend,
+                    extra_outputs=extra)
+
+
+def simulate_command(*, output: OutputOptions, scenes: int | None = None, seed: int = 0, fmt: str = "synthetic",
+                     terrain: bool = False, frame_rate: float | None = None) -> SceneCounter:
+    """``pedenv simulate``: the built-in scenes written to ``output.folder`` in format ``fmt``
+    (:data:`pedenv.datasets.SCENE_WRITERS`), each as it is made, at ``frame_rate`` Hz (default 10,
+    12 for nuscenes); the format and the options are checked before the folder is prepared.
+    Returns what was written, counted."""
+    from pedenv.datasets import scene_writer
+    from pedenv.outputs.output_dir import prepare_output_dir
+
+    write = scene_writer(fmt)
+    rate = frame_rate if frame_rate is not None else (12.0 if fmt == "nuscenes" else 10.0)
+    stream = iter_builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
+    prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv simulate")
+    counter = SceneCounter()
+    write((counter.add(scene) for scene in stream), Path(output.folder))
+    return counter
 
 
 def _demo_order(method: str) -> int:

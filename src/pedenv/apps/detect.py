@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from pedenv.errors import InputError
 from pedenv.images import image_size, read_image_rgb, write_image
 from pedenv.outputs.detections import detections_to_dict, unique_names, write_detections
 from pedenv.outputs.output_dir import prepare_output_dir
+from pedenv.pose.base import PoseBackend
 from pedenv.pose.tiling import CameraGeometry
+from pedenv.records import Camera
 from pedenv.visualize.overlay import draw_detections
 
 
-def annotate_images(images, output: str | Path, backend, *, camera=None, overwrite: bool = False,
+def annotate_images(images: Iterable[str | Path], output: str | Path, backend: PoseBackend, *,
+                    camera: Camera | None = None, overwrite: bool = False,
                     prepare: bool = True) -> Path:
     """Run a pose ``backend`` on image files; write ``output/detections.json`` and the drawn images.
 
@@ -59,17 +64,20 @@ def annotate_images(images, output: str | Path, backend, *, camera=None, overwri
     return target
 
 
-def _annotate(path: Path, drawn_path: Path, backend, camera) -> dict:
+def _annotate(path: Path, drawn_path: Path, backend: PoseBackend, camera: Camera | None) -> dict:
     """One image's record: read, detected (the far band placed by ``camera`` when given), drawn
     to ``drawn_path``."""
+    # detect(image[, geometry]) is not in the PoseBackend protocol (only __call__ on a frame): the
+    # image backends (OnnxPose, StreamPose, UltralyticsPose) have it, with the signatures of their own
+    detector: Any = backend
     image = read_image_rgb(path)
     if camera is None:
-        det = backend.detect(image)
+        det = detector.detect(image)
     elif (image.shape[1], image.shape[0]) != (camera.width, camera.height):
         raise InputError(f"{path}: image is {image.shape[1]}x{image.shape[0]} px, the calibration says "
                          f"{camera.width}x{camera.height}")
     else:
-        det = backend.detect(image, CameraGeometry.of_camera(camera))
+        det = detector.detect(image, CameraGeometry.of_camera(camera))
     drawn = write_image(drawn_path, draw_detections(image, det))
     return {"file": str(path), "width": image.shape[1], "height": image.shape[0], "backend": backend.name,
             "drawn": str(drawn), "persons": detections_to_dict(det)}

@@ -27,9 +27,10 @@ from pathlib import Path
 
 from pedenv.apps.evaluate import evaluation_info, resolve_scenes
 from pedenv.apps.executors import RayExecutor, SerialExecutor, TaskContext
+from pedenv.apps.options import ExecutorOptions
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.scene_checkpoint import load_checkpoint, run_identity, save_checkpoint
-from pedenv.apps.scene_result import SceneResult, evaluate_scene, merge_scene_results
+from pedenv.apps.scene_result import SceneHooks, SceneResult, evaluate_scene, merge_scene_results
 from pedenv.config import Config
 from pedenv.datasets import Dataset
 from pedenv.errors import InputError
@@ -105,8 +106,8 @@ def _scene_task(name: str, context: TaskContext) -> SceneResult:
     backend = context.cached(("backend", id(spec)), lambda: make_backend(spec))
     frames = list(dataset.frames(name))
     context.report(0, len(frames))
-    return evaluate_scene(name, frames, config=config, backend=backend, collect_lines=True,
-                          progress=lambda done: context.report(done, len(frames)))
+    hooks = SceneHooks(collect_lines=True, progress=lambda done: context.report(done, len(frames)))
+    return evaluate_scene(name, frames, config=config, backend=backend, hooks=hooks)
 
 
 class SceneStore:
@@ -159,31 +160,32 @@ class SceneStore:
         return path
 
 
-def evaluate_distributed(dataset: Dataset, *, executor: str = "ray", address: str | None = None,
-                         workers: int | None = None, scenes: Sequence[str] | None = None,
-                         config: Config | None = None, pose_backend: BackendSpec | None = None,
-                         output_dir: str | Path | None = None, resume: bool = False, overwrite: bool = False,
-                         progress: bool = False, object_store_memory: int | None = None) -> EvaluationResult:
-    """:func:`evaluate_on` with the executor named ``executor`` (started and stopped here), then
-    ``metrics.json``, ``config.json`` and the plots into ``output_dir`` (also when scenes failed).
+def evaluate_distributed(dataset: Dataset, *, executor: ExecutorOptions | None = None,
+                         scenes: Sequence[str] | None = None, config: Config | None = None,
+                         pose_backend: BackendSpec | None = None, output_dir: str | Path | None = None,
+                         overwrite: bool = False, progress: bool = False) -> EvaluationResult:
+    """:func:`evaluate_on` with the executor ``executor`` names (started and stopped here; default: a
+    local Ray), then ``metrics.json``, ``config.json`` and the plots into ``output_dir`` (also when
+    scenes failed).
 
     ``output_dir`` must be new, empty, a folder pedenv wrote with ``overwrite`` (emptied), or
-    one it wrote with ``resume`` (continued).
+    one it wrote with ``executor.resume`` (continued).
     """
     from pedenv.apps.evaluation_outputs import write_outputs
     from pedenv.apps.executors import create_executor
     from pedenv.outputs.output_dir import prepare_output_dir
 
     config = config or Config()
+    executor = executor or ExecutorOptions("ray")
     if output_dir is not None:
-        if resume:
+        if executor.resume:
             prepare_resume_dir(Path(output_dir))
         else:
             prepare_output_dir(output_dir, overwrite=overwrite, command="pedenv evaluate")
-    with create_executor(executor, address=address, workers=workers,
-                         object_store_memory=object_store_memory) as ex:
+    with create_executor(executor.name, address=executor.address, workers=executor.workers,
+                         object_store_memory=executor.object_store_memory) as ex:
         result = evaluate_on(dataset, executor=ex, scenes=scenes, config=config, pose_backend=pose_backend,
-                             output_dir=output_dir, resume=resume, progress=progress)
+                             output_dir=output_dir, resume=executor.resume, progress=progress)
     if output_dir is not None:
         result.extras["paths"] = write_outputs(result, Path(output_dir), config)
     return result

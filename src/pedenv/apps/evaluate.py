@@ -9,7 +9,7 @@ from pathlib import Path
 
 from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.apps.progress import progress_bar
-from pedenv.apps.scene_result import evaluate_scene, merge_scene_results
+from pedenv.apps.scene_result import SceneHooks, evaluate_scene, merge_scene_results
 from pedenv.config import Config
 from pedenv.datasets import Dataset
 from pedenv.errors import InputError
@@ -63,8 +63,9 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
         for name in names:
             frames = list(dataset.frames(name))
             task = bar.add_task(name, total=len(frames))
+            hooks = SceneHooks(on_frame=on_frame, pairs=pairs, progress=partial(_advance, bar, task))
             results.append(evaluate_scene(name, frames, config=config, backend=backend, model_factory=model_factory,
-                                          on_frame=on_frame, pairs=pairs, progress=partial(_advance, bar, task)))
+                                          hooks=hooks))
     result = merge_scene_results(results, evaluation_info(dataset, backend, config, names))
     result.extras["files"] = sinks.files + ([pairs.path] if pairs else [])
     return result

@@ -11,18 +11,28 @@ import json
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pedenv.evaluation.detections import load_samples, match_detections, summarize
+from pedenv.evaluation.detections import DetectionSample, load_samples, match_detections, summarize
 from pedenv.evaluation.metrics import strict_json
 from pedenv.images import read_image_rgb
+from pedenv.records import Detections
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.stream import StreamPose
+    from pedenv.pose.tiling import DetectionConfig
 
 
-def evaluate_detections(data_root: str | Path, detection="far", output: str | Path | None = None, backend=None,
+def evaluate_detections(data_root: str | Path, detection: str | DetectionConfig = "far",
+                        output: str | Path | None = None, backend: OnnxPose | StreamPose | None = None,
                         model_path: str | Path | None = None, threads: int = 2,
-                        progress: Callable[[int, int], None] | None = None, samples=None) -> dict:
+                        progress: Callable[[int, int], None] | None = None,
+                        samples: list[DetectionSample] | None = None) -> dict:
     """Recall/precision report (a JSON-ready dict) of ``detection`` mode (``fast``, ``far`` or a
     DetectionConfig) on the samples under ``data_root``; written to ``output/detections_eval.json``
     when ``output`` is given. ``backend``: an OnnxPose to use instead of creating one.
@@ -36,7 +46,7 @@ def evaluate_detections(data_root: str | Path, detection="far", output: str | Pa
     images = [read_image_rgb(s.image_path) for s in samples]
     pose.detect(images[0], samples[0].geometry)  # warm-up: onnxruntime's first run allocates
     matches, ms, cpu_ms, units = [], [], [], []
-    previous = None
+    previous: tuple[DetectionSample, Detections] | None = None
     for i, (sample, image) in enumerate(zip(samples, images)):
         start, cpu = time.perf_counter(), time.process_time()
         if hasattr(pose, "detect_frame"):  # stream: a sequence's samples in order, consecutive frames
@@ -69,10 +79,12 @@ def evaluate_detections(data_root: str | Path, detection="far", output: str | Pa
     return report
 
 
-def stream_frame(pose, image, sample, previous):
+def stream_frame(pose: StreamPose, image: np.ndarray, sample: DetectionSample,
+                 previous: tuple[DetectionSample, Detections] | None) -> Detections:
     """``pose.detect_frame`` on one sample as the next frame of its sequence; the tracks stand-in
     is the previous sample's persons where it is the frame before in the same sequence (not moved,
-    ``track_min_hits`` hits each); a sample of another sequence, or of none, restarts the stream."""
+    ``track_min_hits`` hits each); a sample of another sequence, or of none, restarts the stream.
+    ``image``: (H, W, 3) uint8 RGB."""
     if previous is None or not sample.sequence or previous[0].sequence != sample.sequence:
         pose.restart()
         return pose.detect_frame(image, sample.geometry, sample.timestamp)
@@ -81,22 +93,22 @@ def stream_frame(pose, image, sample, previous):
     return pose.detect_frame(image, sample.geometry, sample.timestamp, (np.arange(len(boxes)), boxes, hits))
 
 
-def network_units(pose) -> float:
+def network_units(pose: OnnxPose | StreamPose) -> float:
     """Network input pixels of the passes ``pose`` ran on its last image, in units of one
     384x640 pass (a load-independent cost; about 24 ms on two quiet cores, FORMATS.md)."""
     return sum(p.input_size[0] * p.input_size[1] for p in pose.last_passes) / (384 * 640)
 
 
-def _mean(values: list[float], samples, dataset: str) -> float:
+def _mean(values: list[float], samples: list[DetectionSample], dataset: str) -> float:
     picked = [v for v, s in zip(values, samples) if dataset in ("all", s.dataset)]
     return float(sum(picked) / len(picked)) if picked else float("nan")
 
 
-def _pct(x) -> str:
+def _pct(x: float | None) -> str:
     return "-" if x is None else f"{100 * x:.0f} %"
 
 
-def detection_table(report: dict, title: str = ""):
+def detection_table(report: dict, title: str = "") -> Table:
     """A rich table: recall by height (and goal bins), precision, ms per frame, per dataset."""
     from rich.table import Table
 
@@ -125,7 +137,7 @@ def detection_table(report: dict, title: str = ""):
     return table
 
 
-def distance_table(report: dict):
+def distance_table(report: dict) -> Table:
     """A rich table: recall by distance bin where 3D ground truth exists (KITTI, nuScenes)."""
     from rich.table import Table
 

@@ -211,7 +211,8 @@ def _drain(queue: Any, on_progress: Callable | None) -> None:
         on_progress(item, done, total)
 
 
-def _ignore(done: int, total: int) -> None:
+def _ignore(done: int, total: int) -> None:  # noqa: ARG001 - a progress callback's signature
+    """The progress callback of a run without ``on_progress``: ``report(done, total)`` does nothing."""
     return None
 
 

@@ -25,19 +25,27 @@ With ``realtime`` the frames are taken at the recording's own rate: frame ``i`` 
 
 from __future__ import annotations
 
+import enum
 import queue
 import threading
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.records import Frame
 
-_END = object()  # the end of a queue's items
+
+class _End(enum.Enum):
+    """The end of a queue's items (an enum member: ``item is _END`` narrows an item's type)."""
+
+    END = "end"
+
+
+_END: Final = _End.END
 _POLL_S = 0.1  # how often a blocked stage looks whether the others have stopped
 
 
@@ -94,7 +102,7 @@ class _Failure:
         self.exc = exc
 
 
-def _put(q: queue.Queue, item, stop: threading.Event) -> bool:
+def _put(q: queue.Queue, item: object, stop: threading.Event) -> bool:
     """Put ``item`` unless ``stop`` is set first; whether it was put."""
     while not stop.is_set():
         try:
@@ -105,7 +113,7 @@ def _put(q: queue.Queue, item, stop: threading.Event) -> bool:
     return False
 
 
-def _read(frames: Iterable[Frame], out: queue.Queue, stop: threading.Event) -> None:
+def _read(frames: Iterable[Frame], out: queue.Queue[Frame | _Failure | _End], stop: threading.Event) -> None:
     iterator = iter(frames)
     try:
         for frame in iterator:
@@ -170,7 +178,8 @@ class _RealtimeClock:
 
 
 def run_frames(frames: Iterable[Frame], step: Callable[[Frame], Any], write: Callable[[Any], None], *,
-               config: PipelineConfig | None = None, done: Callable[[Any], None] = lambda result: None,
+               config: PipelineConfig | None = None,
+               done: Callable[[Any], None] = lambda result: None,  # noqa: ARG005 - no progress to report
                stats: PipelineStats | None = None, clock: Callable[[], float] = time.monotonic,
                sleep: Callable[[float], None] = time.sleep) -> PipelineStats:
     """Run ``step`` on each of ``frames`` and ``write`` each result, pipelined (module doc).
@@ -183,7 +192,7 @@ def run_frames(frames: Iterable[Frame], step: Callable[[Frame], Any], write: Cal
     config = config or PipelineConfig()
     stats = stats if stats is not None else PipelineStats()
     stop = threading.Event()
-    inbox: queue.Queue = queue.Queue(config.read_ahead)
+    inbox: queue.Queue[Frame | _Failure | _End] = queue.Queue(config.read_ahead)
     reader = threading.Thread(target=_read, args=(frames, inbox, stop), name="pedenv-reader", daemon=True)
     writer = _Writer(write, done, stats, clock, config.write_behind)
     pace = _RealtimeClock(clock, sleep) if config.realtime else None
@@ -218,7 +227,7 @@ def run_frames(frames: Iterable[Frame], step: Callable[[Frame], Any], write: Cal
     return stats
 
 
-def _next(inbox: queue.Queue, writer: _Writer):
+def _next(inbox: queue.Queue[Frame | _Failure | _End], writer: _Writer) -> Frame | _Failure | _End:
     """The next frame (or end or failure) of the reader; stops early when the writer failed."""
     while not writer.failed.is_set():
         try:

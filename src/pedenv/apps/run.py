@@ -6,18 +6,19 @@ import dataclasses
 import json
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.images import write_image
-from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import prepare_output_dir
@@ -25,124 +26,132 @@ from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.pose.redetect import with_redetection
-from pedenv.recordings.footage import Recording, load_recording
+from pedenv.recordings.footage import Recording
 from pedenv.records import Frame
 from pedenv.video_files import VideoOut, video_capture
 from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
+if TYPE_CHECKING:
+    from pedenv.recordings.bag import BagRecording
 
-def run_recording(*, calibration=None, ego_poses=None, output, images=None, video=None, fps=None, start_time=None,
-                  static=False,
-                  pose_backend: str = "onnx", pose_model=None, pose_input_size=None, config=None,
-                  video_out: bool = False, overwrite: bool = False, progress=None,
-                  detection: str | None = "far", extra_outputs: ExtraOutputs | None = None,
-                  method: str | None = None, backend: PoseBackend | None = None, bag=None, bag_options=None,
-                  device: str = "auto", pipeline: PipelineConfig | None = None) -> dict:
+
+def run_recording(source: RecordingSource, output: OutputOptions | str | Path, pose: PoseOptions | None = None, *,
+                  config: Config | str | Path | None = None, method: str | None = None,
+                  backend: PoseBackend | None = None, pipeline: PipelineConfig | None = None,
+                  progress: Callable[[int, int], None] | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
     ``run.json`` (pose backend and the provider that ran it, recording, frames done, speed),
-    ``overlays/<index>.png`` or ``overlay.mp4`` (``video_out``) with skeletons, track ids and
+    ``overlays/<index>.png`` or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and
     distances, and ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the
-    ``extra_outputs`` asked for (Parquet, Rerun, MCAP; refused before the run when their extra
+    ``output.extra`` outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra
     is missing). Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`,
     ``pipeline``); every output holds the frames in order. A bad frame stops the run with an
     InputError; what was computed before it stays on disk. ``progress(done, total)`` is called
     per frame written.
-    ``output`` must be empty or new, unless ``overwrite`` (then an earlier pedenv run there is
-    deleted once every frame's size and ego pose are checked: :func:`pedenv.outputs.output_dir.prepare_output_dir`).
+    ``output.folder`` must be empty or new, unless ``output.overwrite`` (then an earlier pedenv run there is
+    deleted once every frame's size and ego pose are checked:
+    :func:`pedenv.outputs.output_dir.prepare_output_dir`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
-    ``detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
-    ``fast`` (one pass fitted to the camera's aspect); None with ``pose_input_size`` None
-    picks 384x640 for wide cameras, else 640 (one pass). ``device`` (``onnx``): ``auto``,
+    ``pose.detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
+    ``fast`` (one pass fitted to the camera's aspect); None with ``pose.input_size`` None
+    picks 384x640 for wide cameras, else 640 (one pass). ``pose.device`` (``onnx``): ``auto``,
     ``cpu`` or ``cuda`` (:mod:`pedenv.pose.providers`).
     ``pipeline.realtime``: frames at the recording's rate, those arriving while the model is
     busy dropped and counted (``frames_dropped``); an image folder needs its timestamps.csv or ``fps``.
     ``config``: a Config or a config.json (default ``Config()``, the fused method);
     ``method`` switches it to another position method (:func:`pedenv.localization.configure`).
     ``backend``: a pose backend already made (a worker's, kept over recordings) instead of
-    the one ``pose_backend``, ``pose_model``, ``pose_input_size``, ``detection`` and ``device`` describe.
-    ``static``: the camera is fixed to the ground (``mount: static``, whatever the calibration
-    says); ``ego_poses`` may then be None (:func:`pedenv.recordings.footage.load_recording`).
-    ``bag``: a ROS bag instead of images/video + calibration + ego poses, read with
-    ``bag_options`` (:func:`pedenv.recordings.bag.load_bag_recording`).
-    Returns the summary also saved as ``run.json``.
+    the one ``pose`` describes (default: :class:`~pedenv.apps.options.PoseOptions`).
+    ``source``: :class:`~pedenv.apps.options.RecordingSource` (images or video, calibration, ego
+    poses, or a ROS bag). Returns the summary also saved as ``run.json``.
     """
-    cfg = config if isinstance(config, Config) else (Config.load(config) if config else Config())
-    cfg = configure(cfg, method) if method else cfg
-    cfg = detection_mode(cfg, pose_backend, detection)
+    output, pose = OutputOptions.of(output), pose or PoseOptions()
+    cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
     pipe = pipeline or PipelineConfig()
-    extra = extra_outputs or ExtraOutputs()
-    extra.check()
-    _check_realtime(pipe, images, fps)
-    rec = _load_bag(bag, bag_options) if bag is not None else load_recording(
-        calibration=calibration, ego_poses=ego_poses, images=images, video=video, fps=fps, start_time=start_time,
-        static=static)
-    if pose_backend == "onnx" and pose_input_size is None and pose_model is None and detection is None:
-        pose_input_size = choose_input_size(rec.camera.width, rec.camera.height)
-    if backend is None:
-        backend = create_pose_backend(pose_backend, **backend_options(
-            pose_backend, pose_model, pose_input_size, cfg.detection if detection else None,
-            cfg.tracking.pose_score_threshold, cfg.merge, device=device))
-    if hasattr(rec, "check") and _holds_files(Path(output)):  # an earlier run there: every frame's size and
-        rec.check()  # ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
-        # the frames before a bad one are run and stay on disk
-    out = prepare_output_dir(output, overwrite=overwrite, command="pedenv run")
-    cfg.save(out / "config.json")
+    extra = output.extra or ExtraOutputs()
+    rec, backend, out = _open_run(source, output, pose, cfg, pipe, backend)
     model = PedestrianEnvironmentModel(cfg)
     backend = with_redetection(backend, model, cfg.redetect)  # missed tracks searched in crops (fused preset)
     summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(out / "environment.jsonl")}
     stats, timer = PipelineStats(), _StepTimes()
-    outputs = _Outputs(out, rec, video_out, summary, progress)
+    outputs = _Outputs(out, rec, output.video_out, summary, progress)
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
         with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
             outputs.writer, outputs.sinks = writer, sinks
             run_frames(rec.frames(), partial(_step, backend, model, timer), outputs.write, config=pipe,
                        done=outputs.done, stats=stats)
-        if rec.video is not None and stats.taken + stats.dropped < summary["frames_total"]:
-            summary["ended_early"] = (f"{rec.video}: the video ended after {stats.taken + stats.dropped} of the "
-                                      f"{summary['frames_total']} frames its header announces (cut or damaged?)")
-            warnings.warn(summary["ended_early"], stacklevel=2)
+        _check_ended_early(rec, stats, summary)
     finally:
         outputs.close()
-        summary["pose_backend"] = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
-        summary["frames_dropped"] = stats.dropped
-        summary["speed"] = {**stats.to_dict(), **timer.per_frame(backend), "pipeline": dataclasses.asdict(pipe)}
-        if outputs.last is not None:
-            state, frame = outputs.last
-            summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=rec.name))
-        summary["files"] = [str(p) for p in sinks.files]
+        _finish_summary(summary, out, backend, stats, timer, pipe, outputs, sinks)
         (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
     return summary
 
 
-def detection_mode(cfg: Config, pose_backend: str, detection: str | None) -> Config:
-    """``cfg`` with ``detection.mode`` set to a command's ``--detection`` (onnx backend), so the
-    ``config.json`` of the run records the passes that ran."""
-    return cfg.replace(detection={"mode": detection}) if pose_backend == "onnx" and detection else cfg
+def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions, cfg: Config,
+              pipe: PipelineConfig, backend: PoseBackend | None) -> tuple[Recording | BagRecording, PoseBackend, Path]:
+    """Everything checked before the output folder is touched (the extra outputs, ``--realtime``'s
+    timestamps, the recording, every frame of a folder or video), then the folder prepared and
+    ``config.json`` saved: (recording, pose backend, output folder)."""
+    (output.extra or ExtraOutputs()).check()
+    source.check_realtime(pipe.realtime)
+    rec = source.load()
+    backend = backend or _make_backend(pose, cfg, rec)
+    if hasattr(rec, "check") and _holds_files(Path(output.folder)):  # an earlier run there: every frame's size
+        rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
+        # the frames before a bad one are run and stay on disk
+    out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
+    cfg.save(out / "config.json")
+    return rec, backend, out
 
 
 def _holds_files(folder: Path) -> bool:
     return folder.is_dir() and any(folder.iterdir())
 
 
-def _load_bag(bag, options):
-    from pedenv.recordings.bag import load_bag_recording
+def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording) -> PoseBackend:
+    """The pose backend ``pose`` describes; onnx without a detection mode, input size or model
+    takes the input size fitted to the recording's camera."""
+    name = pose.backend or "onnx"
+    input_size: str | tuple[int, int] | None = pose.input_size
+    if name == "onnx" and input_size is None and pose.model is None and pose.detection is None:
+        input_size = choose_input_size(rec.camera.width, rec.camera.height)
+    return create_pose_backend(name, **backend_options(
+        name, pose.model, input_size, cfg.detection if pose.detection else None,
+        cfg.tracking.pose_score_threshold, cfg.merge, device=pose.device))
 
-    return load_bag_recording(bag, options)
+
+def _check_ended_early(rec: Recording | BagRecording, stats: PipelineStats, summary: dict) -> None:
+    """A video that ended before its header's frame count: warned about and noted in ``summary``."""
+    if rec.video is not None and stats.taken + stats.dropped < summary["frames_total"]:
+        summary["ended_early"] = (f"{rec.video}: the video ended after {stats.taken + stats.dropped} of the "
+                                  f"{summary['frames_total']} frames its header announces (cut or damaged?)")
+        warnings.warn(summary["ended_early"], stacklevel=3)
 
 
-def _check_realtime(pipe: PipelineConfig, images, fps) -> None:
-    """``--realtime`` on an image folder needs the frames' times: its timestamps.csv or ``fps``."""
-    if pipe.realtime and images is not None and fps is None and Path(images).is_dir() \
-            and not (Path(images) / "timestamps.csv").is_file():
-        raise InputError(f"{images}: --realtime takes the frames at their own times, and the folder has no "
-                         "timestamps.csv (filename,timestamp); add one or give --fps")
+def _finish_summary(summary: dict, out: Path, backend, stats: PipelineStats, timer: _StepTimes,
+                    pipe: PipelineConfig, outputs: _Outputs, sinks: Sinks) -> None:
+    """The end of ``run.json``: backend, dropped frames, speed, the bird's-eye plot and the files written."""
+    summary["pose_backend"] = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
+    summary["frames_dropped"] = stats.dropped
+    summary["speed"] = {**stats.to_dict(), **timer.per_frame(backend), "pipeline": dataclasses.asdict(pipe)}
+    if outputs.last is not None:
+        state, frame = outputs.last
+        summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=summary["recording"]))
+    summary["files"] = [str(p) for p in sinks.files]
+
+
+def detection_mode(cfg: Config, pose_backend: str, detection: str | None) -> Config:
+    """``cfg`` with ``detection.mode`` set to a command's ``--detection`` (onnx backend), so the
+    ``config.json`` of the run records the passes that ran."""
+    return cfg.replace(detection={"mode": detection}) if pose_backend == "onnx" and detection else cfg
 
 
 @dataclass
@@ -181,7 +190,7 @@ class _Outputs:
     """The writer stage: each frame's state to the JSON Lines file and the sinks, its overlay
     to a PNG or the overlay video; counts the frames written into ``summary``."""
 
-    def __init__(self, out: Path, rec: Recording, video_out: bool, summary: dict, progress) -> None:
+    def __init__(self, out: Path, rec: Recording | BagRecording, video_out: bool, summary: dict, progress) -> None:
         self.out, self.rec, self.video_out, self.summary, self.progress = out, rec, video_out, summary, progress
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
@@ -204,7 +213,7 @@ class _Outputs:
             write_image(self.out / "overlays" / f"{frame.index:06d}.png", drawn)
         self.last = (state, frame)
 
-    def done(self, result) -> None:
+    def done(self, result) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
         self.summary["frames_done"] += 1
         if self.progress is not None:
             self.progress(self.summary["frames_done"], self.summary["frames_total"])
@@ -215,7 +224,7 @@ class _Outputs:
             self.video = None
 
 
-def _open_video(path: Path, rec: Recording, shape) -> VideoOut:
+def _open_video(path: Path, rec: Recording | BagRecording, shape) -> VideoOut:
     import cv2
 
     stamps = np.array([t for _, t in rec.images]) if rec.images else None

@@ -22,6 +22,7 @@ import json
 import os
 import zipfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,6 +32,9 @@ from pedenv.evaluation.metrics import ErrorSamples
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth
 from pedenv.stage_timer import StageTimer
 from pedenv.state import Behaviour, EnvironmentState, Pedestrians
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: What ``meta["format"]`` says, and the version of the layout below.
 FORMAT, VERSION = "pedenv-scene-checkpoint", 1
@@ -127,11 +131,11 @@ def load_checkpoint(path: Path, name: str, run: dict) -> SceneResult:
                          f"{hint}") from None
 
 
-def _differences(saved, current: dict, limit: int = 3) -> str:
+def _differences(saved: object, current: dict, limit: int = 3) -> str:
     """The first ``limit`` differing settings: ``config.method paper (this run: fused)``."""
     out: list[str] = []
 
-    def walk(a, b, where: str) -> None:
+    def walk(a: object, b: object, where: str) -> None:
         if isinstance(a, dict) and isinstance(b, dict):
             for key in list(b) + [k for k in a if k not in b]:
                 walk(a.get(key), b.get(key), f"{where}.{key}" if where else key)
@@ -152,7 +156,7 @@ def _rebuild(meta: dict, arrays: dict[str, np.ndarray]) -> SceneResult:
                        int(meta["busiest_count"]))
 
 
-def _events(arrays: dict[str, np.ndarray], i: int):
+def _events(arrays: dict[str, np.ndarray], i: int) -> pd.DataFrame:
     """The motmetrics event table of accumulator ``i`` (what ``MOTAccumulator.events`` gives)."""
     import motmetrics  # imported here: only evaluation needs it
 

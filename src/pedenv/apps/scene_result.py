@@ -55,35 +55,48 @@ class SceneResult:
     lines: list[str] | None = None
 
 
+@dataclass(frozen=True)
+class SceneHooks:
+    """What :func:`evaluate_scene` does beside scoring, all optional.
+
+    on_frame(state, frame): after every frame (writers, sinks). pairs: a matched-pairs table
+    writer. collect_lines: keep each frame's JSON Lines line in the result (for a worker whose
+    files the caller writes). progress(frames_done): after every frame.
+    """
+
+    on_frame: Callable[[EnvironmentState, Frame], None] | None = None
+    pairs: Any = None
+    collect_lines: bool = False
+    progress: Callable[[int], None] | None = None
+
+
 def evaluate_scene(name: str, frames: Iterable[Frame], *, config: Config, backend: PoseBackend,
                    model_factory: Callable[[Config], PedestrianEnvironmentModel] = PedestrianEnvironmentModel,
-                   on_frame: Callable[[EnvironmentState, Frame], None] | None = None, pairs=None,
-                   collect_lines: bool = False, progress: Callable[[int], None] | None = None) -> SceneResult:
+                   hooks: SceneHooks | None = None) -> SceneResult:
     """Run scene ``name`` (its ``frames`` in time order) through a fresh model and score its labelled frames.
 
-    ``on_frame(state, frame)`` after every frame (writers, sinks); ``pairs``: a matched-pairs
-    table writer; ``collect_lines``: keep each frame's JSON Lines line in the result (for a
-    worker whose files the caller writes); ``progress(frames_done)`` after every frame.
-    An InputError from a bad frame propagates; what ``on_frame`` wrote stays written.
+    ``hooks``: writers, a matched-pairs table, collected lines and progress (:class:`SceneHooks`).
+    An InputError from a bad frame propagates; what ``hooks.on_frame`` wrote stays written.
     """
+    hooks = hooks or SceneHooks()
     model = model_factory(config)
     backend = with_redetection(backend, model, config.redetect)  # missed tracks searched in crops (fused)
     tracking = TrackingAccumulator()
-    result = SceneResult(name, timer=model.timer, lines=[] if collect_lines else None)
+    result = SceneResult(name, timer=model.timer, lines=[] if hooks.collect_lines else None)
     for frame in frames:
         frame = replace(frame, detections=backend(frame))
         state = model.update(frame)
-        if on_frame is not None:
-            on_frame(state, frame)
+        if hooks.on_frame is not None:
+            hooks.on_frame(state, frame)
         if result.lines is not None:
             result.lines.append(environment_line(state))
         if frame.ground_truth is not None:
-            n = score_frame(frame, state, result.samples, tracking, pairs)
+            n = score_frame(frame, state, result.samples, tracking, hooks.pairs)
             if n > result.busiest_count:
                 result.busiest, result.busiest_count = (state, frame), n
         result.frames += 1
-        if progress is not None:
-            progress(result.frames)
+        if hooks.progress is not None:
+            hooks.progress(result.frames)
     result.tracking = dict(tracking.scenes)
     return result
 

@@ -30,7 +30,7 @@ def stdout_console(width: int | None) -> Console:
     return Console(width=width, emoji=False, markup=False)
 
 
-def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:  # noqa: ARG001 - warnings.formatwarning's signature
     return f"warning: {message}\n"
 
 

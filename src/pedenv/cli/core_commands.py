@@ -1,65 +1,32 @@
-"""``pedenv demo | simulate | evaluate | bench``."""
+"""``pedenv demo | simulate | evaluate | bench``: each parses its flags, calls one application function, prints."""
 
 from __future__ import annotations
 
 import sys
-from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import typer
 
 from pedenv.cli.app import app, console, stdout_console
-from pedenv.cli.pose_commands import DEVICE
-from pedenv.config import Config
-
-if TYPE_CHECKING:
-    from pedenv.pose import PoseBackend
+from pedenv.cli.options import (
+    Address,
+    ConfigFile,
+    Detection,
+    Device,
+    Executor,
+    Mcap,
+    Overwrite,
+    Parquet,
+    RerunOption,
+    Resume,
+    RosOut,
+    Workers,
+    split_names,
+)
+from pedenv.datasets import DATASETS
 
 #: stdout console for tables and results; wide enough for the tables when piped
 _out = stdout_console(None if sys.stdout.isatty() else 140)
-
-
-def _config(path: Path | None, method: str | None = None, **paper) -> Config:
-    """The config of ``--config`` (or the defaults) with the paper settings given and ``method``'s preset."""
-    from pedenv.localization import configure
-
-    config = Config.load(path) if path else Config()
-    changes = {k: v for k, v in paper.items() if v is not None}
-    config = config.replace(paper=changes) if changes else config
-    return configure(config, method) if method else config
-
-
-def _extra_outputs(output: Path, parquet: bool, rerun: Path | None, mcap: Path | None, *,
-                   matches: bool = False, video_scene: str | None = None, ros: Path | None = None,
-                   overwrite: bool = False):
-    """The ExtraOutputs of the ``--parquet``, ``--rerun``, ``--mcap``, ``--ros-out`` flags (and the bird's-eye
-    video)."""
-    from pedenv.outputs.sinks import ExtraOutputs
-
-    return ExtraOutputs(parquet=output / "environment.parquet" if parquet else None,
-                        matches_parquet=output / "matches.parquet" if parquet and matches else None,
-                        rerun=rerun, mcap=mcap, ros=ros,
-                        birds_eye_video=output / "birds_eye.mp4" if video_scene else None, birds_eye_scene=video_scene,
-                        overwrite=overwrite)
-
-
-#: The flags of the per-frame outputs, shared by demo and evaluate (run has them too).
-_PARQUET = typer.Option(
-    False, "--parquet", help="Also write environment.parquet (and matches.parquet when evaluating)."
-)
-_RERUN = typer.Option(None, "--rerun", help="Write a Rerun recording (FILE.rrd; one file per scene when several; "
-                                             "an existing file only with --overwrite).")
-_MCAP = typer.Option(None, "--mcap",
-                     help="Write a Foxglove MCAP file (FILE.mcap; an existing file only with --overwrite).")
-_ROS_OUT = typer.Option(None, "--ros-out", help="Write ROS 2 messages as a rosbag2 FILE.mcap (FILE-<method>.mcap "
-                                                 "with --method both).")
-_OVERWRITE = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output, and "
-                                                     "an existing --rerun/--mcap/--ros-out file.")
-_EXECUTOR = typer.Option("serial", "--executor", help="serial (in this process) or ray (one task per scene).")
-_ADDRESS = typer.Option(None, "--address", help="Ray cluster HOST:PORT (`ray start --head`); default: a local Ray.")
-_WORKERS = typer.Option(None, "--workers", help="Ray: CPUs of the local Ray, or most tasks at once on a cluster.")
-_RESUME = typer.Option(False, "--resume", help="Keep the scenes an earlier run in --output completed; run the rest.")
 
 
 def _print_result(metrics, title: str = "") -> None:
@@ -76,32 +43,29 @@ def demo(
     seed: int = typer.Option(0, "--seed", help="Seed of the built-in scenes and the detector model."),
     terrain: bool = typer.Option(False, "--terrain/--flat", help="Rolling terrain and vehicle pitch, or a flat world."),
     pose_backend: str = typer.Option("detector-model", "--pose-backend", help="detector-model or ground-truth."),
-    config: Path | None = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+    config: ConfigFile = None,
     method: str | None = typer.Option(
         None, "--method", help="Method of the outputs: fused (default, or the --config file's) or paper; "
                                "the other one runs beside it on the same frames for the table."),
-    overwrite: bool = _OVERWRITE,
-    parquet: bool = _PARQUET,
-    rerun: Path | None = _RERUN,
-    mcap: Path | None = _MCAP,
-    ros_out: Path | None = _ROS_OUT,
+    overwrite: Overwrite = False,
+    parquet: Parquet = False,
+    rerun: RerunOption = None,
+    mcap: Mcap = None,
+    ros_out: RosOut = None,
 ) -> None:
     """Run the paper's and the fused method on the built-in synthetic scenes; print them side by side, write plots."""
     from pedenv.apps.compare import comparison_by_scene_table, comparison_summary_table
-    from pedenv.apps.demo import VIDEO_SCENE, run_demo
-    from pedenv.outputs.output_dir import prepare_output_dir
+    from pedenv.apps.demo import demo_command
+    from pedenv.apps.options import MethodOptions, OutputFlags, OutputOptions
 
-    cfg = _config(config, method)
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, video_scene=VIDEO_SCENE, ros=ros_out,
-                           overwrite=overwrite)
-    extra.check()
-    prepare_output_dir(output, overwrite=overwrite, command="pedenv demo")
-    result = run_demo(output, seed=seed, config=cfg, terrain=terrain, pose_backend=pose_backend, extra_outputs=extra)
+    result = demo_command(output=OutputOptions(output, overwrite=overwrite),
+                          flags=OutputFlags(parquet=parquet, rerun=rerun, mcap=mcap, ros=ros_out),
+                          method=MethodOptions(config, method), seed=seed, terrain=terrain, pose_backend=pose_backend)
     methods = result.extras["methods"]
     _out.print(comparison_by_scene_table(methods, "pedenv demo: built-in synthetic scenes, the same frames and "
                                                   f"{result.metrics.info['pose_backend']} skeletons"))
     _out.print(comparison_summary_table(methods))
-    _out.print(f"outputs below: method {cfg.method}", highlight=False)
+    _out.print(f"outputs below: method {result.metrics.info['method']}", highlight=False)
     for name, path in result.extras["paths"].items():
         _out.print(f"{name}: {path}", highlight=False)
     _out.print(f"environment: {output / 'environment.jsonl'}", highlight=False)
@@ -120,28 +84,23 @@ def simulate(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
 ) -> None:
     """Write the built-in synthetic scenes to disk in one of the supported formats, each as it is made."""
-    from pedenv.apps.demo import SceneCounter, iter_builtin_scenes
-    from pedenv.datasets import scene_writer
-    from pedenv.outputs.output_dir import prepare_output_dir
+    from pedenv.apps.demo import simulate_command
+    from pedenv.apps.options import OutputOptions
 
-    write = scene_writer(fmt)
-    rate = frame_rate if frame_rate is not None else (12.0 if fmt == "nuscenes" else 10.0)
-    stream = iter_builtin_scenes(seed, scenes, terrain=terrain, frame_rate_hz=rate)
-    prepare_output_dir(output, overwrite=overwrite, command="pedenv simulate")
-    counter = SceneCounter()
-    write((counter.add(scene) for scene in stream), output)
+    counter = simulate_command(output=OutputOptions(output, overwrite=overwrite), scenes=scenes, seed=seed, fmt=fmt,
+                               terrain=terrain, frame_rate=frame_rate)
     _out.print(f"wrote {counter.summary()} as {fmt} to {output}", highlight=False)
 
 
 @app.command()
 def evaluate(
-    dataset: str = typer.Option(..., "--dataset", help="synthetic, nuscenes or carla."),
+    dataset: str = typer.Option(..., "--dataset", help=f"{', '.join(DATASETS)}."),
     data_root: Path = typer.Option(..., "--data-root", help="The dataset's root folder."),
     output: Path = typer.Option(..., "--output", help="Folder for metrics, JSON Lines and plots."),
     scenes: str | None = typer.Option(None, "--scenes", help="Comma-separated scene names (default: all)."),
     version: str = typer.Option("v1.0-mini", "--version", help="nuScenes version folder."),
     pose_backend: str | None = typer.Option(None, "--pose-backend", help="Default: the dataset's own."),
-    config: Path | None = typer.Option(None, "--config", help="A config.json to use instead of the defaults."),
+    config: ConfigFile = None,
     no_refinement: bool = typer.Option(
         False, "--no-refinement", help="Ablation of the paper method: skip the height refinement."),
     initial_estimate: str | None = typer.Option(
@@ -153,97 +112,54 @@ def evaluate(
                                "side by side on the same frames, each method's outputs in OUTPUT/<method>/ "
                                "(its --parquet tables there too) and FILE-<method>.rrd / .mcap."),
     cues: str | None = typer.Option(None, "--cues", help="fused cues, e.g. ground,triangulation,height."),
-    overwrite: bool = _OVERWRITE,
-    detection: str | None = typer.Option(None, "--detection", help="onnx backend: far, stream or fast (default: far)."),
-    parquet: bool = _PARQUET,
-    rerun: Path | None = _RERUN,
-    mcap: Path | None = _MCAP,
-    ros_out: Path | None = _ROS_OUT,
-    executor: str = _EXECUTOR,
-    address: str | None = _ADDRESS,
-    workers: int | None = _WORKERS,
-    resume: bool = _RESUME,
-    device: str = DEVICE,
+    overwrite: Overwrite = False,
+    detection: Detection = None,
+    parquet: Parquet = False,
+    rerun: RerunOption = None,
+    mcap: Mcap = None,
+    ros_out: RosOut = None,
+    executor: Executor = "serial",
+    address: Address = None,
+    workers: Workers = None,
+    resume: Resume = False,
+    device: Device = "auto",
 ) -> None:
     """Evaluate the environment model on a dataset with the paper's protocol."""
-    from pedenv.apps.evaluate import evaluate_dataset
-    from pedenv.datasets import open_dataset
-    from pedenv.errors import InputError
+    from pedenv.apps.evaluate_command import DatasetChoice, evaluate_command
+    from pedenv.apps.options import ExecutorOptions, MethodOptions, OutputFlags, OutputOptions, PoseOptions
 
-    options = {"version": version} if dataset == "nuscenes" else {}
-    data = open_dataset(dataset, data_root, **options)
-    names = [s.strip() for s in scenes.split(",") if s.strip()] if scenes else None
-    cfg = _config(config, method if method != "both" else None, refine=False if no_refinement else None,
-                  initial_estimate=initial_estimate)
-    if (no_refinement or initial_estimate) and method != "both" and cfg.method != "paper":
-        raise InputError(f"--no-refinement and --initial-estimate change the paper's method, not {cfg.method}; "
-                         "add --method paper")
-    if cues:
-        cfg = cfg.replace(fused={"cues": tuple(c.strip() for c in cues.split(",") if c.strip())})
-    onnx = None  # the onnx backend's factory: called here, or once per Ray worker
-    if detection is not None or pose_backend == "onnx" or device != "auto":
-        from pedenv.pose.base import create_pose_backend
+    outcome = evaluate_command(
+        dataset=DatasetChoice(dataset, data_root, version=version, scenes=split_names(scenes)),
+        output=OutputOptions(output, overwrite=overwrite),
+        flags=OutputFlags(parquet=parquet, rerun=rerun, mcap=mcap, ros=ros_out),
+        pose=PoseOptions(pose_backend, detection=detection, device=device),
+        method=MethodOptions(config, method, refine=False if no_refinement else None,
+                             initial_estimate=initial_estimate, cues=split_names(cues)),
+        executor=ExecutorOptions(executor, address=address, workers=workers, resume=resume),
+        ablation=ablation)
+    _print_evaluation(outcome, dataset)
 
-        if (pose_backend or data.default_pose_backend) != "onnx":
-            raise InputError("--detection and --device apply to the onnx pose backend; add --pose-backend onnx")
-        threshold = {} if cfg.tracking.pose_score_threshold is None else {
-            "score_threshold": cfg.tracking.pose_score_threshold}
-        cfg = cfg.replace(detection={"mode": detection or "far"})  # saved in config.json with the merge
-        onnx = partial(create_pose_backend, "onnx", detection=cfg.detection, merge=cfg.merge, device=device,
-                       **threshold)
-    if executor == "serial" and (address is not None or workers is not None):
-        from pedenv.errors import InputError
 
-        raise InputError("--address and --workers apply to --executor ray")
-    if executor != "serial" or resume:
-        _evaluate_distributed(data, executor=executor, address=address, workers=workers, scenes=names, config=cfg,
-                              pose_backend=onnx or pose_backend, output=output, resume=resume, overwrite=overwrite,
-                              refused={"--method both": method == "both", "--ablation": ablation, "--parquet": parquet,
-                                       "--rerun": rerun is not None, "--mcap": mcap is not None,
-                                       "--ros-out": ros_out is not None})
+def _print_evaluation(outcome, dataset: str) -> None:
+    """The tables of ``pedenv evaluate``; failed scenes of a run as tasks: one error line each, exit code 1."""
+    from pedenv.apps.compare import comparison_by_scene_table, comparison_summary_table
+
+    if outcome.distributed is not None:
+        _print_tasks(outcome.distributed, outcome.output)
         return
-    backend: str | PoseBackend | None = onnx() if onnx else pose_backend
-    from pedenv.outputs.output_dir import prepare_output_dir
-
-    extra = _extra_outputs(output, parquet, rerun, mcap, matches=True, ros=ros_out, overwrite=overwrite)
-    extra.check()
-    prepare_output_dir(output, overwrite=overwrite, command="pedenv evaluate")
-    if method == "both":
-        from pedenv.apps.compare import (
-            compare_methods,
-            comparison_by_scene_table,
-            comparison_summary_table,
-            outputs_per_method,
-        )
-
-        methods = ("paper", "fused")
-        results = compare_methods(data, methods=methods, scenes=names, config=cfg, pose_backend=backend,
-                                  output_dir=output, progress=True,
-                                  extra_outputs=outputs_per_method(extra, methods, output))
-        _out.print(comparison_by_scene_table(results))
-        _out.print(comparison_summary_table(results))
+    if outcome.methods:
+        _out.print(comparison_by_scene_table(outcome.methods))
+        _out.print(comparison_summary_table(outcome.methods))
     else:
-        metrics = evaluate_dataset(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output,
-                                   progress=True, extra_outputs=extra)
-        _print_result(metrics, f"{dataset}: {metrics.info['pose_backend']} skeletons, method {metrics.info['method']}")
-    if ablation:
-        from pedenv.apps.ablation import run_ablation
-
-        _out.print(run_ablation(data, scenes=names, config=cfg, pose_backend=backend, output_dir=output))
-    _out.print(f"outputs: {output}", highlight=False)
+        info = outcome.metrics.info
+        _print_result(outcome.metrics, f"{dataset}: {info['pose_backend']} skeletons, method {info['method']}")
+    if outcome.ablation is not None:
+        _out.print(outcome.ablation)
+    _out.print(f"outputs: {outcome.output}", highlight=False)
 
 
-def _evaluate_distributed(data, *, output: Path, resume: bool, overwrite: bool, refused: dict[str, bool],
-                          **options) -> None:
-    """``pedenv evaluate --executor ray`` or ``--resume``: one task per scene; failed scenes are listed, exit code 1."""
-    from pedenv.apps.distributed import evaluate_distributed
-    from pedenv.errors import InputError
-
-    given = [flag for flag, on in refused.items() if on]
-    if given:
-        raise InputError(f"{', '.join(given)} run in the serial in-process evaluation only; leave out --executor ray "
-                         f"and --resume")
-    result = evaluate_distributed(data, output_dir=output, resume=resume, overwrite=overwrite, progress=True, **options)
+def _print_tasks(result, output: Path) -> None:
+    """``pedenv evaluate --executor ray`` or ``--resume``: the table; failed scenes are listed, exit code 1."""
     info = result.metrics.info
     _print_result(result.metrics, f"{info['dataset']}: {info['pose_backend']} skeletons, method {info['method']}")
     if result.extras["resumed"]:
@@ -264,35 +180,15 @@ def bench(
         True, "--pose/--no-pose", help="Also time the pose networks (needs the prepared models)."
     ),
     samples: Path | None = typer.Option(
-        Path("../shared/samples/real"),
-        "--samples",
-        help="Real samples for the detection modes' recall (skipped if absent).",
-    ),
-    device: str = DEVICE,
+        None, "--samples", help="Folder of real samples (kitti/, mot17/, nuscenes-0061/; e.g. ../shared/samples/real) "
+                                "for the detection modes' recall (default: none, recall not measured)."),
+    device: Device = "auto",
 ) -> None:
     """Time the stages next to the paper's figures (tracking, position, pose network, end to end)."""
-    from pedenv.apps.bench import bench_core, format_bench
-    from pedenv.errors import InputError
+    from pedenv.apps.bench_command import bench_tables
 
-    rows = bench_core(n_frames=frames)
-    pose_rows = []
-    if pose:
-        from pedenv.apps.bench import bench_end_to_end
-
-        try:
-            pose_rows = bench_end_to_end(device=device)
-        except (ImportError, InputError) as exc:
-            console.print(f"pose networks not timed: {exc}", highlight=False, markup=False)
-    _out.print(format_bench(rows, pose_rows))
-    providers = sorted({r["provider"] for r in pose_rows if r.get("provider")})
-    if providers:
-        _out.print(f"pose networks ran on: {', '.join(providers)} (--device {device})", highlight=False)
-    from pedenv.apps.bench import format_behaviour_cost
-    from pedenv.config import Config
-
-    _out.print(format_behaviour_cost(bench_core(n_frames=frames, config=Config())))
-    if pose and pose_rows:
-        from pedenv.apps.bench import bench_detection_modes, format_detection_modes
-
-        root = samples if samples is not None and samples.is_dir() else None
-        _out.print(format_detection_modes(bench_detection_modes(root, device=device)))
+    for output in bench_tables(frames=frames, pose=pose, samples=samples, device=device):
+        if output.note:
+            console.print(output.item, highlight=False, markup=False)
+        else:
+            _out.print(output.item, highlight=False)

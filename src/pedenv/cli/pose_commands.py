@@ -1,4 +1,5 @@
-"""Commands for real images: ``pedenv models prepare``, ``pedenv detect``, ``pedenv run``."""
+"""Commands for real images: ``pedenv models prepare``, ``pedenv detect``, ``pedenv run``; each parses its flags,
+calls one application function, prints."""
 
 from __future__ import annotations
 
@@ -8,10 +9,22 @@ from pathlib import Path
 import typer
 
 from pedenv.cli.app import app, console
-
-#: ``--device``, shared by run, detect, evaluate and bench.
-DEVICE = typer.Option("auto", "--device", help="onnx: auto (the GPU when onnxruntime has one, else the CPU), "
-                                               "cpu or cuda (a GPU or an error).")
+from pedenv.cli.options import (
+    Address,
+    ConfigFile,
+    Detection,
+    Device,
+    Executor,
+    Mcap,
+    Overwrite,
+    Parquet,
+    PoseInputSize,
+    PoseModel,
+    RerunOption,
+    Resume,
+    RosOut,
+    Workers,
+)
 
 models_app = typer.Typer(help="Pose-network weights: export and cache the ONNX models (offline).",
                          no_args_is_help=True)
@@ -47,11 +60,11 @@ def detect(
     images: list[Path] = typer.Argument(..., help="Image files."),
     output: Path = typer.Option(..., "--output", help="Folder for detections.json and the drawn images."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
-    pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
-    pose_input_size: str | None = typer.Option(None, "--pose-input-size", help="Network input, 640 or 384x640."),
+    pose_model: PoseModel = None,
+    pose_input_size: PoseInputSize = None,
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
-    device: str = DEVICE,
+    device: Device = "auto",
     calibration: Path | None = typer.Option(
         None, "--calibration", help="Calibration YAML (as for run): places the far band; default: fitted."),
 ) -> None:
@@ -84,11 +97,9 @@ def run(
         False, "--static", help="A camera fixed to the ground (mount: static); runs without --ego-poses."),
     output: Path = typer.Option(..., "--output", help="Output folder."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
-    pose_model: Path | None = typer.Option(None, "--pose-model", help="ONNX file (onnx) or .pt weights (ultralytics)."),
-    pose_input_size: str | None = typer.Option(
-        None, "--pose-input-size", help="Network input, 640 or 384x640 (default: by camera aspect)."
-    ),
-    config: Path | None = typer.Option(None, "--config", help="config.json of the environment model."),
+    pose_model: PoseModel = None,
+    pose_input_size: PoseInputSize = None,
+    config: ConfigFile = None,
     method: str | None = typer.Option(
         None, "--method", help="Position method: fused (default, or the --config file's) or paper."),
     fps: float | None = typer.Option(
@@ -98,25 +109,18 @@ def run(
         None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."
     ),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
-    detection: str = typer.Option(
-        "far", "--detection", help="onnx: far (whole frame + tiles over the far band), stream (far over "
-                                   "consecutive frames, within a budget) or fast (one pass)."
-    ),
-    parquet: bool = typer.Option(
-        False, "--parquet", help="Also write environment.parquet (one row per pedestrian and frame)."
-    ),
-    rerun: Path | None = typer.Option(
-        None, "--rerun", help="Write a Rerun recording (FILE.rrd; an existing file only with --overwrite)."),
-    mcap: Path | None = typer.Option(
-        None, "--mcap", help="Write a Foxglove MCAP file (FILE.mcap; an existing file only with --overwrite)."),
+    overwrite: Overwrite = False,
+    detection: Detection = "far",
+    parquet: Parquet = False,
+    rerun: RerunOption = None,
+    mcap: Mcap = None,
     manifest: Path | None = typer.Option(
         None, "--manifest", help="CSV or YAML, one recording per row: one output folder each + summary.json."
     ),
-    executor: str = typer.Option("serial", "--executor", help="With --manifest: serial or ray (a task per recording)."),
-    address: str | None = typer.Option(None, "--address", help="Ray cluster HOST:PORT; default: a local Ray."),
-    workers: int | None = typer.Option(None, "--workers", help="Ray: local CPUs, or most tasks at once on a cluster."),
-    resume: bool = typer.Option(False, "--resume", help="With --manifest: keep the recordings already complete."),
+    executor: Executor = "serial",
+    address: Address = None,
+    workers: Workers = None,
+    resume: Resume = False,
     bag: Path | None = typer.Option(
         None, "--bag", help="A ROS bag instead of images + calibration + ego poses: rosbag2 folder, .mcap or .bag."),
     image_topic: str | None = typer.Option(None, "--image-topic", help="--bag: the Image/CompressedImage topic."),
@@ -125,105 +129,41 @@ def run(
         None, "--odometry-topic", help="--bag: nav_msgs/Odometry for the ego poses instead of /tf."),
     world_frame: str | None = typer.Option(None, "--world-frame", help="--bag: the tf world frame (map, odom)."),
     vehicle_frame: str | None = typer.Option(None, "--vehicle-frame", help="--bag: the tf vehicle frame."),
-    ros_out: Path | None = typer.Option(
-        None, "--ros-out", help="Write ROS 2 messages (vision_msgs, RViz markers, /tf, Autoware) as a rosbag2 "
-                                "FILE.mcap."),
+    ros_out: RosOut = None,
     live: bool = typer.Option(
         False, "--live", help="Serve the model as it runs to Foxglove over WebSocket on 127.0.0.1 (--live-port)."),
     live_port: int = typer.Option(8765, "--live-port", help="--live: the TCP port (0: any free one)."),
-    device: str = DEVICE,
+    device: Device = "auto",
     realtime: bool = typer.Option(
         False, "--realtime", help="Frames at the recording's rate; those arriving while the model is busy are dropped."
     ),
 ) -> None:
     """Run the pedestrian environment model on a recording (images or video + calibration + ego poses),
     or on every recording of a --manifest."""
-    from pedenv.errors import InputError
-
-    if manifest is not None:
-        per_recording = (("--images", images), ("--video", video), ("--calibration", calibration),
-                         ("--ego-poses", ego_poses), ("--fps", fps), ("--start-time", start_time),
-                         ("--static", static or None))
-        _refuse_beside_manifest([flag for flag, value in per_recording if value is not None],
-                                bool(parquet or rerun or mcap), realtime or device != "auto")
-        _run_manifest(manifest, output, single=(ros_out, bag, live), executor=executor, address=address,
-                      workers=workers, resume=resume, overwrite=overwrite, pose_backend=pose_backend,
-                      pose_model=pose_model, pose_input_size=pose_input_size, config=config, detection=detection,
-                      video_out=video_out, method=method)
-        return
-    bag_options = _bag_options(bag, (images, video, calibration, ego_poses, static),
-                               (image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame))
-    if executor != "serial" or address or workers or resume:
-        raise InputError("--executor, --address, --workers and --resume apply to --manifest runs")
-    from pedenv.apps.pipeline import PipelineConfig
-    from pedenv.apps.progress import progress_callback
-    from pedenv.apps.run import run_recording
-    from pedenv.outputs.sinks import ExtraOutputs
-
-    extra = ExtraOutputs(parquet=output / "environment.parquet" if parquet else None, rerun=rerun, mcap=mcap,
-                         ros=ros_out, live=live_port if live else None, overwrite=overwrite)
-
-    with progress_callback("frames", console=console) as progress:
-        summary = run_recording(
-            images=images, video=video, calibration=calibration, ego_poses=ego_poses, static=static, output=output,
-            pose_backend=pose_backend, pose_model=pose_model, pose_input_size=pose_input_size, config=config,
-            fps=fps, start_time=start_time, video_out=video_out, overwrite=overwrite, detection=detection,
-            extra_outputs=extra, progress=progress, method=method, bag=bag, bag_options=bag_options,
-            device=device, pipeline=PipelineConfig(realtime=realtime))
-    dropped = f", {summary['frames_dropped']} dropped: the model was busy" if realtime else ""
-    fps = summary["speed"]["frames_per_second"]
-    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']} ({fps or 0:.1f} per second{dropped})")
-
-
-def _refuse_beside_manifest(given: list[str], outputs: bool, paced: bool) -> None:
-    """One error for the flags of single recordings given with ``--manifest``: the recording's
-    files and timing (``given``), the per-frame outputs, ``--realtime`` and ``--device``."""
-    from pedenv.errors import InputError
-
-    if given:
-        raise InputError(f"{', '.join(given)}: with --manifest each row names its recording's files and timing")
-    if outputs:
-        raise InputError("--parquet, --rerun and --mcap are written by single-recording runs, not --manifest runs")
-    if paced:
-        raise InputError("--realtime and --device apply to single-recording runs, not --manifest runs (which "
-                         "take the GPU where onnxruntime has one)")
-
-
-def _bag_options(bag: Path | None, recording: tuple, flags: tuple):
-    """The BagOptions of ``--bag`` and its topic and frame flags (None without a bag). ``recording``:
-    --images, --video, --calibration, --ego-poses, --static; ``flags``: --image-topic, --camera-info-topic,
-    --odometry-topic, --world-frame, --vehicle-frame."""
-    from pedenv.errors import InputError
-
-    names = ("image_topic", "camera_info_topic", "odometry_topic", "world_frame", "vehicle_frame")
-    choices = dict(zip(names, flags))
-
-    if bag is None:
-        given = [f"--{k.replace('_', '-')}" for k, v in choices.items() if v is not None]
-        if given:
-            raise InputError(f"{', '.join(given)} apply to --bag")
-        if recording[2] is None or (recording[3] is None and not recording[4]):
-            raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
-                             "(or a --bag, or a --manifest of recordings)")
-        return None
-    if any(v is not None for v in recording[:4]) or recording[4]:
-        raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, "
-                         "--ego-poses and --static")
+    from pedenv.apps.options import ExecutorOptions, MethodOptions, OutputFlags, OutputOptions, PoseOptions
+    from pedenv.apps.options import RecordingSource as Source
+    from pedenv.apps.run_command import run_command
     from pedenv.recordings.bag_topics import BagOptions
 
-    return BagOptions(**choices)
+    topics = BagOptions(image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame)
+    outcome = run_command(
+        source=Source(images, video, calibration, ego_poses, static, fps, start_time, bag=bag, bag_options=topics),
+        output=OutputOptions(output, overwrite=overwrite, video_out=video_out),
+        flags=OutputFlags(parquet=parquet, rerun=rerun, mcap=mcap, ros=ros_out, live=live_port if live else None),
+        pose=PoseOptions(pose_backend, pose_model, pose_input_size, detection, device),
+        method=MethodOptions(config, method), manifest=manifest, realtime=realtime,
+        executor=ExecutorOptions(executor, address=address, workers=workers, resume=resume))
+    if outcome.manifest:
+        _print_manifest(outcome.summary, output)
+        return
+    summary = outcome.summary
+    dropped = f", {summary['frames_dropped']} dropped: the model was busy" if realtime else ""
+    rate = summary["speed"]["frames_per_second"]
+    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']} ({rate or 0:.1f} per second{dropped})")
 
 
-def _run_manifest(manifest: Path, output: Path, single: tuple = (), **options) -> None:
-    """``pedenv run --manifest``: every recording; failed ones listed, exit code 1. ``single``: the
-    values of --ros-out, --bag and --live, which a manifest run refuses."""
-    from pedenv.apps.batch import run_manifest
-    from pedenv.errors import InputError
-
-    if any(single):
-        raise InputError("--ros-out, --live and --bag are for single-recording runs, not --manifest runs")
-
-    summary = run_manifest(manifest, output, progress=True, **options)
+def _print_manifest(summary: dict, output: Path) -> None:
+    """``pedenv run --manifest``: one line per recording; failed ones as error lines too, exit code 1."""
     for rec in summary["recordings"]:
         line = f"{rec['name']}: {rec['status']}, {rec.get('frames_done', 0)} of {rec.get('frames_total', '?')} frames"
         typer.echo(line + (f" -> {rec['output']}" if rec["status"] != "failed" else ""))

@@ -15,6 +15,7 @@ recall only (its README: annotations do not cover every visible person).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -182,7 +183,7 @@ def _inside_any(box: np.ndarray, regions: np.ndarray, fraction: float = 0.5) -> 
     return bool(len(regions)) and bool((containment_matrix(box[None], regions) >= fraction).any())
 
 
-def _bins(values: np.ndarray, hits: np.ndarray, bins) -> list[dict]:
+def _bins(values: np.ndarray, hits: np.ndarray, bins: Iterable[tuple[str, float, float]]) -> list[dict]:
     rows = []
     for label, low, high in bins:
         inside = (values >= low) & (values < high)

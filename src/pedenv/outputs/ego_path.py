@@ -24,7 +24,7 @@ class EgoPath:
         self.piece = 0
         self._points: list[np.ndarray] = []
 
-    def add(self, position) -> tuple[int, np.ndarray]:
+    def add(self, position: np.ndarray) -> tuple[int, np.ndarray]:
         """Append ``position`` ((3,) world frame, metres); the piece it is in and that piece's points."""
         if len(self._points) >= self.piece_points:
             self.piece += 1

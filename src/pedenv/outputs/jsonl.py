@@ -42,7 +42,7 @@ class EnvironmentWriter:
         self._file.write(line + "\n")
         self._file.flush()
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         if self._file is not None:
             self._file.close()
 

@@ -11,10 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import foxglove
-from foxglove import channels as fc
 
 from pedenv.errors import InputError
-from pedenv.outputs.ego_path import EgoPath
 from pedenv.outputs.mcap_log import McapWriter
 
 DEFAULT_PORT = 8765
@@ -39,19 +37,7 @@ class LiveViewer(McapWriter):
         self.path = Path(f"ws://{host}:{self.port}")
         self.files: list[Path] = []
         self._writer = None
-        ctx = self._context
-        self._tf = fc.FrameTransformsChannel("/tf", context=ctx)
-        self._peds = fc.SceneUpdateChannel("/pedestrians", context=ctx)
-        self._truth = fc.SceneUpdateChannel("/ground_truth", context=ctx)
-        self._ego = fc.SceneUpdateChannel("/ego", context=ctx)
-        self._calibration = fc.CameraCalibrationChannel("/camera/calibration", context=ctx)
-        self._image = fc.CompressedImageChannel("/camera/image", context=ctx)
-        self._annotations = fc.ImageAnnotationsChannel("/camera/annotations", context=ctx)
-        self._environment = foxglove.Channel("/environment", message_encoding="json", context=ctx)
-        self._scene: str | None = None
-        self._offset = 0.0
-        self._last = float("-inf")
-        self._trajectory = EgoPath()
+        self._open_channels()
 
     def close(self) -> None:
         if self._server is not None:

@@ -23,6 +23,7 @@ file is finished (summary and index) by ``close()``; a run stopped by an excepti
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 
 import foxglove
@@ -35,18 +36,18 @@ from pedenv.outputs.mcap_behaviour import ego_path_line, pedestrian_primitives
 from pedenv.records import Frame
 from pedenv.skeleton import COCO_BONES
 from pedenv.state import EnvironmentState
-from pedenv.visualize.behaviour_shapes import behaviour_shapes
+from pedenv.visualize.behaviour_shapes import BehaviourShapes, behaviour_shapes
 from pedenv.visualize.shapes import covariance_ellipses
 
 _RED, _BLUE, _BLACK, _GREEN = (fm.Color(r=0.9, g=0.25, b=0.15, a=1.0), fm.Color(r=0.15, g=0.4, b=0.9, a=1.0),
                                fm.Color(r=0.1, g=0.1, b=0.1, a=1.0), fm.Color(r=0.15, g=0.65, b=0.25, a=1.0))
 
 
-def _v3(p) -> fm.Vector3:
+def _v3(p: Sequence[float] | np.ndarray) -> fm.Vector3:
     return fm.Vector3(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
-def _p3(p) -> fm.Point3:
+def _p3(p: Sequence[float] | np.ndarray) -> fm.Point3:
     return fm.Point3(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
@@ -58,7 +59,7 @@ def _quaternion(r: np.ndarray) -> fm.Quaternion:
     return fm.Quaternion(x=float(x), y=float(y), z=float(z), w=float(w))
 
 
-def _pose(position, yaw: float = 0.0) -> fm.Pose:
+def _pose(position: np.ndarray, yaw: float = 0.0) -> fm.Pose:
     """A pose at ``position`` (3,) metres, turned by ``yaw`` radians about z."""
     return fm.Pose(
         position=_v3(position), orientation=fm.Quaternion(z=float(np.sin(yaw / 2)), w=float(np.cos(yaw / 2)))
@@ -73,6 +74,10 @@ class McapWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._context = foxglove.Context()
         self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=self._context)
+        self._open_channels()
+
+    def _open_channels(self) -> None:
+        """The topics above in ``self._context`` (a file's or a live server's), and a fresh scene."""
         ctx = self._context
         self._tf = fc.FrameTransformsChannel("/tf", context=ctx)
         self._peds = fc.SceneUpdateChannel("/pedestrians", context=ctx)
@@ -117,7 +122,7 @@ class McapWriter:
             self._writer.close()
             self._writer = None
 
-    def _log_transforms(self, state: EnvironmentState, frame: Frame, stamp, ns: int) -> None:
+    def _log_transforms(self, state: EnvironmentState, frame: Frame, stamp: fm.Timestamp, ns: int) -> None:
         mount = frame.camera.cam_to_vehicle
         self._tf.log(fm.FrameTransforms(transforms=[
             fm.FrameTransform(timestamp=stamp, parent_frame_id="world", child_frame_id="ego",
@@ -126,7 +131,7 @@ class McapWriter:
                               translation=_v3(mount[:3, 3]), rotation=_quaternion(mount[:3, :3])),
         ]), log_time=ns)
 
-    def _log_ground_truth(self, frame: Frame, stamp, ns: int) -> None:
+    def _log_ground_truth(self, frame: Frame, stamp: fm.Timestamp, ns: int) -> None:
         gt = frame.ground_truth
         entities = (
             []
@@ -156,7 +161,7 @@ class McapWriter:
         )
         self._truth.log(fm.SceneUpdate(deletions=[_delete_all(stamp)], entities=entities), log_time=ns)
 
-    def _log_camera(self, state: EnvironmentState, frame: Frame, stamp, ns: int) -> None:
+    def _log_camera(self, state: EnvironmentState, frame: Frame, stamp: fm.Timestamp, ns: int) -> None:
         cam = frame.camera
         k = cam.intrinsics
         p = np.hstack([k, np.zeros((3, 1))])
@@ -170,11 +175,12 @@ class McapWriter:
         self._annotations.log(_image_annotations(state, stamp), log_time=ns)
 
 
-def _delete_all(stamp) -> fm.SceneEntityDeletion:
+def _delete_all(stamp: fm.Timestamp) -> fm.SceneEntityDeletion:
     return fm.SceneEntityDeletion(timestamp=stamp, type=fm.SceneEntityDeletionType.All)
 
 
-def _pedestrian(state: EnvironmentState, i: int, stamp, shapes=None) -> fm.SceneEntity:
+def _pedestrian(state: EnvironmentState, i: int, stamp: fm.Timestamp,
+                shapes: BehaviourShapes | None = None) -> fm.SceneEntity:
     """Pedestrian ``i`` as one entity: sphere, velocity arrow, skeleton, 2-sigma ellipse, id text,
     and with behaviour (``shapes``) the heading arrow and predicted path (:mod:`pedenv.outputs.mcap_behaviour`)."""
     extra_arrows, extra_lines = pedestrian_primitives(state, shapes, i)
@@ -199,7 +205,7 @@ def _pedestrian(state: EnvironmentState, i: int, stamp, shapes=None) -> fm.Scene
                                 text=str(int(p.track_ids[i])))])
 
 
-def _image_annotations(state: EnvironmentState, stamp) -> fm.ImageAnnotations:
+def _image_annotations(state: EnvironmentState, stamp: fm.Timestamp) -> fm.ImageAnnotations:
     """2D skeletons (line lists), boxes (line loops) and track ids over the camera image."""
     p = state.pedestrians
     points, texts = [], []

@@ -13,7 +13,9 @@ that survives that.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Self
 
 import numpy as np
 import pyarrow as pa
@@ -79,7 +81,7 @@ def _text(name: str) -> str:
     return name.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
-def _arrow(values, kind: pa.DataType) -> pa.Array:
+def _arrow(values: Sequence[object] | np.ndarray, kind: pa.DataType) -> pa.Array:
     """``values`` as an Arrow array of ``kind``; (n, a[, b]) numpy arrays become nested fixed-size lists."""
     if not pa.types.is_fixed_size_list(kind):
         return pa.array(values, type=kind)
@@ -140,10 +142,10 @@ class _IncrementalTable:
             self._writer = None
             self._file.close()
 
-    def __enter__(self):
+    def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 
@@ -152,7 +154,8 @@ class EnvironmentTableWriter(_IncrementalTable):
 
     schema = ENVIRONMENT_SCHEMA
 
-    def write(self, state: EnvironmentState, frame: Frame | None = None) -> None:
+    def write(self, state: EnvironmentState, frame: Frame | None = None) -> None:  # noqa: ARG002
+        # ``frame``: FrameSink.write's signature; the table holds only the state
         p, n = state.pedestrians, len(state.pedestrians)
         ego = state.ego
         self._add({

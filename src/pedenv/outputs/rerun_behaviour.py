@@ -14,7 +14,7 @@ from pedenv.state import EnvironmentState
 from pedenv.visualize.behaviour_shapes import CONFLICT_RGB, HEADING_RGB, PATH_RGB, behaviour_shapes
 
 
-def log_behaviour(rec, state: EnvironmentState) -> None:
+def log_behaviour(rec: rr.RecordingStream, state: EnvironmentState) -> None:
     """Log (or clear, with behaviour off) the behaviour entities of one frame."""
     shapes = behaviour_shapes(state.pedestrians)
     if shapes is None:

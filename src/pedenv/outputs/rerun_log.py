@@ -89,7 +89,7 @@ class RerunWriter:
         assert rec is not None  # _start() made it
         rec.set_time("frame", sequence=int(state.frame_index))
         rec.set_time("time", duration=float(state.timestamp))
-        self._log_ego(rec, state, frame)
+        self._log_ego(rec, state)
         self._log_image(rec, state, frame)
         self._log_world(rec, state)
         log_behaviour(rec, state)
@@ -139,12 +139,12 @@ class RerunWriter:
             self._rec.disconnect()
             self._rec = None
 
-    def _log_ego(self, rec, state: EnvironmentState, frame: Frame) -> None:
+    def _log_ego(self, rec: rr.RecordingStream, state: EnvironmentState) -> None:
         rec.log("world/ego", rr.Transform3D(translation=state.ego.translation, mat3x3=state.ego.rotation))
         piece, points = self._trajectory.add(state.ego.translation)
         rec.log(f"world/ego_trajectory/{piece}", rr.LineStrips3D([points], colors=[_EGO]))
 
-    def _log_image(self, rec, state: EnvironmentState, frame: Frame) -> None:
+    def _log_image(self, rec: rr.RecordingStream, state: EnvironmentState, frame: Frame) -> None:
         base = "world/ego/camera/image"
         if frame.image is not None:  # JPEG: a raw 1600x900 frame would be 4 MB
             rec.log(base, rr.EncodedImage(contents=jpeg_bytes(frame.image), media_type="image/jpeg"))
@@ -157,7 +157,7 @@ class RerunWriter:
                                             class_ids=np.full(len(p), PERSON_CLASS), show_labels=True))
         self._log_skeletons(rec, f"{base}/skeletons", p.track_ids, p.keypoints, p.confidences, rr.Points2D)
 
-    def _log_world(self, rec, state: EnvironmentState) -> None:
+    def _log_world(self, rec: rr.RecordingStream, state: EnvironmentState) -> None:
         p = state.pedestrians
         labels = [str(t) for t in p.track_ids]
         rec.log("world/pedestrians/positions", rr.Points3D(p.positions, labels=labels, radii=0.25, colors=[_PRED],
@@ -175,8 +175,13 @@ class RerunWriter:
         self._shown = {int(t) for t in p.track_ids}
 
     @staticmethod
-    def _log_skeletons(rec, base: str, ids, points, confidences, kind) -> None:
-        """One entity per person (so that the keypoint connections stay within a person)."""
+    def _log_skeletons(rec: rr.RecordingStream, base: str, ids: np.ndarray, points: np.ndarray,
+                       confidences: np.ndarray, kind: type[rr.Points2D] | type[rr.Points3D]) -> None:
+        """One entity per person (so that the keypoint connections stay within a person).
+
+        ``ids`` (N,) track ids; ``points`` (N, 17, 2) pixels or (N, 17, 3) world frame, metres (``kind``
+        says which); ``confidences`` (N, 17), 0 where a keypoint is not seen.
+        """
         for tid, pts, conf in zip(ids, points, confidences):
             seen = np.flatnonzero(conf > 0)
             radius = 0.05 if kind is rr.Points3D else 2.0  # metres in 3D, pixels in the image
@@ -185,7 +190,7 @@ class RerunWriter:
                                                show_labels=False))
 
     @staticmethod
-    def _log_ground_truth(rec, frame: Frame) -> None:
+    def _log_ground_truth(rec: rr.RecordingStream, frame: Frame) -> None:
         gt = frame.ground_truth
         if gt is None:  # an unlabelled frame (nuScenes sweeps): no stale truth from the last keyframe
             rec.log("world/ground_truth", rr.Clear(recursive=True))

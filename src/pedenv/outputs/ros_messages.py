@@ -9,11 +9,13 @@ Frames: ``world`` (the model's world frame) -> ``base_link`` (the vehicle) -> ``
 from __future__ import annotations
 
 import uuid
+from collections.abc import Iterable, Sequence
+from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from pedenv.outputs.ros_types import make
+from pedenv.outputs.ros_types import Message, Typestore, make
 from pedenv.skeleton import COCO_BONES
 from pedenv.state import EnvironmentState
 
@@ -33,19 +35,19 @@ STATIONARY_SPEED_MPS = 0.2
 UUID_NAMESPACE = uuid.UUID("6d3b2f0e-4c1a-5b7e-9a2d-70656465e076")
 
 
-def stamp(store, ns: int):
+def stamp(store: Typestore, ns: int) -> Message:
     return make(store, "builtin_interfaces/msg/Time", sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
 
-def header(store, ns: int, frame: str = WORLD_FRAME):
+def header(store: Typestore, ns: int, frame: str = WORLD_FRAME) -> Message:
     return make(store, "std_msgs/msg/Header", stamp=stamp(store, ns), frame_id=frame)
 
 
-def _point(store, p, kind: str = "geometry_msgs/msg/Point"):
+def _point(store: Typestore, p: Sequence[float] | np.ndarray, kind: str = "geometry_msgs/msg/Point") -> Message:
     return make(store, kind, x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
-def _pose(store, p, rotation=None):
+def _pose(store: Typestore, p: Sequence[float] | np.ndarray, rotation: np.ndarray | None = None) -> Message:
     x, y, z, w = (0.0, 0.0, 0.0, 1.0) if rotation is None else Rotation.from_matrix(rotation).as_quat()
     return make(store, "geometry_msgs/msg/Pose", position=_point(store, p),
                 orientation=make(store, "geometry_msgs/msg/Quaternion", x=x, y=y, z=z, w=w))
@@ -73,9 +75,9 @@ def object_uuid(scene: str, track_id: int) -> bytes:
     return uuid.uuid5(UUID_NAMESPACE, f"{scene}/{int(track_id)}").bytes
 
 
-def transforms(store, state: EnvironmentState, cam_to_vehicle: np.ndarray, ns: int):
+def transforms(store: Typestore, state: EnvironmentState, cam_to_vehicle: np.ndarray, ns: int) -> Message:
     """``tf2_msgs/TFMessage``: world -> base_link (the ego pose) and base_link -> camera_optical."""
-    def tf(parent, child, translation, rotation):
+    def tf(parent: str, child: str, translation: np.ndarray, rotation: np.ndarray) -> Message:
         x, y, z, w = Rotation.from_matrix(rotation).as_quat()
         q = make(store, "geometry_msgs/msg/Quaternion", x=x, y=y, z=z, w=w)
         t = make(store, "geometry_msgs/msg/Transform",
@@ -93,7 +95,7 @@ def _score(state: EnvironmentState, i: int) -> float:
     return float(conf[conf > 0].mean()) if np.any(conf > 0) else 0.0
 
 
-def detections(store, state: EnvironmentState, ns: int):
+def detections(store: Typestore, state: EnvironmentState, ns: int) -> Message:
     """``vision_msgs/Detection3DArray`` in the world frame: one Detection3D per pedestrian."""
     p, heights = state.pedestrians, body_heights(state)
     items = []
@@ -110,7 +112,7 @@ def detections(store, state: EnvironmentState, ns: int):
     return make(store, "vision_msgs/msg/Detection3DArray", header=header(store, ns), detections=items)
 
 
-def tracked_objects(store, state: EnvironmentState, ns: int):
+def tracked_objects(store: Typestore, state: EnvironmentState, ns: int) -> Message:
     """``autoware_perception_msgs/TrackedObjects``: each pedestrian as a cylinder, its pose at the
     cylinder's centre (Autoware's convention), velocity in the twist (world axes: orientation unavailable)."""
     p, heights = state.pedestrians, body_heights(state)
@@ -139,7 +141,7 @@ def tracked_objects(store, state: EnvironmentState, ns: int):
     return make(store, "autoware_perception_msgs/msg/TrackedObjects", header=header(store, ns), objects=objects)
 
 
-def markers(store, state: EnvironmentState, ns: int):
+def markers(store: Typestore, state: EnvironmentState, ns: int) -> Message:
     """``visualization_msgs/MarkerArray`` for RViz: a DELETEALL, then per pedestrian its 3D skeleton
     (LINE_LIST), 2-sigma ellipse (LINE_STRIP), id (TEXT_VIEW_FACING) and velocity arrow (ARROW)."""
     from pedenv.visualize.shapes import covariance_ellipses
@@ -149,7 +151,8 @@ def markers(store, state: EnvironmentState, ns: int):
     blue = make(store, "std_msgs/msg/ColorRGBA", r=0.15, g=0.4, b=0.9, a=1.0)
     out = [make(store, "visualization_msgs/msg/Marker", header=header(store, ns), action=3)]
 
-    def marker(i, kind, n, color, scale, points=(), **extra):
+    def marker(i: int, kind: str, n: int, color: Message, scale: Sequence[float],
+               points: Iterable[Sequence[float] | np.ndarray] = (), **extra: Any) -> Message:
         return make(store, "visualization_msgs/msg/Marker", header=header(store, ns), ns=f"pedestrian/{kind}",
                     id=int(p.track_ids[i]), type=n, action=0, color=color, pose=_pose(store, (0, 0, 0)),
                     scale=_point(store, scale, "geometry_msgs/msg/Vector3"),

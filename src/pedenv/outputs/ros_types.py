@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from functools import cache
 from pathlib import Path
+from typing import Any, TypeAlias
 
 import numpy as np
 
@@ -17,15 +18,19 @@ PACKAGES = ("vision_msgs", "autoware_perception_msgs")
 _NUMPY = {"bool": np.bool_, "int8": np.int8, "uint8": np.uint8, "byte": np.uint8, "char": np.uint8,
           "int16": np.int16, "uint16": np.uint16, "int32": np.int32, "uint32": np.uint32, "int64": np.int64,
           "uint64": np.uint64, "float32": np.float32, "float64": np.float64}
+#: A rosbags ``Typestore`` and a message built from it: rosbags ships no type information that mypy
+#: follows (pyproject's overrides skip it), so both are ``Any`` here, named for the reader.
+Typestore: TypeAlias = Any
+Message: TypeAlias = Any
 
 
 @cache
-def ros2_typestore():
+def ros2_typestore() -> Typestore:
     """A rosbags typestore (ROS 2 Humble) with the messages of :data:`PACKAGES` registered."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     store = get_typestore(Stores.ROS2_HUMBLE)
-    types: dict = {}
+    types: dict[str, Any] = {}
     for package in PACKAGES:
         for path in sorted((MSG_ROOT / package / "msg").glob("*.msg")):
             types.update(get_types_from_msg(path.read_text(), f"{package}/msg/{path.stem}"))
@@ -33,7 +38,7 @@ def ros2_typestore():
     return store
 
 
-def _default(store, node):
+def _default(store: Typestore, node: tuple[Any, Any]) -> Any:
     from rosbags.typesys.base import Nodetype
 
     kind, detail = node
@@ -51,7 +56,7 @@ def _default(store, node):
     return np.zeros(0, _NUMPY[sub[0]]) if sub_kind == Nodetype.BASE and sub[0] in _NUMPY else []
 
 
-def make(store, msgtype: str, **fields):
+def make(store: Typestore, msgtype: str, **fields: Any) -> Message:
     """An instance of ``msgtype`` (``pkg/msg/Name``) with ``fields``; the rest get ROS's defaults.
 
     Numeric arrays given as lists become numpy arrays of the field's type (what rosbags expects).
@@ -59,7 +64,7 @@ def make(store, msgtype: str, **fields):
     from rosbags.typesys.base import Nodetype
 
     _, defs = store.fielddefs[msgtype]
-    values = {}
+    values: dict[str, Any] = {}
     for name, node in defs:
         if name in fields:
             value = fields.pop(name)

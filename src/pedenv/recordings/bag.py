@@ -61,7 +61,7 @@ class BagRecording:
             msgtype = bag.topics[topic].msgtype
             for m in bag.messages([topic]):
                 where = f"{self.path}: topic {topic} message {m.index}"
-                stamp = stamp_seconds(m.msg.header.stamp)  # type: ignore[attr-defined]
+                stamp = stamp_seconds(m.msg.header.stamp)
                 if previous is not None and stamp <= previous:
                     raise InputError(f"{where}: stamps go backwards: {stamp:.9f} s is not after the previous "
                                      f"image's {previous:.9f} s")

@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.recordings.bag_source import RosMessage
 
 IMAGE_TYPE = "sensor_msgs/msg/Image"
 COMPRESSED_TYPE = "sensor_msgs/msg/CompressedImage"
@@ -33,7 +34,7 @@ _TO_RGB = {"bgr8": cv2.COLOR_BGR2RGB, "8UC3": cv2.COLOR_BGR2RGB, "rgba8": cv2.CO
 DISTORTION_MODELS = ("plumb_bob", "rational_polynomial", "equidistant")
 
 
-def image_rgb(msg, msgtype: str) -> np.ndarray:
+def image_rgb(msg: RosMessage, msgtype: str) -> np.ndarray:
     """(H, W, 3) uint8 RGB of an Image or CompressedImage message; InputError says what is wrong."""
     if msgtype == COMPRESSED_TYPE:
         fmt = str(msg.format).lower()
@@ -82,7 +83,7 @@ class CameraModel:
         return bool(np.any(self.distortion != 0.0))
 
 
-def camera_model(msg) -> CameraModel:
+def camera_model(msg: RosMessage) -> CameraModel:
     """The :class:`CameraModel` of a CameraInfo message (ROS 1's ``K``, ``D`` or ROS 2's ``k``, ``d``)."""
     k = np.asarray(getattr(msg, "k", None) if hasattr(msg, "k") else msg.K, np.float64).reshape(3, 3)
     d = np.asarray(getattr(msg, "d", None) if hasattr(msg, "d") else msg.D, np.float64).ravel()

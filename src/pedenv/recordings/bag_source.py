@@ -8,18 +8,26 @@ message definitions stored in them; :class:`BagSource` turns each of its failure
 from __future__ import annotations
 
 import functools
-from collections.abc import Collection, Iterator
+from collections.abc import Collection, Iterable, Iterator
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 from pedenv.errors import InputError, require_extra
+
+if TYPE_CHECKING:
+    from pedenv.recordings.bag_stream import StreamingMcap
 
 #: A message larger than this (bytes) is refused as corrupt before it is decoded: an 8K
 #: RGB image is 100 MB, so 512 MiB only stops a size field that lies or a runaway
 #: message that would exhaust memory. Raising it admits larger messages.
 MAX_MESSAGE_BYTES = 512 * 2**20
+#: A decoded ROS message or a rosbags connection or typestore: rosbags builds its message classes
+#: at run time and mypy does not follow it (pyproject), so these are ``Any``, named for the reader.
+RosMessage: TypeAlias = Any
+RosConnection: TypeAlias = Any
+RosTypestore: TypeAlias = Any
 
 
 @dataclass(frozen=True)
@@ -47,7 +55,7 @@ class BagMessage:
     topic: str
     index: int
     log_ns: int
-    msg: object
+    msg: RosMessage
 
 
 def _bag_kind(path: Path) -> str:
@@ -104,7 +112,7 @@ class BagSource:
         self.topics = self._summaries()
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self._stack.close()
 
     def _summaries(self) -> dict[str, TopicSummary]:
@@ -158,7 +166,7 @@ class BagSource:
         return {name: TopicSummary(t.name, t.msgtype, t.count, *spans.get(name, (0, 0)))
                 for name, t in self.topics.items()}
 
-    def _decode(self, conn, index: int, raw) -> object:
+    def _decode(self, conn: RosConnection, index: int, raw: bytes) -> RosMessage:
         where = f"{self.path}: topic {conn.topic} message {index}"
         if len(raw) > self.max_message_bytes:
             raise InputError(f"{where}: {len(raw)} bytes, more than bag.max_message_bytes "
@@ -172,7 +180,7 @@ class BagSource:
                              f"message's {len(raw)} bytes?): {_why(exc)}") from None
 
 
-def _cut_mcap(path: Path):
+def _cut_mcap(path: Path) -> StreamingMcap | None:
     """A :class:`~pedenv.recordings.bag_stream.StreamingMcap` of the MCAP file at ``path`` (or the one
     MCAP file of a rosbag2 folder) that holds channels, or None."""
     from pedenv.recordings.bag_stream import StreamingMcap
@@ -194,28 +202,28 @@ def _why(exc: Exception) -> str:
 
 
 @functools.lru_cache(maxsize=64)
-def _definitions(kind: str, text: str, msgtype: str) -> dict:
+def _definitions(kind: str, text: str, msgtype: str) -> dict[str, Any]:
     """The types one stored message definition declares (parsed once per process: a bag is opened
     twice per run, and parsing is most of the cost of opening it)."""
     from rosbags.typesys import get_types_from_idl, get_types_from_msg
 
     if kind == "msg":
         return dict(get_types_from_msg(text, msgtype))
-    types: dict = {}
+    types: dict[str, Any] = {}
     sep = "=" * 80 + "\n"
     for part in text.split(sep)[1:] if text.startswith(sep) else [text]:
         types.update(get_types_from_idl(part.split("\n", 1)[1] if part.startswith("IDL: ") else part))
     return types
 
 
-def _typestore(connections, is_ros1: bool):
+def _typestore(connections: Iterable[RosConnection], is_ros1: bool) -> RosTypestore:
     """A typestore of the bag's own message definitions (a type changed between ROS releases is
     read as the bag wrote it); a bag without them (rosbag2 sqlite3 before Iron) gets the types of
     ROS 2 Humble (ROS 1: Noetic) for what it lacks."""
     from rosbags.interfaces import MessageDefinitionFormat
     from rosbags.typesys import Stores, get_typestore
 
-    types: dict = {}
+    types: dict[str, Any] = {}
     lacking = False
     for c in connections:
         if c.msgdef.format in (MessageDefinitionFormat.MSG, MessageDefinitionFormat.IDL) and c.msgdef.data:

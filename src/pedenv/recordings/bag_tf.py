@@ -8,29 +8,31 @@ time series interpolated as the ego poses CSV is (linear position, slerp rotatio
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.geometry import quaternion_to_rotation
+from pedenv.recordings.bag_source import RosMessage
 from pedenv.recordings.footage import EgoTrajectory
 
 
-def stamp_seconds(stamp) -> float:
+def stamp_seconds(stamp: RosMessage) -> float:
     """A ROS time (``sec``, ``nanosec``) in seconds, correctly rounded (integer division)."""
     return (int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)) / 1_000_000_000
 
 
-def _xyz(v) -> list[float]:
+def _xyz(v: RosMessage) -> list[float]:
     return [float(v.x), float(v.y), float(v.z)]
 
 
-def _wxyz(q) -> list[float]:
+def _wxyz(q: RosMessage) -> list[float]:
     return [float(q.w), float(q.x), float(q.y), float(q.z)]
 
 
-def pose_matrix(translation, quaternion) -> np.ndarray:
+def pose_matrix(translation: Sequence[float] | np.ndarray, quaternion: Sequence[float] | np.ndarray) -> np.ndarray:
     """(4, 4) of a translation (3,) metres and a quaternion ``[w, x, y, z]``."""
     m = np.eye(4)
     m[:3, :3] = quaternion_to_rotation(quaternion)
@@ -56,7 +58,7 @@ class TransformTree:
     static: dict[str, tuple[str, np.ndarray]] = field(default_factory=dict)
     dynamic: dict[str, _Series] = field(default_factory=dict)
 
-    def add(self, msg, *, static: bool, topic: str, index: int) -> None:
+    def add(self, msg: RosMessage, *, static: bool, topic: str, index: int) -> None:
         """Add the transforms of one ``tf2_msgs/TFMessage``; a link whose samples go back in time,
         or a frame given two parents, raises InputError naming the topic and message index."""
         for tf in msg.transforms:
@@ -170,7 +172,8 @@ def _matrix_trajectory(stamps: np.ndarray, poses: np.ndarray, source: str) -> Eg
     return EgoTrajectory(stamps, poses[:, :3, 3], quats, source)
 
 
-def odometry_trajectory(messages, bag: str, topic: str) -> tuple[EgoTrajectory, str, str]:
+def odometry_trajectory(messages: Iterable[tuple[int, RosMessage]], bag: str,
+                        topic: str) -> tuple[EgoTrajectory, str, str]:
     """The ego trajectory of ``nav_msgs/Odometry`` messages (``(index, msg)`` pairs) with their
     world (``header.frame_id``) and vehicle (``child_frame_id``) frames."""
     series = _Series("")

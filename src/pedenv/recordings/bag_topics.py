@@ -11,7 +11,8 @@ from pathlib import PurePosixPath
 
 from pedenv.errors import InputError
 from pedenv.recordings.bag_images import CAMERA_INFO_TYPE, COMPRESSED_TYPE, IMAGE_TYPE
-from pedenv.recordings.bag_source import MAX_MESSAGE_BYTES
+from pedenv.recordings.bag_source import MAX_MESSAGE_BYTES, BagSource
+from pedenv.recordings.bag_tf import TransformTree
 
 TF_TYPE = "tf2_msgs/msg/TFMessage"
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
@@ -48,12 +49,13 @@ class BagChoice:
     world_frame: str = ""
 
 
-def _holds(bag) -> str:
+def _holds(bag: BagSource) -> str:
     return "; ".join(f"{t.name} ({t.msgtype.replace('/msg/', '/')}, {t.count})" for t in bag.topics.values()) or \
         "no topics"
 
 
-def _pick(bag, given: str | None, types: tuple[str, ...], what: str, flag: str, prefer: str | None = None) -> str:
+def _pick(bag: BagSource, given: str | None, types: tuple[str, ...], what: str, flag: str,
+          prefer: str | None = None) -> str:
     found = bag.topics_of(*types)
     if given is not None:
         if given not in bag.topics or bag.topics[given].msgtype not in types:
@@ -72,7 +74,7 @@ def _pick(bag, given: str | None, types: tuple[str, ...], what: str, flag: str, 
     return found[0]
 
 
-def choose_topics(bag, opts: BagOptions) -> BagChoice:
+def choose_topics(bag: BagSource, opts: BagOptions) -> BagChoice:
     """The image, CameraInfo, odometry and tf topics of ``bag`` (a :class:`BagSource`)."""
     image = _pick(bag, opts.image_topic, (IMAGE_TYPE, COMPRESSED_TYPE), "image", "--image-topic")
     if bag.topics[image].count == 0:
@@ -88,7 +90,7 @@ def choose_topics(bag, opts: BagOptions) -> BagChoice:
     return BagChoice(image, info, odometry, tf)
 
 
-def choose_frames(tree, topics: BagChoice, camera_frame: str, opts: BagOptions, odom_world: str | None,
+def choose_frames(tree: TransformTree, topics: BagChoice, camera_frame: str, opts: BagOptions, odom_world: str | None,
                   odom_vehicle: str | None) -> BagChoice:
     """The camera, vehicle and world frames: the vehicle is the frame the camera hangs from over
     static links (just below the first /tf link up from the camera), the world the root above it;

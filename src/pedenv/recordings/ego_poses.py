@@ -79,21 +79,35 @@ class EgoTrajectory:
 def load_ego_poses(path: str | Path) -> EgoTrajectory:
     """The ego poses of a CSV file (format in the module doc); rows must be sorted by time."""
     path = Path(path)
-    try:
-        with path.open(newline="", encoding="utf-8-sig") as f:  # -sig: a byte-order mark is accepted
-            rows = [r for r in csv.reader(f) if any(c.strip() for c in r)]
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the ego poses: {exc.strerror}") from None
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise InputError(f"{path}: the ego poses are not a UTF-8 CSV text file (a binary file?): {exc}") from None
+    rows = _read_rows(path)
     header = tuple(c.strip().lower() for c in rows[0]) if rows else ()
     if header not in POSE_HEADERS:
         raise InputError(f"{path}: ego poses header must be {' or '.join(','.join(h) for h in POSE_HEADERS)}, "
                          f"got {','.join(header) or 'an empty file'}")
     if len(rows) < 2:
         raise InputError(f"{path}: no ego pose rows after the header")
-    values = np.empty((len(rows) - 1, len(header)))
-    for n, row in enumerate(rows[1:]):
+    values = _row_values(path, header, rows[1:])
+    ts = values[:, 0]
+    trans, quats = _translations_quaternions(path, header, values)
+    _warn_implausible_speed(path, ts, trans)
+    return EgoTrajectory(ts, trans, quats, str(path))
+
+
+def _read_rows(path: Path) -> list[list[str]]:
+    """The CSV rows of ``path`` that hold something (a byte-order mark is accepted)."""
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as f:
+            return [r for r in csv.reader(f) if any(c.strip() for c in r)]
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the ego poses: {exc.strerror}") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path}: the ego poses are not a UTF-8 CSV text file (a binary file?): {exc}") from None
+
+
+def _row_values(path: Path, header: tuple[str, ...], rows: list[list[str]]) -> np.ndarray:
+    """(len(rows), len(header)) float: each row's numbers, checked finite, in bounds and sorted by time."""
+    values = np.empty((len(rows), len(header)))
+    for n, row in enumerate(rows):
         try:
             if len(row) != len(header):
                 raise ValueError
@@ -107,21 +121,24 @@ def load_ego_poses(path: str | Path) -> EgoTrajectory:
         if n and values[n, 0] <= values[n - 1, 0]:
             raise InputError(f"{path}: rows must be sorted by time: row {n + 1} (line {n + 2}, timestamp "
                              f"{values[n, 0]:.6f} s) is not after row {n} ({values[n - 1, 0]:.6f} s)")
-    ts = values[:, 0]
+    return values
+
+
+def _translations_quaternions(path: Path, header: tuple[str, ...],
+                              values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 3) translations, metres, and (N, 4) unit quaternions ``[w, x, y, z]`` of the rows' values
+    (the 3D header's quaternions normalised; the planar header's yaw about z, at z = 0)."""
     if header == POSE_HEADERS[0]:
         trans, quats = values[:, 1:4], values[:, 4:8]
         norms = np.linalg.norm(quats, axis=1)
         if np.any(norms < 1e-9):
             raise InputError(f"{path}: row {int(np.argmax(norms < 1e-9)) + 1} has a zero quaternion")
-        quats = quats / norms[:, None]
-    else:
-        trans = np.column_stack([values[:, 1:3], np.zeros(len(values))])
-        quats = Rotation.from_euler("z", values[:, 3:4]).as_quat(canonical=True, scalar_first=True)
-    _warn_implausible_speed(path, ts, trans)
-    return EgoTrajectory(ts, trans, quats, str(path))
+        return trans, quats / norms[:, None]
+    trans = np.column_stack([values[:, 1:3], np.zeros(len(values))])
+    return trans, Rotation.from_euler("z", values[:, 3:4]).as_quat(canonical=True, scalar_first=True)
 
 
-def _check_bounds(path: Path, n: int, header: tuple, row: np.ndarray) -> None:
+def _check_bounds(path: Path, n: int, header: tuple[str, ...], row: np.ndarray) -> None:
     """InputError when a row's timestamp or position is outside the ranges above."""
     where = f"{path}: row {n + 1} (line {n + 2})"
     if abs(row[0]) > MAX_TIMESTAMP_S:

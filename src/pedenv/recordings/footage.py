@@ -26,6 +26,7 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -47,7 +48,7 @@ from pedenv.video_files import video_capture
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
 
 
-def _field(data: dict, key: str, path: Path):
+def _field(data: dict[str, Any], key: str, path: Path) -> Any:
     node = data
     for part in key.split("."):
         if not isinstance(node, dict) or part not in node:
@@ -56,7 +57,7 @@ def _field(data: dict, key: str, path: Path):
     return node
 
 
-def _numbers(value, key: str, path: Path, shape: tuple) -> np.ndarray:
+def _numbers(value: object, key: str, path: Path, shape: tuple[int, ...]) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -166,7 +167,7 @@ class Recording:
         for index, timestamp, path, image in source:
             ego = self._check_frame(path, index, timestamp, (image.shape[1], image.shape[0]))
             yield Frame(index, timestamp, self.camera, ego, image=image,
-                        image_path=None if self.video else path, scene=self.name)
+                        image_path=None if self.video else Path(path), scene=self.name)
 
     def check(self) -> None:
         """Check every frame before anything runs, without decoding an image: each image's size
@@ -183,7 +184,8 @@ class Recording:
         for index, (path, timestamp) in enumerate(self.images):
             self._check_frame(path, index, timestamp, image_size(path))
 
-    def _check_frame(self, path, index: int, timestamp: float, size: tuple[int, int] | None = None) -> EgoPose:
+    def _check_frame(self, path: str | Path, index: int, timestamp: float,
+                     size: tuple[int, int] | None = None) -> EgoPose:
         """The ego pose of frame ``index`` (the identity without a trajectory: a static camera), its size checked."""
         ego = EgoPose(np.zeros(3), np.eye(3)) if self.trajectory is None else self.trajectory.at(timestamp)
         if ego is None:
@@ -205,7 +207,8 @@ class Recording:
             return max(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)), 0)
 
 
-def _video_frames(video: Path, fps: float | None, start_time: float):
+def _video_frames(video: Path, fps: float | None, start_time: float) -> Iterator[tuple[int, float, str, np.ndarray]]:
+    """(index, timestamp in seconds, ``<video>#<index>``, (H, W, 3) uint8 RGB) per frame of ``video``."""
     import cv2
 
     index = 0

@@ -110,47 +110,61 @@ def _check_fields(path: Path, where: str, names: list[str]) -> None:
 
 def _row(manifest: Path, n: int, fields: dict) -> ManifestRow:
     where = f"{manifest}: row {n}"
-
-    def file(key: str, kind: str, required: bool) -> Path | None:
-        value = fields.get(key, "")
-        if value in ("", None):
-            if required:
-                raise InputError(f"{where}: field {key!r} is missing")
-            return None
-        p = check_path(Path(str(value)).expanduser(), f"{where}: field {key!r}:")
-        p = p if p.is_absolute() else manifest.parent / p
-        exists = p.is_dir() if kind == "folder" else p.is_file()
-        if not exists:
-            raise InputError(f"{where}: field {key!r}: {kind} {p} not found")
-        return p
-
-    def number(key: str, positive: bool) -> float | None:
-        value = fields.get(key, "")
-        if value in ("", None):
-            return None
-        try:
-            x = float(value)
-        except (TypeError, ValueError):
-            raise InputError(f"{where}: field {key!r} must be a number, got {value!r}") from None
-        if not math.isfinite(x) or (positive and x <= 0):
-            bound = " > 0" if positive else ""
-            raise InputError(f"{where}: field {key!r} must be a finite number{bound}, got {value!r}")
-        return x
-
-    images, video = file("images", "folder", False), file("video", "file", False)
+    images = _file_field(manifest, where, fields, "images", "folder", required=False)
+    video = _file_field(manifest, where, fields, "video", "file", required=False)
     if (images is None) == (video is None):
         raise InputError(f"{where}: give exactly one of the fields 'images' (a folder) and 'video' (a file)")
-    calibration, ego_poses = file("calibration", "file", True), file("ego_poses", "file", True)
+    calibration = _file_field(manifest, where, fields, "calibration", "file", required=True)
+    ego_poses = _file_field(manifest, where, fields, "ego_poses", "file", required=True)
     assert calibration is not None and ego_poses is not None  # required above
-    name = str(fields.get("name") or "").strip() or (images.resolve().name if images else video.stem)  # type: ignore[union-attr]
+    name = str(fields.get("name") or "").strip() or _default_name(images, video)
     if "/" in name or "\\" in name or name in (".", "..") or len(os.fsencode(name)) > MAX_NAME_BYTES:
         raise InputError(f"{where}: field 'name' must be usable as a folder name (no / or \\, at most "
                          f"{MAX_NAME_BYTES} bytes), got {_short(name)!r}")
     if name in RESERVED_NAMES:
         raise InputError(f"{where}: field 'name' {name!r} is the name of a file the run writes in the output folder "
                          f"({', '.join(RESERVED_NAMES)}); choose another name")
-    return ManifestRow(name, calibration, ego_poses, images, video, number("fps", True), number("start_time", False),
-                       row=n)
+    return ManifestRow(name, calibration, ego_poses, images, video, _number_field(where, fields, "fps", positive=True),
+                       _number_field(where, fields, "start_time", positive=False), row=n)
+
+
+def _file_field(manifest: Path, where: str, fields: dict, key: str, kind: str, *, required: bool) -> Path | None:
+    """The existing ``kind`` ("folder" or "file") that field ``key`` names, relative to the manifest's
+    folder; None for an empty field unless ``required``."""
+    value = fields.get(key, "")
+    if value in ("", None):
+        if required:
+            raise InputError(f"{where}: field {key!r} is missing")
+        return None
+    p = check_path(Path(str(value)).expanduser(), f"{where}: field {key!r}:")
+    p = p if p.is_absolute() else manifest.parent / p
+    exists = p.is_dir() if kind == "folder" else p.is_file()
+    if not exists:
+        raise InputError(f"{where}: field {key!r}: {kind} {p} not found")
+    return p
+
+
+def _number_field(where: str, fields: dict, key: str, *, positive: bool) -> float | None:
+    """Field ``key`` as a finite number (above 0 when ``positive``), or None when it is empty."""
+    value = fields.get(key, "")
+    if value in ("", None):
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: field {key!r} must be a number, got {value!r}") from None
+    if not math.isfinite(x) or (positive and x <= 0):
+        bound = " > 0" if positive else ""
+        raise InputError(f"{where}: field {key!r} must be a finite number{bound}, got {value!r}")
+    return x
+
+
+def _default_name(images: Path | None, video: Path | None) -> str:
+    """A recording's name when its row gives none: the image folder's name, else the video's stem."""
+    if images is not None:
+        return images.resolve().name
+    assert video is not None  # a row holds exactly one of the two (checked before)
+    return video.stem
 
 
 def _short(text: str, limit: int = 60) -> str:

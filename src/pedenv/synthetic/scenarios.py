@@ -136,7 +136,7 @@ def crowd(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
                         _constant(speed_mps), _constant(0.0), peds)
 
 
-def standing_pedestrians(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:
+def standing_pedestrians(rng: np.random.Generator, duration_s: float) -> ScenarioPlan:  # noqa: ARG001 - a recipe
     road = Road(half_width_m=5.0)
     singles = sidewalk_walkers(rng, road, 12, (6.0, 150.0), standing_share=1.0)
     centres = road.point(rng.uniform(10.0, 120.0, 4), road.sidewalk_offsets(rng, 4))

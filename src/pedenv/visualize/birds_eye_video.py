@@ -127,8 +127,9 @@ class BirdsEyeVideo:
                     cv2.FONT_HERSHEY_SIMPLEX, 0.42, _TEXT, 1, cv2.LINE_AA)
         return img
 
-    def _update_trails(self, track_ids, positions) -> None:
-        """Append each track's position (world, metres); drop the trails of tracks gone for ``trail`` frames."""
+    def _update_trails(self, track_ids: np.ndarray, positions: np.ndarray) -> None:
+        """Append each track's position (``positions`` (N, 3), world frame, metres; ``track_ids`` (N,));
+        drop the trails of tracks gone for ``trail`` frames."""
         self._draws += 1
         for tid, pos in zip(track_ids, positions):
             self._trails.setdefault(int(tid), deque(maxlen=self.trail_length)).append(np.asarray(pos, float))

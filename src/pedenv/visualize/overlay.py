@@ -6,12 +6,17 @@ the image's own pixels (u right, v down).
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
+
 import cv2
 import numpy as np
 
-from pedenv.records import Detections
+from pedenv.records import Detections, Frame
 from pedenv.skeleton import COCO_BONES
+from pedenv.state import EnvironmentState
 
+#: An RGB colour, 0-255 per channel.
+Color = tuple[int, int, int]
 #: Keypoints at or below this confidence are not drawn.
 MIN_DRAW_CONFIDENCE = 0.3
 _PALETTE = np.array([[230, 25, 75], [60, 180, 75], [0, 130, 200], [245, 130, 48], [145, 30, 180],
@@ -35,7 +40,7 @@ def _scale(image: np.ndarray) -> float:
     return max(image.shape[0], image.shape[1]) / 1000.0
 
 
-def draw_skeleton(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndarray, color,
+def draw_skeleton(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndarray, color: Color,
                   min_confidence: float = MIN_DRAW_CONFIDENCE) -> None:
     """Draw one skeleton in place. keypoints: (17, 2) pixels; confidences: (17,)."""
     thick = max(1, round(2 * _scale(image)))
@@ -48,7 +53,7 @@ def draw_skeleton(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndar
         cv2.circle(image, tuple(p), thick + 2, color, -1, cv2.LINE_AA)
 
 
-def draw_label(image: np.ndarray, text: str, anchor, color) -> None:
+def draw_label(image: np.ndarray, text: str, anchor: Sequence[float] | np.ndarray, color: Color) -> None:
     """Draw ``text`` in place on a filled box whose bottom-left corner is ``anchor`` (u, v) pixels."""
     text = ascii_text(text)
     scale = 0.5 * _scale(image) + 0.2
@@ -62,7 +67,7 @@ def draw_label(image: np.ndarray, text: str, anchor, color) -> None:
 
 
 def draw_persons(image: np.ndarray, keypoints: np.ndarray, confidences: np.ndarray, boxes: np.ndarray,
-                 labels: list[str], keys=None) -> np.ndarray:
+                 labels: list[str], keys: Iterable[int] | np.ndarray | None = None) -> np.ndarray:
     """A copy of ``image`` with skeletons, boxes and one label per person.
 
     keypoints: (N, 17, 2) pixels; confidences: (N, 17); boxes: (N, 4) pixels
@@ -87,7 +92,7 @@ def draw_detections(image: np.ndarray, detections: Detections) -> np.ndarray:
     return draw_persons(image, detections.keypoints, detections.confidences, detections.boxes, labels)
 
 
-def draw_environment(image: np.ndarray, state, frame=None) -> np.ndarray:
+def draw_environment(image: np.ndarray, state: EnvironmentState, frame: Frame | None = None) -> np.ndarray:
     """A copy of ``image`` with the tracked pedestrians of an ``EnvironmentState``:
     skeleton, box, track id and distance from the camera in metres; with behaviour cues
     (``Config.behaviour``) also motion state, facing and conflict in the label, and, given the
