@@ -12,7 +12,9 @@ distribution is the rise of their running maximum.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.special import ndtr
@@ -39,22 +41,26 @@ def path_coordinates(path: EgoPath, points: np.ndarray) -> tuple[np.ndarray, np.
     """Arc length ``s`` (...) metres along the path from the ego now (in its direction of travel),
     offset ``d`` (...) metres across it (left positive) and the unit normal (..., 2) there, of
     points (..., 2) world x-y."""
-    e0 = path.xy[0]
-    heading = np.array([np.cos(path.yaw[0]), np.sin(path.yaw[0])]) * path.direction
-    normal0 = np.array([-heading[1], heading[0]])
-    rel = points - e0
+    s, d, nx, ny = _coordinates(path, points[..., 0], points[..., 1])
+    return s, d, np.stack(np.broadcast_arrays(nx, ny, s)[:2], axis=-1)
+
+
+def _coordinates(path: EgoPath, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+    """:func:`path_coordinates` of points given by their world coordinates px, py (...): ``s``,
+    ``d`` and the normal's components (... or scalars)."""
+    hx, hy = math.cos(path.yaw[0]) * path.direction, math.sin(path.yaw[0]) * path.direction
+    rx, ry = px - path.xy[0, 0], py - path.xy[0, 1]
     curvature = path.curvature
     if abs(curvature) < 1e-4:
-        s, d = rel @ heading, rel @ normal0
-        return s, d, np.broadcast_to(normal0, points.shape)
+        return rx * hx + ry * hy, ry * hx - rx * hy, -hy, hx
     r = 1.0 / curvature  # signed: positive turning left
-    to_point = rel - r * normal0  # from the turn's centre
-    dist = np.linalg.norm(to_point, axis=-1)
-    start = -r * normal0
-    cross = start[0] * to_point[..., 1] - start[1] * to_point[..., 0]
-    angle = np.arctan2(cross, to_point @ start) * np.sign(r)  # swept angle, in the direction of travel
-    outward = to_point / np.maximum(dist, 1e-9)[..., None]
-    return abs(r) * angle, np.sign(r) * (abs(r) - dist), -np.sign(r) * outward
+    tx, ty = rx + r * hy, ry - r * hx  # from the turn's centre
+    dist = np.hypot(tx, ty)
+    sx, sy = -r * -hy, -r * hx  # from the centre to the ego now
+    angle = np.arctan2(sx * ty - sy * tx, tx * sx + ty * sy)  # swept angle, signed like r
+    sign = math.copysign(1.0, r)
+    scale = -sign / np.maximum(dist, 1e-9)  # the normal: the inward unit vector for a left turn
+    return (abs(r) * sign) * angle, sign * (abs(r) - dist), tx * scale, ty * scale
 
 
 def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
@@ -66,42 +72,59 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     more than :data:`GATE_SIGMAS` standard deviations beyond the corridor's reach (its length
     plus half width, from the ego now) gets probability 0 without the per-step computation.
     """
-    n = positions.shape[0]
-    sep = positions - path.xy[None]
-    dist = np.linalg.norm(sep, axis=2)
-    j = dist.argmin(axis=1)
-    rows = np.arange(n)
-    u = sep[rows, j] / np.maximum(dist[rows, j], 1e-9)[:, None]
-    closest_var = np.einsum("ni,nij,nj->n", u, covariances[rows, j], u) + path.lateral_std[j] ** 2
+    parts = (positions[..., 0], positions[..., 1], covariances[..., 0, 0], covariances[..., 0, 1],
+             covariances[..., 1, 1])
+    return conflict_of(path, tuple(np.ascontiguousarray(a, float) for a in parts), half_width_m, front_m)
+
+
+def conflict_of(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, front_m: float) -> Conflict:
+    """:func:`corridor_conflict` from the predicted positions and covariances by component:
+    ``parts`` = x, y (N, K) metres and the covariances' xx, xy, yy (N, K) m^2
+    (:meth:`pedenv.behaviour.prediction.PathPredictor.components`)."""
+    px, py, cxx, cxy, cyy = parts
+    n, k = px.shape
+    sx, sy = px - path.xy[:, 0], py - path.xy[:, 1]
+    sep = np.hypot(sx, sy)
+    j = sep.argmin(axis=1)  # the closest step
+    at = np.arange(n) * k + j
+    closest, ux, uy = sep.ravel()[at], sx.ravel()[at], sy.ravel()[at]
+    across = ux * ux * cxx.ravel()[at] + 2.0 * ux * uy * cxy.ravel()[at] + uy * uy * cyy.ravel()[at]
+    closest_var = across / np.maximum(closest, 1e-9) ** 2 + path.lateral_std[j] ** 2  # along the separation
     horizon = path.times[-1]
     prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
     reach = path.length + front_m + half_width_m
-    trace = (covariances[..., 0, 0] + covariances[..., 1, 1]).max(axis=1)
-    spread_max = np.sqrt(np.maximum(trace, 0.0) + path.lateral_std[-1] ** 2)
-    near = np.linalg.norm(positions - path.xy[0], axis=2).min(axis=1) < reach + GATE_SIGMAS * spread_max
-    if near.any():
-        prob[near], mean[near], spread[near] = _entry(path, positions[near], covariances[near], half_width_m,
+    spread_max = np.sqrt(np.maximum((cxx + cyy).max(axis=1), 0.0) + path.lateral_std[-1] ** 2)
+    near = np.hypot(px - path.xy[0, 0], py - path.xy[0, 1]).min(axis=1) < reach + GATE_SIGMAS * spread_max
+    if near.all():
+        prob, mean, spread = _entry(path, parts, half_width_m, path.length + front_m)
+    elif near.any():
+        prob[near], mean[near], spread[near] = _entry(path, tuple(a[near] for a in parts), half_width_m,
                                                       path.length + front_m)
-    return Conflict(prob, mean, spread, dist[rows, j], np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
+    return Conflict(prob, mean, spread, closest, np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
 
 
 #: Pedestrians farther than this many standard deviations beyond the corridor's reach are not in conflict.
 GATE_SIGMAS = 6.0
 
 
-def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
-           length: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s."""
-    s, d, normal = path_coordinates(path, positions)
-    var = np.einsum("nki,nkij,nkj->nk", normal, covariances, normal) + path.lateral_std[None, :] ** 2
+def _entry(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, length: float
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s, from
+    the positions and covariances by component (M, K) (see :func:`conflict_of`)."""
+    px, py, cxx, cxy, cyy = parts
+    s, d, nx, ny = _coordinates(path, px, py)
+    var = nx * nx * cxx + 2.0 * nx * ny * cxy + ny * ny * cyy + path.lateral_std**2
     sd = np.sqrt(np.maximum(var, 1e-8))
     inside = ndtr((half_width_m - d) / sd) - ndtr((-half_width_m - d) / sd)
-    inside = np.where((s >= 0.0) & (s <= length), inside, 0.0)
+    inside *= (s >= 0.0) & (s <= length)  # behind the ego or beyond the corridor: 0
     running = np.maximum.accumulate(inside, axis=1)
-    prob = np.clip(running[:, -1], 0.0, 1.0)
-    rise = np.diff(running, axis=1, prepend=0.0)
-    t = path.times[None, :]
+    prob = np.minimum(np.maximum(running[:, -1], 0.0), 1.0)
     some = prob > 1e-3
-    mean = np.where(some, (rise * t).sum(1) / np.maximum(prob, 1e-12), path.times[-1])
+    t = path.times
+    if not some.any():
+        return prob, np.full(len(prob), t[-1]), np.zeros(len(prob))
+    rise = running.copy()
+    rise[:, 1:] -= running[:, :-1]
+    mean = np.where(some, (rise @ t) / np.maximum(prob, 1e-12), t[-1])
     spread = np.sqrt(np.maximum((rise * (t - mean[:, None]) ** 2).sum(1) / np.maximum(prob, 1e-12), 0.0))
     return prob, mean, np.where(some, spread, 0.0)

@@ -113,20 +113,23 @@ def travelled(motion: EgoMotion, times: np.ndarray) -> np.ndarray:
 def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray) -> EgoPath:
     """The path at ``times`` (K,) s ahead from the pose now: an arc of the curvature now (yaw rate
     over speed), along which the ego covers :func:`travelled`."""
+    times = np.asarray(times, float)
     s = travelled(motion, times)
-    direction = -1.0 if s[-1] < 0 or (s[-1] == 0 and motion.speed < 0) else 1.0
+    last = float(s[-1])
+    direction = -1.0 if last < 0 or (last == 0 and motion.speed < 0) else 1.0
     dist = np.abs(s)
     speed = abs(motion.speed)
     curvature = motion.yaw_rate / speed if speed > 1e-3 else 0.0
-    heading = ego.yaw + (0.0 if direction > 0 else np.pi)
+    yaw = ego.yaw
+    heading = yaw + (0.0 if direction > 0 else math.pi)
     turn = curvature * dist
+    xy = np.empty((len(times), 2))
     if abs(curvature) < 1e-6:
-        dx, dy = dist * np.cos(heading), dist * np.sin(heading)
+        xy[:, 0] = ego.translation[0] + dist * math.cos(heading)
+        xy[:, 1] = ego.translation[1] + dist * math.sin(heading)
     else:
-        dx = (np.sin(heading + turn) - np.sin(heading)) / curvature
-        dy = (np.cos(heading) - np.cos(heading + turn)) / curvature
-    xy = ego.translation[None, :2] + np.column_stack([dx, dy])
-    lateral = np.sqrt((0.5 * motion.yaw_rate_std * times * dist) ** 2
-                      + (0.5 * motion.speed_std * times * np.abs(np.sin(turn))) ** 2)
-    return EgoPath(np.asarray(times, float), xy, ego.yaw + turn, lateral, motion, curvature, float(dist[-1]),
-                   direction)
+        xy[:, 0] = ego.translation[0] + (np.sin(heading + turn) - math.sin(heading)) / curvature
+        xy[:, 1] = ego.translation[1] + (math.cos(heading) - np.cos(heading + turn)) / curvature
+    lateral = np.hypot((0.5 * motion.yaw_rate_std) * times * dist,
+                       (0.5 * motion.speed_std) * times * np.abs(np.sin(turn)))
+    return EgoPath(times, xy, yaw + turn, lateral, motion, curvature, float(dist[-1]), direction)

@@ -7,17 +7,19 @@ in :class:`TrackStore`, keyed by track id; tracks the tracker has dropped are fo
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
 
 from pedenv.behaviour import facing, heading_filter, motion_state
 from pedenv.behaviour.config import BehaviourConfig
-from pedenv.behaviour.conflict import corridor_conflict
-from pedenv.behaviour.ego_path import EgoHistory, predict_ego_path
-from pedenv.behaviour.orientation import motion_likelihood, skeleton_cue, skeleton_likelihood
-from pedenv.behaviour.prediction import predict_path
-from pedenv.geometry import pixel_rays
+from pedenv.behaviour.conflict import conflict_of
+from pedenv.behaviour.ego_path import EgoHistory, EgoPath, predict_ego_path
+from pedenv.behaviour.motion_state import velocity_stats
+from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
+from pedenv.behaviour.prediction import PathPredictor
+from pedenv.geometry import inverse_intrinsics
 from pedenv.records import Frame
 from pedenv.state import Behaviour, Pedestrians
 
@@ -73,12 +75,24 @@ class BehaviourEstimator:
         self.acceleration_std = acceleration_std
         self.store = TrackStore(config.orientation_bins)
         self.ego = EgoHistory(config)
-        self.cells = heading_filter.cell_centres(config.orientation_bins)
+        self.grid = heading_filter.grid(config.orientation_bins)  # the trig and Fourier tables, once
+        self.cells = self.grid.cells
+        self.angles = (math.radians(config.heading_random_walk_deg), math.radians(config.available_std_deg),
+                       math.radians(config.facing_half_angle_deg))  # random walk, available spread, facing
         self.horizons = np.asarray(config.horizons_s, float)
         k = int(round(config.conflict_horizon_s / config.conflict_step_s))
         self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
-        self.path_times = np.concatenate([self.conflict_times, self.horizons])  # one prediction for both
+        self.predictor = PathPredictor(self.horizons, acceleration_std)  # the predicted path reported
+        self.conflict_predictor = PathPredictor(self.conflict_times, acceleration_std)  # the corridor's steps
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
+        self._intrinsics: tuple[bytes, np.ndarray] = (b"", np.eye(3))  # the last camera's and their inverse
+
+    def _inverse_intrinsics(self, frame: Frame) -> np.ndarray:
+        """The inverse of the frame's camera matrix, computed again only when it changes."""
+        key = frame.camera.intrinsics.tobytes()
+        if key != self._intrinsics[0]:
+            self._intrinsics = (key, inverse_intrinsics(frame.camera.intrinsics))
+        return self._intrinsics[1]
 
     def reset(self) -> None:
         self.store.clear()
@@ -94,59 +108,66 @@ class BehaviourEstimator:
         finite or beyond :data:`STATE_LIMIT`); live_ids: every track id the tracker still holds.
         """
         start = time.perf_counter()
-        usable = (started & (np.abs(x) < STATE_LIMIT[0]).all(axis=1)
-                  & (np.abs(P) < STATE_LIMIT[1]).reshape(len(P), 16).all(axis=1))  # False for NaN, inf
-        if not usable.all():
-            x, P, fresh = x.copy(), P.copy(), ~usable
-            x[fresh] = np.column_stack([peds.positions[fresh, 0], np.zeros(fresh.sum()), peds.positions[fresh, 1],
-                                        np.zeros(fresh.sum())])
-            prior = np.repeat(np.diag([1.0, 4.0, 1.0, 4.0])[None], fresh.sum(), axis=0)
-            cov = _finite_cov4(peds.covariances[fresh])
-            prior[:, 0, 0], prior[:, 0, 2], prior[:, 2, 0], prior[:, 2, 2] = (cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 0],
-                                                                              cov[:, 1, 1])
-            P[fresh] = prior
+        if len(peds) and not (started.all() and np.abs(x).max() < STATE_LIMIT[0]
+                              and np.abs(P).max() < STATE_LIMIT[1]):  # False for NaN
+            x, P = _usable_states(peds, x, P, started)
         self.ego.add(frame.timestamp, frame.ego)
         path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times)
         self.store.keep(live_ids)
         if len(peds) == 0:
-            beh = Behaviour.empty(self.horizons)
+            beh = dataclasses.replace(Behaviour.empty(self.horizons), conflict_horizon=float(self.conflict_times[-1]),
+                                      ego_speed=path.motion.speed, ego_yaw_rate=path.motion.yaw_rate, ego_path=path.xy)
         else:
             beh = self._cues(frame, peds, x, P, path)
-        beh = dataclasses.replace(beh, conflict_horizon=float(self.conflict_times[-1]), ego_speed=path.motion.speed,
-                                  ego_yaw_rate=path.motion.yaw_rate, ego_path=path.xy)
         self.elapsed_s, self.frames = self.elapsed_s + time.perf_counter() - start, self.frames + 1
         return dataclasses.replace(peds, behaviour=beh)
 
-    def _cues(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, path) -> Behaviour:
-        cfg, t, store = self.config, frame.timestamp, self.store
+    def _cues(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, path: EgoPath) -> Behaviour:
+        cfg, t, store, g = self.config, frame.timestamp, self.store, self.grid
         rows = store.rows(peds.track_ids, t)
-        p = heading_filter.predict(store.p[rows], t - store.time[rows], np.radians(cfg.heading_random_walk_deg))
-        origin = frame.cam_to_world[:3, 3]
-        rays = pixel_rays(peds.keypoints, frame.camera.intrinsics, frame.cam_to_world)
-        cue = skeleton_cue(rays, peds.confidences, peds.positions, origin,
-                           float(frame.camera.intrinsics[0, 0]), cfg)
-        velocity, velocity_cov = x[:, [1, 3]], P[:, [1, 3]][:, :, [1, 3]]
-        moving, _ = motion_likelihood(velocity, velocity_cov, self.cells, cfg)
-        p = heading_filter.update(p, skeleton_likelihood(cue, self.cells, cfg) * moving)
+        walk, available_std, half = self.angles
+        p = heading_filter.spread(store.p[rows], t - store.time[rows], walk, g)
+        cam_to_world = frame.cam_to_world
+        rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
+        cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
+                            float(frame.camera.intrinsics[0, 0]), cfg)
+        cos_a, velocity = cue.toward @ g.cos_sin, velocity_stats(x[:, 1::2], P[:, 1::2, 1::2])
+        moving, _ = walking_likelihood(velocity, g.cos_sin, cfg)
+        p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin, cfg) * moving)
         store.p[rows], store.time[rows] = p, t
-        yaw, yaw_std, available = heading_filter.summary(p, np.radians(cfg.available_std_deg))
-        speed, speed_std = motion_state.speed_and_std(velocity, velocity_cov)
+        yaw, yaw_std, available = heading_filter.summary(p, available_std)
+        speed, speed_std = motion_state.speed_from(velocity)
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
-        half = np.radians(cfg.facing_half_angle_deg)
-        ahead, ahead_cov = predict_path(x, P, self.path_times, self.acceleration_std)
-        k = len(self.conflict_times)
-        conflict = corridor_conflict(path, ahead[:, :k], ahead_cov[:, :k], cfg.corridor_half_width_m,
-                                     cfg.corridor_front_m)
-        positions, covariances = ahead[:, k:], ahead_cov[:, k:]
-        return Behaviour(yaw, yaw_std, available, facing.body_facing(p, cue.toward, half),
-                         facing.head_facing(cue, half), state, speed, speed_std, self.horizons, positions,
-                         covariances, conflict.probability, conflict.time_s, conflict.time_std_s,
-                         conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s)
+        ahead, ahead_cov = self.predictor(x, P)
+        conflict = conflict_of(path, self.conflict_predictor.components(x, P), cfg.corridor_half_width_m,
+                               cfg.corridor_front_m)
+        return Behaviour(yaw, yaw_std, available, facing.body_facing_from(p, cos_a, math.cos(half)),
+                         facing.head_facing(cue, half), state, speed, speed_std, self.horizons, ahead,
+                         ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
+                         conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s,
+                         float(self.conflict_times[-1]), path.motion.speed, path.motion.yaw_rate, path.xy)
 
 
 #: A filter state (m, m/s) or covariance entry (m^2, ...) beyond these is not used (an overflowed track).
 STATE_LIMIT = (1e6, 1e8)
+
+
+def _usable_states(peds: Pedestrians, x: np.ndarray, P: np.ndarray, started: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """x (N, 4), P (N, 4, 4) with the rows not started, not finite or beyond :data:`STATE_LIMIT`
+    replaced by the reported position, standing, with a 2 m/s velocity spread."""
+    usable = (started & (np.abs(x) < STATE_LIMIT[0]).all(axis=1)
+              & (np.abs(P) < STATE_LIMIT[1]).reshape(len(P), 16).all(axis=1))  # False for NaN, inf
+    x, P, fresh = x.copy(), P.copy(), ~usable
+    x[fresh] = np.column_stack([peds.positions[fresh, 0], np.zeros(fresh.sum()), peds.positions[fresh, 1],
+                                np.zeros(fresh.sum())])
+    prior = np.repeat(np.diag([1.0, 4.0, 1.0, 4.0])[None], fresh.sum(), axis=0)
+    cov = _finite_cov4(peds.covariances[fresh])
+    prior[:, 0, 0], prior[:, 0, 2], prior[:, 2, 0], prior[:, 2, 2] = (cov[:, 0, 0], cov[:, 0, 1], cov[:, 1, 0],
+                                                                      cov[:, 1, 1])
+    P[fresh] = prior
+    return x, P
 
 
 def _finite_cov4(cov: np.ndarray) -> np.ndarray:

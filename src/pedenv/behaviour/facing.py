@@ -15,6 +15,13 @@ def body_facing(p: np.ndarray, toward: np.ndarray, half_angle: float) -> np.ndar
     return heading_filter.probability_within(p, np.arctan2(toward[:, 1], toward[:, 0]), half_angle)
 
 
+def body_facing_from(p: np.ndarray, cos_a: np.ndarray, cos_half_angle: float) -> np.ndarray:
+    """:func:`body_facing` from ``cos(a)`` (N, B) of each cell (the cosine of its angle to the
+    direction to the camera): the cells within the half angle are those with ``cos(a) >=
+    cos(half_angle)``."""
+    return np.minimum((p * (cos_a >= cos_half_angle)).sum(axis=1), 1.0)
+
+
 def head_facing(cue: SkeletonCue, half_angle: float) -> np.ndarray:
     """(N,) probability that the head faces the camera, from this frame's face keypoints.
 

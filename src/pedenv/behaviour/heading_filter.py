@@ -26,20 +26,53 @@ def cell_centres(bins: int) -> np.ndarray:
     return -np.pi + (np.arange(bins) + 0.5) * (2.0 * np.pi / bins)
 
 
+class Grid:
+    """The constant tables of a B-cell grid, computed once (the estimator holds one).
+
+    cells (B,) radians; cos_sin (2, B) their cosines and sines; freq_sq (M,) the squared
+    frequencies of the real Fourier transform (M = B // 2 + 1); the mode's neighbourhood
+    (+-3 cells) and its offsets' cosines and sines (7, 2) for :func:`summary`.
+    """
+
+    def __init__(self, bins: int) -> None:
+        self.bins = bins
+        self.cells = cell_centres(bins)
+        self.cos_sin = np.stack([np.cos(self.cells), np.sin(self.cells)])
+        self.freq_sq = np.arange(bins // 2 + 1).astype(float) ** 2
+        self.neighbours = np.arange(-3, 4)
+        step = self.neighbours * (2.0 * np.pi / bins)
+        self.neighbour_cos_sin = np.column_stack([np.cos(step), np.sin(step)])
+
+
+_GRIDS: dict[int, Grid] = {}
+
+
+def grid(bins: int) -> Grid:
+    """The (cached) :class:`Grid` of ``bins`` cells."""
+    if bins not in _GRIDS:
+        _GRIDS[bins] = Grid(bins)
+    return _GRIDS[bins]
+
+
 def uniform(n: int, bins: int) -> np.ndarray:
     """(n, B) the flat distribution (nothing known)."""
     return np.full((n, bins), 1.0 / bins)
+
+
+def spread(p: np.ndarray, dt: np.ndarray, random_walk_rad: float, g: Grid) -> np.ndarray:
+    """p (N, B) convolved with a wrapped normal of variance ``q^2 dt`` per row (dt (N,) seconds,
+    finite), not normalised (its rows keep their sums, up to the clipped rounding)."""
+    var = random_walk_rad**2 * np.minimum(np.maximum(dt, 0.0), 1e3)
+    damp = np.exp(np.multiply.outer(-0.5 * np.minimum(var, 1e3), g.freq_sq))
+    return np.maximum(np.fft.irfft(np.fft.rfft(p, axis=1) * damp, n=g.bins, axis=1), 0.0)
 
 
 def predict(p: np.ndarray, dt: np.ndarray, random_walk_rad: float) -> np.ndarray:
     """Spread distributions p (N, B) over dt (N,) seconds (heading random walk, rad / sqrt(s))."""
     if not len(p):
         return p
-    var = random_walk_rad**2 * np.clip(np.where(np.isnan(dt), 1e3, dt), 0.0, 1e3)
-    k = np.arange(p.shape[1] // 2 + 1)
-    damp = np.exp(-0.5 * np.minimum(var, 1e3)[:, None] * k[None, :] ** 2)
-    out = np.fft.irfft(np.fft.rfft(p, axis=1) * damp, n=p.shape[1], axis=1)
-    return normalise(np.maximum(out, 0.0))
+    dt = np.where(np.isnan(dt), 1e3, dt)
+    return normalise(spread(p, dt, random_walk_rad, grid(p.shape[1])))
 
 
 def update(p: np.ndarray, likelihood: np.ndarray) -> np.ndarray:
@@ -49,6 +82,8 @@ def update(p: np.ndarray, likelihood: np.ndarray) -> np.ndarray:
 
 def normalise(p: np.ndarray) -> np.ndarray:
     total = p.sum(axis=1, keepdims=True)
+    if len(total) and total.min() > 1e-300 and total.max() < np.inf:  # the usual case (False for NaN)
+        return p / total
     flat = ~(total > 1e-300) | ~np.isfinite(total)
     return np.where(flat, 1.0 / p.shape[1], p / np.where(flat, 1.0, total))
 
@@ -60,17 +95,21 @@ def summary(p: np.ndarray, available_std_rad: float) -> tuple[np.ndarray, np.nda
     n, bins = p.shape
     if n == 0:
         return np.zeros(0), np.zeros(0), np.zeros(0, np.int8)
-    cells = cell_centres(bins)
+    g = grid(bins)
     best = p.argmax(axis=1)
-    near = (best[:, None] + np.arange(-3, 4)[None, :]) % bins
-    w = p[np.arange(n)[:, None], near]
-    yaw = np.arctan2((w * np.sin(cells[near])).sum(1), (w * np.cos(cells[near])).sum(1))
-    diff = _wrap(cells[None, :] - yaw[:, None])
-    std = np.sqrt((p * diff**2).sum(axis=1))
-    axial = np.sqrt((p * _wrap_half(diff) ** 2).sum(axis=1))
+    near = p.take(((best[:, None] + g.neighbours) % bins) + bins * np.arange(n)[:, None])  # (N, 7)
+    local = near @ g.neighbour_cos_sin  # (N, 2): the neighbourhood's mean direction, from the mode's cell
+    yaw = _wrap(g.cells[best] + np.arctan2(local[:, 1], local[:, 0]))
+    diff = g.cells - yaw[:, None]  # in (-2 pi, 2 pi): wrapped to [-pi, pi] below
+    diff -= (2.0 * np.pi) * np.rint(diff * (0.5 / np.pi))
+    sq = diff * diff
+    std = np.sqrt((p * sq).sum(axis=1))
+    np.abs(diff, out=diff)
+    diff -= np.pi
+    axial = np.sqrt((p * np.minimum(sq, diff * diff)).sum(axis=1))  # about the axis: the nearer end
     availability = np.where(std < available_std_rad, AVAILABLE,
                             np.where(axial < available_std_rad, SIGN_UNKNOWN, UNAVAILABLE)).astype(np.int8)
-    return _wrap(yaw), std, availability
+    return yaw, std, availability
 
 
 def probability_within(p: np.ndarray, centre: np.ndarray, half_angle: float) -> np.ndarray:
@@ -82,7 +121,3 @@ def probability_within(p: np.ndarray, centre: np.ndarray, half_angle: float) -> 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2.0 * np.pi) - np.pi
-
-
-def _wrap_half(a: np.ndarray) -> np.ndarray:
-    return (a + 0.5 * np.pi) % np.pi - 0.5 * np.pi

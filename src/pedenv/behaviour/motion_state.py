@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from pedenv.behaviour.config import BehaviourConfig
@@ -11,16 +13,43 @@ STANDING, WALKING, RUNNING = 0, 1, 2
 MOTION_STATE_NAMES = ("standing", "walking", "running")
 
 
+@dataclass(frozen=True)
+class VelocityStats:
+    """Velocities (N, 2) m/s with covariances (N, 2, 2), summarised once for the cues that use them:
+    speed (N,) m/s, unit (N, 2) its direction (zero at standstill), var_along and var_across (N,)
+    (m/s)^2 the variance along and across it, var_largest (N,) the covariance's larger eigenvalue."""
+
+    speed: np.ndarray
+    unit: np.ndarray
+    var_along: np.ndarray
+    var_across: np.ndarray
+    var_largest: np.ndarray
+
+
+def velocity_stats(velocities: np.ndarray, velocity_covariances: np.ndarray) -> VelocityStats:
+    """:class:`VelocityStats` of velocities (N, 2) m/s with covariances (N, 2, 2) (m/s)^2."""
+    vx, vy = velocities[:, 0], velocities[:, 1]
+    a, b, d = velocity_covariances[:, 0, 0], velocity_covariances[:, 0, 1], velocity_covariances[:, 1, 1]
+    speed = np.hypot(vx, vy)
+    inv = 1.0 / np.maximum(speed, 1e-9)
+    ux, uy = vx * inv, vy * inv
+    uxx, uyy, uxy2 = ux * ux, uy * uy, 2.0 * ux * uy * b
+    along = uxx * a + uxy2 + uyy * d
+    across = uyy * a - uxy2 + uxx * d
+    largest = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
+    return VelocityStats(speed, velocities * inv[:, None], along, across, largest)
+
+
 def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Speed (N,) m/s and its standard deviation (N,) of velocities (N, 2) m/s with covariances
     (N, 2, 2) (m/s)^2 (along the velocity; at standstill the larger axis)."""
-    speed = np.linalg.norm(velocities, axis=1)
-    unit = velocities / np.maximum(speed, 1e-9)[:, None]
-    along = np.einsum("ni,nij,nj->n", unit, velocity_covariances, unit)
-    a, b, d = velocity_covariances[:, 0, 0], velocity_covariances[:, 0, 1], velocity_covariances[:, 1, 1]
-    largest = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
-    var = np.where(speed > 1e-6, along, largest)
-    return speed, np.sqrt(np.maximum(var, 0.0))
+    return speed_from(velocity_stats(velocities, velocity_covariances))
+
+
+def speed_from(v: VelocityStats) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`speed_and_std` from the :class:`VelocityStats`."""
+    var = np.where(v.speed > 1e-6, v.var_along, v.var_largest)
+    return v.speed, np.sqrt(np.maximum(var, 0.0))
 
 
 def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, config: BehaviourConfig) -> np.ndarray:

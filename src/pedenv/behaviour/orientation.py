@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pedenv.behaviour.config import BehaviourConfig
+from pedenv.behaviour.motion_state import VelocityStats, velocity_stats
 from pedenv.body import EAR_FORWARD, HIP_HALF_WIDTH, NOSE_FORWARD, SHOULDER_HALF_WIDTH
 from pedenv.skeleton import CocoKeypoint as KP
 
@@ -48,13 +49,30 @@ class SkeletonCue:
     face_seen: np.ndarray
 
 
+#: The keypoints the skeleton cue measures, in the order of :func:`cue_from_rays`'s rays: the
+#: left shoulder and hip, the right shoulder and hip, the nose and the left and right ear.
+CUE_KEYPOINTS = np.array([KP.LEFT_SHOULDER, KP.LEFT_HIP, KP.RIGHT_SHOULDER, KP.RIGHT_HIP, KP.NOSE, KP.LEFT_EAR,
+                          KP.RIGHT_EAR])
+_ONES3 = np.ones(3)
+_HALF_WIDTHS = np.array([SHOULDER_HALF_WIDTH, HIP_HALF_WIDTH])
+_AXES = (np.array([[0, 1], [1, 0]]), np.array([[-1.0, -1.0], [-1.0, 1.0]]))  # toward -> [bearing, right] columns
+
+
 def viewing_axes(positions: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``toward`` (N, 2) and ``right`` (N, 2) unit vectors of people at positions (N, 3) world,
     metres, seen from a camera at ``origin`` (3,) (see the module docstring)."""
-    d = origin[None, :2] - positions[:, :2]
-    norm = np.linalg.norm(d, axis=1, keepdims=True)
-    toward = np.where(norm > 1e-6, d / np.maximum(norm, 1e-6), np.array([1.0, 0.0]))
-    return toward, np.column_stack([-toward[:, 1], toward[:, 0]])
+    toward, _ = _toward(positions, origin)
+    return toward, toward[:, ::-1] * _AXES[1][1]
+
+
+def _toward(positions: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``toward`` (N, 2) unit and the ground distance (N,) metres from the camera."""
+    d = origin[:2] - positions[:, :2]
+    norm = np.hypot(d[:, 0], d[:, 1])
+    toward = d / np.maximum(norm, 1e-6)[:, None]
+    if len(norm) and norm.min() <= 1e-6:
+        toward[norm <= 1e-6] = (1.0, 0.0)
+    return toward, norm
 
 
 def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarray, origin: np.ndarray,
@@ -65,48 +83,62 @@ def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarra
     positions: (N, 3) the people's ground points, world, metres. origin: (3,) camera centre.
     focal_px: the camera's focal length in pixels (turns pixel noise into metres).
     """
-    toward, right = viewing_axes(positions, origin)
-    bearing = -toward
-    rng = np.maximum(np.linalg.norm(positions[:, :2] - origin[None, :2], axis=1), 0.5)
-    along = rays[..., 0] * bearing[:, None, 0] + rays[..., 1] * bearing[:, None, 1]
-    cut = origin + (rng[:, None] / np.maximum(along, 0.05))[..., None] * rays  # (N, 17, 3)
-    lateral = cut[..., 0] * right[:, None, 0] + cut[..., 1] * right[:, None, 1]  # (N, 17) metres
-    ok = (confidences >= config.min_keypoint_confidence) & (along > 0.05)
+    return cue_from_rays(rays[:, CUE_KEYPOINTS], confidences, positions, origin, focal_px, config)
+
+
+def cue_from_rays(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarray, origin: np.ndarray,
+                  focal_px: float, config: BehaviourConfig) -> SkeletonCue:
+    """:func:`skeleton_cue` from the viewing rays (N, 7, 3), world frame, of the
+    :data:`CUE_KEYPOINTS` only (the others are not needed; the rays need not be unit vectors);
+    confidences (N, 17) of all keypoints."""
+    toward, dist = _toward(positions, origin)
+    rng = np.maximum(dist, 0.5)
+    # each ray's component along the bearing (away from the camera) and to the right
+    length = np.sqrt((rays * rays) @ _ONES3)
+    proj = (rays[..., :2] @ (toward[:, _AXES[0]] * _AXES[1])) / length[..., None]  # (N, 7, 2)
+    along = proj[..., 0]
+    # the sideways offset (metres, N x 7) where the ray meets the person's range, less the camera's
+    # own (which cancels in every difference taken below)
+    lateral = (rng[:, None] / np.maximum(along, 0.05)) * proj[..., 1]
+    ok = (confidences[:, CUE_KEYPOINTS] >= config.min_keypoint_confidence) & (along > 0.05)
     pixel_m = config.keypoint_pixel_std * rng / focal_px  # one keypoint's noise in metres at the range
-    h = config.person_height_m
-    ratios, weights = [], []
-    for left, right_kp, half in ((KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER, SHOULDER_HALF_WIDTH),
-                                 (KP.LEFT_HIP, KP.RIGHT_HIP, HIP_HALF_WIDTH)):
-        width_m = 2.0 * half * h
-        both = ok[:, left] & ok[:, right_kp]
-        ratios.append(np.where(both, (lateral[:, left] - lateral[:, right_kp]) / width_m, 0.0))
-        var = config.width_ratio_std**2 + 2.0 * (pixel_m / width_m) ** 2
-        weights.append(np.where(both, 1.0 / var, 0.0))
-    w = weights[0] + weights[1]
+    width_m = (2.0 * config.person_height_m) * _HALF_WIDTHS  # shoulders, hips
+    both = ok[:, 0:2] & ok[:, 2:4]
+    ratios = np.where(both, (lateral[:, 0:2] - lateral[:, 2:4]) / width_m, 0.0)
+    weights = np.where(both, 1.0 / (config.width_ratio_std**2 + 2.0 * (pixel_m[:, None] / width_m) ** 2), 0.0)
+    w = weights[:, 0] + weights[:, 1]  # (a reduction over a last axis of 2 is slow)
     width_ok = w > 0
-    width = np.clip((ratios[0] * weights[0] + ratios[1] * weights[1]) / np.maximum(w, 1e-12), -1.2, 1.2)
+    weighted = ratios * weights
+    width = np.minimum(np.maximum((weighted[:, 0] + weighted[:, 1]) / np.maximum(w, 1e-12), -1.2), 1.2)
     width_std = np.where(width_ok, 1.0 / np.sqrt(np.maximum(w, 1e-12)), 1.0)
     face, face_std, face_ok = _face_offset(lateral, ok, pixel_m, config)
-    face_seen = confidences[:, [KP.NOSE, KP.LEFT_EYE, KP.RIGHT_EYE]].min(axis=1)
-    return SkeletonCue(toward, right, width, width_std, width_ok, face, face_std, face_ok,
-                       np.clip(np.where(np.isnan(face_seen), 0.0, face_seen), 0.0, 1.0))
+    seen = np.minimum(np.minimum(confidences[:, KP.NOSE], confidences[:, KP.LEFT_EYE]), confidences[:, KP.RIGHT_EYE])
+    face_seen = np.minimum(np.fmax(seen, 0.0), 1.0)  # NaN -> 0
+    return SkeletonCue(toward, toward[:, ::-1] * _AXES[1][1], width, width_std, width_ok, face, face_std, face_ok,
+                       face_seen)
 
 
 def _face_offset(lateral: np.ndarray, ok: np.ndarray, pixel_m: np.ndarray,
                  config: BehaviourConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The nose's sideways offset ratio (N,) from the ears' midpoint (both ears seen) or else
-    the shoulders' midpoint, its spread (N,) and where it exists (N,) bool."""
+    the shoulders' midpoint, its spread (N,) and where it exists (N,) bool. lateral, ok: (N, 7)
+    in the order of :data:`CUE_KEYPOINTS`."""
     h = config.person_height_m
-    ears = ok[:, KP.LEFT_EAR] & ok[:, KP.RIGHT_EAR]
-    shoulders = ok[:, KP.LEFT_SHOULDER] & ok[:, KP.RIGHT_SHOULDER]
-    ear_mid = 0.5 * (lateral[:, KP.LEFT_EAR] + lateral[:, KP.RIGHT_EAR])
-    shoulder_mid = 0.5 * (lateral[:, KP.LEFT_SHOULDER] + lateral[:, KP.RIGHT_SHOULDER])
-    full = np.where(ears, NOSE_FORWARD - EAR_FORWARD, NOSE_FORWARD) * h  # the offset in full profile, metres
-    offset = lateral[:, KP.NOSE] - np.where(ears, ear_mid, shoulder_mid)
-    face_ok = ok[:, KP.NOSE] & (ears | shoulders)
-    face = np.where(face_ok, np.clip(offset / full, -1.5, 1.5), 0.0)
+    ears = ok[:, 5] & ok[:, 6]
+    face_ok = ok[:, 4] & (ears | (ok[:, 0] & ok[:, 2]))
+    mid = 0.5 * np.where(ears, lateral[:, 5] + lateral[:, 6], lateral[:, 0] + lateral[:, 2])
+    full = np.where(ears, (NOSE_FORWARD - EAR_FORWARD) * h, NOSE_FORWARD * h)  # the offset in full profile, metres
+    face = np.where(face_ok, np.minimum(np.maximum((lateral[:, 4] - mid) / full, -1.5), 1.5), 0.0)
     std = np.sqrt(config.face_offset_std**2 + 1.5 * (pixel_m / full) ** 2)
     return face, std, face_ok
+
+
+def keypoint_rays(keypoints: np.ndarray, inverse_intrinsics: np.ndarray, cam_to_world: np.ndarray) -> np.ndarray:
+    """Viewing rays (N, J, 3), world frame, not of unit length, of pixels (N, J, 2) (the camera's
+    inverse intrinsics (3, 3), its (4, 4) camera-to-world transform): :func:`pedenv.geometry.pixel_rays`
+    without the normalisation :func:`cue_from_rays` does itself."""
+    m = cam_to_world[:3, :3] @ inverse_intrinsics
+    return keypoints @ m[:, :2].T + m[:, 2]
 
 
 def skeleton_likelihood(cue: SkeletonCue, cells: np.ndarray, config: BehaviourConfig) -> np.ndarray:
@@ -115,15 +147,18 @@ def skeleton_likelihood(cue: SkeletonCue, cells: np.ndarray, config: BehaviourCo
     The width ratio constrains ``cos(a)`` (a mixture with the mirrored ratio for a swap of
     left and right), the face offset ``sin(a)``; a row with neither is flat (all ones).
     """
-    c, s = np.cos(cells), np.sin(cells)
-    cos_a = cue.toward[:, :1] * c + cue.toward[:, 1:] * s  # (N, B)
-    sin_a = cue.right[:, :1] * c + cue.right[:, 1:] * s
+    cos_sin = np.stack([np.cos(cells), np.sin(cells)])
+    return cue_likelihood(cue, cue.toward @ cos_sin, cue.right @ cos_sin, config)
+
+
+def cue_likelihood(cue: SkeletonCue, cos_a: np.ndarray, sin_a: np.ndarray, config: BehaviourConfig) -> np.ndarray:
+    """:func:`skeleton_likelihood` from ``cos(a)`` and ``sin(a)`` (N, B) of each cell."""
     p = config.left_right_swap_probability
-    z = ((cos_a - cue.width[:, None]) / cue.width_std[:, None]) ** 2
-    zm = ((cos_a + cue.width[:, None]) / cue.width_std[:, None]) ** 2
-    width = (1.0 - p) * np.exp(-0.5 * z) + p * np.exp(-0.5 * zm)
-    face = np.exp(-0.5 * ((sin_a - cue.face[:, None]) / cue.face_std[:, None]) ** 2)
-    like = np.where(cue.width_ok[:, None], width, 1.0) * np.where(cue.face_ok[:, None], face, 1.0)
+    k = np.where(cue.width_ok, -0.5 / cue.width_std**2, 0.0)[:, None]  # a row without the cue: exp(0)
+    a, b = cos_a - cue.width[:, None], cos_a + cue.width[:, None]
+    like = (1.0 - p) * np.exp(a * a * k) + p * np.exp(b * b * k)
+    c = sin_a - cue.face[:, None]
+    like *= np.exp(c * c * np.where(cue.face_ok, -0.5 / cue.face_std**2, 0.0)[:, None])
     return _floored(like)
 
 
@@ -135,17 +170,19 @@ def motion_likelihood(velocities: np.ndarray, velocity_covariances: np.ndarray, 
     direction counts once the speed is above ``min_walking_speed_mps`` and ``speed_sigmas``
     standard deviations; its spread is the direction's own plus ``walking_direction_std_deg``.
     """
-    speed = np.linalg.norm(velocities, axis=1)
-    unit = velocities / np.maximum(speed, 1e-9)[:, None]
-    var_along = np.einsum("ni,nij,nj->n", unit, velocity_covariances, unit)
-    normal = np.column_stack([-unit[:, 1], unit[:, 0]])
-    var_across = np.einsum("ni,nij,nj->n", normal, velocity_covariances, normal)
-    use = (speed > config.min_walking_speed_mps) & (speed > config.speed_sigmas * np.sqrt(np.maximum(var_along, 0.0)))
-    spread = np.radians(config.walking_direction_std_deg) ** 2 + var_across / np.maximum(speed, 1e-9) ** 2
-    direction = np.arctan2(unit[:, 1], unit[:, 0])
-    kappa = 1.0 / np.maximum(spread, 1e-6)
-    like = np.exp(np.minimum(kappa, 1e4)[:, None] * (np.cos(cells[None, :] - direction[:, None]) - 1.0))
-    return np.where(use[:, None], _floored(like), 1.0), use
+    v = velocity_stats(velocities, velocity_covariances)
+    return walking_likelihood(v, np.stack([np.cos(cells), np.sin(cells)]), config)
+
+
+def walking_likelihood(v: VelocityStats, cos_sin: np.ndarray, config: BehaviourConfig
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`motion_likelihood` from the velocities' :class:`VelocityStats` and the cells'
+    cosines and sines (2, B)."""
+    speed = v.speed
+    use = (speed > config.min_walking_speed_mps) & (speed > config.speed_sigmas * np.sqrt(np.maximum(v.var_along, 0.0)))
+    spread = np.radians(config.walking_direction_std_deg) ** 2 + v.var_across / np.maximum(speed, 1e-9) ** 2
+    kappa = np.where(use, np.minimum(1.0 / np.maximum(spread, 1e-6), 1e4), 0.0)[:, None]  # unused: exp(0)
+    return _floored(np.exp(kappa * (v.unit @ cos_sin - 1.0))), use
 
 
 def _floored(like: np.ndarray) -> np.ndarray:

@@ -4,7 +4,58 @@ from __future__ import annotations
 
 import numpy as np
 
-_EYE2 = np.eye(2)
+_POS, _VEL = (0, 2), (1, 3)  # the state's position and velocity components, x then y
+
+
+class PathPredictor:
+    """The constant-velocity model of :mod:`pedenv.kalman` (``kalman.transition``) in closed form
+    at ``horizons`` (H,) seconds, with the process noise of ``acceleration_std`` (m/s^2): both as
+    fixed matrices, so a frame's prediction is two matrix products.
+
+    Position ``p + t v``; covariance ``Ppp + t (Ppv + Pvp) + t^2 Pvv + a^2 t^4 / 4`` per axis.
+    """
+
+    def __init__(self, horizons: np.ndarray, acceleration_std: float) -> None:
+        t = np.asarray(horizons, float)
+        h = len(t)
+        self.horizons = t
+        self.position_map = np.zeros((4, h, 2))  # state -> (H, 2) positions
+        self.covariance_map = np.zeros((16, h, 2, 2))  # flattened P -> (H, 2, 2) covariances
+        self.noise = np.zeros((h, 2, 2))
+        for i in range(2):
+            self.position_map[_POS[i], :, i] = 1.0
+            self.position_map[_VEL[i], :, i] = t
+            self.noise[:, i, i] = acceleration_std**2 * t**4 / 4.0
+            for j in range(2):
+                self.covariance_map[4 * _POS[i] + _POS[j], :, i, j] += 1.0
+                self.covariance_map[4 * _POS[i] + _VEL[j], :, i, j] += t
+                self.covariance_map[4 * _VEL[i] + _POS[j], :, i, j] += t
+                self.covariance_map[4 * _VEL[i] + _VEL[j], :, i, j] += t * t
+        # the same by component, each (N, H) contiguous: x, y; xx, xy, yy
+        self.component_maps = (np.ascontiguousarray(self.position_map.transpose(0, 2, 1).reshape(4, 2 * h)),
+                               np.ascontiguousarray(self.covariance_map[:, :, [0, 0, 1], [0, 1, 1]]
+                                                    .transpose(0, 2, 1).reshape(16, 3 * h)),
+                               np.ascontiguousarray(self.noise[:, [0, 0, 1], [0, 1, 1]].T.reshape(3 * h)))
+        self.position_map = self.position_map.reshape(4, 2 * h)
+        self.covariance_map = self.covariance_map.reshape(16, 4 * h)
+        self.noise = self.noise.reshape(4 * h)
+
+    def __call__(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (N, H, 2) world x-y, metres, and covariances (N, H, 2, 2) m^2 of the filter
+        states x (N, 4) ``[x, vx, y, vy]`` with covariances P (N, 4, 4)."""
+        n, h = len(x), len(self.horizons)
+        positions = (x @ self.position_map).reshape(n, h, 2)
+        cov = (P.reshape(n, 16) @ self.covariance_map + self.noise).reshape(n, h, 2, 2)
+        return positions, cov
+
+
+    def components(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The same as :meth:`__call__`, by component: positions ``x, y`` (N, H) metres and the
+        covariances' ``xx, xy, yy`` (N, H) m^2."""
+        h = len(self.horizons)
+        positions = x @ self.component_maps[0]
+        cov = P.reshape(len(P), 16) @ self.component_maps[1] + self.component_maps[2]
+        return positions[:, :h], positions[:, h:], cov[:, :h], cov[:, h:2 * h], cov[:, 2 * h:]
 
 
 def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleration_std: float
@@ -12,15 +63,7 @@ def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleratio
     """Positions (N, H, 2) world x-y, metres, and covariances (N, H, 2, 2) m^2 at ``horizons``
     (H,) seconds ahead of the filter states x (N, 4) ``[x, vx, y, vy]`` with covariances P
     (N, 4, 4): the constant-velocity model of :mod:`pedenv.kalman` (``kalman.transition``)
-    in closed form, all horizons at once. Its process noise adds ``a^2 t^4 / 4`` per axis.
+    in closed form, all horizons at once (:class:`PathPredictor`). Its process noise adds
+    ``a^2 t^4 / 4`` per axis.
     """
-    t = np.asarray(horizons, float)[None, :]
-    pos, vel = x[:, [0, 2]], x[:, [1, 3]]
-    positions = pos[:, None, :] + t[..., None] * vel[:, None, :]
-    pp = P[:, [0, 2]][:, :, [0, 2]]
-    pv = P[:, [0, 2]][:, :, [1, 3]]
-    vv = P[:, [1, 3]][:, :, [1, 3]]
-    tt = t[..., None, None]
-    cov = (pp[:, None] + tt * (pv + np.transpose(pv, (0, 2, 1)))[:, None] + tt**2 * vv[:, None]
-           + (acceleration_std**2 * tt**4 / 4.0) * _EYE2)
-    return positions, cov
+    return PathPredictor(horizons, acceleration_std)(np.asarray(x, float), np.asarray(P, float))

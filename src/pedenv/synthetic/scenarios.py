@@ -49,7 +49,7 @@ def _constant(value: float) -> Profile:
 
 def _travel(speed: Profile, duration_s: float) -> float:
     t = np.linspace(0.0, duration_s, 400)
-    return float(np.trapz(speed(t), t))
+    return float(np.trapezoid(speed(t), t) if hasattr(np, "trapezoid") else np.trapz(speed(t), t))
 
 
 def _count(density_per_m: float, length_m: float) -> int:
