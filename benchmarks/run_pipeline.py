@@ -80,6 +80,7 @@ class NetworkClock:
 
     def __init__(self, backend) -> None:
         self.seconds, self.runs = 0.0, 0
+        backend = backend if hasattr(backend, "infer") else backend.backend  # stream: its OnnxPose
         infer = backend.infer
 
         def timed(tensor):

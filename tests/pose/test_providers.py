@@ -84,3 +84,12 @@ def test_a_batch_of_passes_gives_what_the_passes_give_one_by_one(use_pose_cache,
         assert len(da) == len(db)
         np.testing.assert_allclose(da.boxes, db.boxes, atol=0.05)
     assert len(decode(together[0], inputs[0][1], 0.25, 0.7, 300)) >= 4
+
+
+def test_the_cuda_provider_picks_cudnn_algorithms_as_configured(tmp_path):
+    got = wanted_providers("cuda", [CUDA, CPU], tmp_path)
+    assert got[0] == (CUDA, {"cudnn_conv_algo_search": "HEURISTIC"}) and got[1] == CPU
+    got = wanted_providers("auto", [CUDA, CPU], tmp_path, "exhaustive")
+    assert got[0] == (CUDA, {"cudnn_conv_algo_search": "EXHAUSTIVE"})
+    with pytest.raises(InputError, match="cudnn_search must be one of heuristic, exhaustive, default, got 'fast'"):
+        SessionConfig(cudnn_search="fast")

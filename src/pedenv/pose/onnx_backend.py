@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -24,6 +25,9 @@ from pedenv.pose.providers import CPU, SessionConfig, create_session
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
 from pedenv.records import Detections, Frame
 
+#: At most this many sessions per backend on a GPU, one per input shape (:meth:`OnnxPose._session_for`);
+#: each holds the model's weights (11 MB) and its own workspace.
+MAX_GPU_SESSIONS = 24
 
 class OnnxPose:
     """YOLO-pose on onnxruntime.
@@ -86,6 +90,7 @@ class OnnxPose:
             assert height is not None and width is not None  # not dynamic: both sides fixed
             self.input_size = (height, width)
         self._input_name = self._session.get_inputs()[0].name
+        self._gpu_sessions: dict[tuple, Any] = {}  # input shape -> its session (GPU only: _session_for)
         self._batch_axis_dynamic = not isinstance(self._session.get_inputs()[0].shape[0], int)
         #: Seconds in the network's session runs and how many runs, since this backend was made.
         self.network_s, self.network_runs = 0.0, 0
@@ -113,10 +118,24 @@ class OnnxPose:
         :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N) (FORMATS.md,
         "Pose network"; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
         start = time.perf_counter()
-        out = self._session.run(None, {self._input_name: tensor})[0]
+        out = self._session_for(tensor.shape).run(None, {self._input_name: tensor})[0]
         self.network_s += time.perf_counter() - start
         self.network_runs += 1
         return out
+
+    def _session_for(self, shape: tuple) -> Any:
+        """The session to run an input of ``shape`` in. On a GPU one session per input shape (at
+        most :data:`MAX_GPU_SESSIONS`, then the first): the CUDA provider keeps each convolution's
+        cuDNN set-up for the last shape it saw only, and redoing it for every change of shape (the
+        whole frame, then tiles, then crops) cost far mode about 0.8 s per 1600x900 frame on an
+        H100 (docs/speed.md). On the CPU one session serves every shape."""
+        if self.provider == CPU:
+            return self._session
+        shape = tuple(shape)
+        if shape not in self._gpu_sessions and len(self._gpu_sessions) < MAX_GPU_SESSIONS:
+            self._gpu_sessions[shape] = self._session if not self._gpu_sessions else \
+                create_session(self.model_path, self.session_config)[0]
+        return self._gpu_sessions.get(shape, self._session)
 
     @property
     def batches(self) -> bool:

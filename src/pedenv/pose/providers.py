@@ -17,7 +17,7 @@ from pathlib import Path
 
 from pedenv.errors import InputError
 from pedenv.pose.models import cache_dir
-from pedenv.validation import check_bool, check_count
+from pedenv.validation import check_bool, check_choice, check_count
 
 #: The valid values of ``device``.
 DEVICES = ("auto", "cpu", "cuda")
@@ -45,12 +45,18 @@ class SessionConfig:
         on 2 cores (median 767 vs 372 ms).
     batch: run the passes of one frame that share an input size as one batch; None (the
         default) batches on a GPU only (on a CPU a batch costs what its passes cost one by one).
+    cudnn_search: how the CUDA provider picks each convolution's cuDNN algorithm: ``heuristic``
+        (the default: cuDNN's own choice, no trial runs), ``exhaustive`` (onnxruntime's default:
+        every algorithm tried) or ``default``. pedenv's passes change input size within a frame
+        (whole frame, tiles, crops); with ``exhaustive`` each change re-ran the search: ``far``
+        took about 5 s per 1600x900 frame on an H100 (docs/speed.md).
     """
 
     device: str = "auto"
     threads: int = 2
     spin_wait: bool = False
     batch: bool | None = None
+    cudnn_search: str = "heuristic"
 
     def __post_init__(self) -> None:
         check_device(self.device)
@@ -58,6 +64,7 @@ class SessionConfig:
         check_bool("spin_wait", self.spin_wait)
         if self.batch is not None:
             check_bool("batch", self.batch)
+        check_choice("cudnn_search", self.cudnn_search, CUDNN_SEARCHES)
 
     @classmethod
     def of(cls, session: SessionConfig | None, options: dict) -> SessionConfig:
@@ -70,7 +77,12 @@ class SessionConfig:
         return cls(**{**{n: getattr(base, n) for n in names}, **options})
 
 
-def wanted_providers(device: str, available: list[str], trt_cache: Path | None = None) -> list:
+#: ``SessionConfig.cudnn_search`` -> the CUDA provider's ``cudnn_conv_algo_search``.
+CUDNN_SEARCHES = {"heuristic": "HEURISTIC", "exhaustive": "EXHAUSTIVE", "default": "DEFAULT"}
+
+
+def wanted_providers(device: str, available: list[str], trt_cache: Path | None = None,
+                     cudnn_search: str = "heuristic") -> list:
     """The provider list to ask onnxruntime for, best first, given the ``available`` provider names.
 
     ``cuda`` without the CUDA provider raises InputError. TensorRT (``auto`` and ``cuda``, where
@@ -88,7 +100,7 @@ def wanted_providers(device: str, available: list[str], trt_cache: Path | None =
     if TENSORRT in available:
         options = {"trt_engine_cache_enable": True, "trt_engine_cache_path": str(trt_cache)} if trt_cache else {}
         providers.append((TENSORRT, options))
-    return providers + [CUDA, CPU]
+    return providers + [(CUDA, {"cudnn_conv_algo_search": CUDNN_SEARCHES[cudnn_search]}), CPU]
 
 
 def create_session(model_path: Path, config: SessionConfig):
@@ -109,7 +121,7 @@ def create_session(model_path: Path, config: SessionConfig):
     options.log_severity_level = 3
     options.add_session_config_entry("session.intra_op.allow_spinning", "1" if config.spin_wait else "0")
     available = [p for p in ort.get_available_providers() if p != TENSORRT or _tensorrt_installed()]
-    providers = wanted_providers(config.device, available, _trt_cache())
+    providers = wanted_providers(config.device, available, _trt_cache(), config.cudnn_search)
     if providers != [CPU] and hasattr(ort, "preload_dlls") and importlib.util.find_spec("nvidia") is not None:
         ort.preload_dlls()  # the CUDA and cuDNN libraries of the gpu extra's nvidia-* pip packages
     if providers != [CPU]:
