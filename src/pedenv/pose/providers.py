@@ -64,7 +64,7 @@ class SessionConfig:
         check_bool("spin_wait", self.spin_wait)
         if self.batch is not None:
             check_bool("batch", self.batch)
-        check_choice("cudnn_search", self.cudnn_search, CUDNN_SEARCHES)
+        check_choice("cudnn_search", self.cudnn_search, tuple(CUDNN_SEARCHES))
 
     @classmethod
     def of(cls, session: SessionConfig | None, options: dict) -> SessionConfig:
