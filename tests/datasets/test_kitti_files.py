@@ -39,7 +39,7 @@ def test_tracking_labels_frame_12_of_0016():
     assert len(frame.of_type("Car")) == 4
     people = frame.of_type("Pedestrian")
     heights = people.boxes[:, 3] - people.boxes[:, 1]
-    assert 59 <= heights.min() and heights.max() <= 143
+    assert heights.min() >= 59 and heights.max() <= 143
     assert np.all((people.locations[:, 2] > 9) & (people.locations[:, 2] < 21))
     assert np.all(frame.of_type("DontCare").track_id == -1)
     # whole-sequence counts from the README

@@ -50,7 +50,7 @@ ANKLE_FRACTION = float(KEYPOINT_HEIGHT_FRACTION[KP.LEFT_ANKLE])
 #: Keypoints the height cue can use.
 HEIGHT_KEYPOINTS = np.flatnonzero(np.isfinite(KEYPOINT_HEIGHT_FRACTION))
 #: Columns of :data:`HEIGHT_KEYPOINTS` that are the ankles (left, right), and a mask of them.
-ANKLE_COLUMNS = [int(np.flatnonzero(HEIGHT_KEYPOINTS == a)[0]) for a in ANKLE_KEYPOINTS]
+ANKLE_COLUMNS = [int(np.flatnonzero(a == HEIGHT_KEYPOINTS)[0]) for a in ANKLE_KEYPOINTS]
 IS_ANKLE = np.isin(HEIGHT_KEYPOINTS, ANKLE_KEYPOINTS)
 #: The used keypoints must span at least this share of body height (e.g. head to hips).
 MIN_FRACTION_SPAN = 0.25
