@@ -40,7 +40,7 @@ test-fast: $(FULL)
 lint: $(FULL)
 	$(BIN)/ruff check src tests benchmarks tools
 	$(BIN)/mypy
-	$(BIN)/python tools/code_shape.py
+	$(BIN)/python tools/code_shape.py --check
 
 docs: $(FULL)
 	$(BIN)/python tools/api_docs.py docs/api
