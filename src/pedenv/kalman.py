@@ -10,9 +10,14 @@ array operations. ``tests/test_kalman.py`` checks both against filterpy's own fi
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from pedenv.geometry import inverse_2x2
+
+if TYPE_CHECKING:
+    from pedenv.config_tracking import KalmanConfig
 
 #: Measurement matrix: the filter observes x and y.
 H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
@@ -90,7 +95,7 @@ def innovation_distance(x: np.ndarray, P: np.ndarray, z: np.ndarray, r: np.ndarr
 
 
 def correct(x: np.ndarray, P: np.ndarray, started: np.ndarray, z: np.ndarray, r: np.ndarray, spread: np.ndarray,
-            config) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            config: KalmanConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One frame's correction of the tracks that have a measurement.
 
     x (N, 4), P (N, 4, 4): predicted states; started (N,) bool: the filter holds a state.

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
@@ -34,6 +34,9 @@ from pedenv.errors import InputError
 from pedenv.outputs.output_dir import prepare_output_dir
 from pedenv.recordings.manifest import SUMMARY, ManifestRow, read_manifest
 from pedenv.structured_text import load_json
+
+if TYPE_CHECKING:
+    from pedenv.pose.base import PoseBackend
 
 
 def run_manifest(manifest: str | Path, output: OutputOptions | str | Path, pose: PoseOptions | None = None, *,
@@ -80,7 +83,7 @@ def run_manifest(manifest: str | Path, output: OutputOptions | str | Path, pose:
     return summary
 
 
-def _write_summary(manifest, out: Path, executor: str, rows: list[ManifestRow], entries: dict,
+def _write_summary(manifest: str | Path, out: Path, executor: str, rows: list[ManifestRow], entries: dict,
                    interrupted: bool) -> dict:
     """``out/summary.json``: every row in manifest order; a row without an entry is ``interrupted``
     (Ctrl-C) or ``not run`` (the executor failed)."""
@@ -111,7 +114,7 @@ def _recording_task(row: ManifestRow, context: TaskContext) -> dict:
     return run_recording(source, output, pose, config=o["config"], backend=backend, progress=context.report)
 
 
-def _make_backend(pose: PoseOptions, config: Config):
+def _make_backend(pose: PoseOptions, config: Config) -> PoseBackend:
     from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
 

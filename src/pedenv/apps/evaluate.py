@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from contextlib import nullcontext
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.apps.progress import progress_bar
@@ -17,8 +18,15 @@ from pedenv.evaluation.metrics import Metrics
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
-from pedenv.outputs.sinks import ExtraOutputs
+from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose import PoseBackend, create_pose_backend
+from pedenv.records import Frame
+from pedenv.state import EnvironmentState
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
+
+    from pedenv.outputs.parquet import MatchesTableWriter
 
 
 def resolve_scenes(dataset: Dataset, scenes: Sequence[str] | None) -> list[str]:
@@ -34,7 +42,8 @@ def resolve_scenes(dataset: Dataset, scenes: Sequence[str] | None) -> list[str]:
 
 def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,
                    pose_backend: str | PoseBackend | None = None, output_dir: str | Path | None = None,
-                   progress: bool = False, model_factory=PedestrianEnvironmentModel,
+                   progress: bool = False,
+                   model_factory: Callable[[Config], PedestrianEnvironmentModel] = PedestrianEnvironmentModel,
                    extra_outputs: ExtraOutputs | None = None) -> EvaluationResult:
     """Run every scene through a fresh model state, evaluate labelled frames, write outputs (in this process).
 
@@ -54,7 +63,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
     pairs = _matches_writer(extra_outputs.matches_parquet, sinks)
     results = []
 
-    def on_frame(state, frame) -> None:
+    def on_frame(state: EnvironmentState, frame: Frame) -> None:
         if writer:
             writer.write(state)
         sinks.write(state, frame)
@@ -87,11 +96,11 @@ def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, c
     return result.metrics
 
 
-def _advance(bar, task, done: int) -> None:
+def _advance(bar: Progress, task: TaskID, done: int) -> None:
     bar.update(task, completed=done)
 
 
-def _matches_writer(path, sinks):
+def _matches_writer(path: Path | None, sinks: Sinks) -> MatchesTableWriter | None:
     """The matched-pairs table writer, or None; closes ``sinks`` when it cannot be opened."""
     if not path:
         return None
@@ -104,5 +113,5 @@ def _matches_writer(path, sinks):
         raise
 
 
-def _backend(spec) -> PoseBackend:
+def _backend(spec: str | PoseBackend) -> PoseBackend:
     return create_pose_backend(spec) if isinstance(spec, str) else spec

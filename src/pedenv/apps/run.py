@@ -34,6 +34,7 @@ from pedenv.visualize.plots import plot_birds_eye
 
 if TYPE_CHECKING:
     from pedenv.recordings.bag import BagRecording
+    from pedenv.state import EnvironmentState
 
 
 def run_recording(source: RecordingSource, output: OutputOptions | str | Path, pose: PoseOptions | None = None, *,
@@ -136,7 +137,7 @@ def _check_ended_early(rec: Recording | BagRecording, stats: PipelineStats, summ
         warnings.warn(summary["ended_early"], stacklevel=3)
 
 
-def _finish_summary(summary: dict, out: Path, backend, stats: PipelineStats, timer: _StepTimes,
+def _finish_summary(summary: dict, out: Path, backend: PoseBackend, stats: PipelineStats, timer: _StepTimes,
                     pipe: PipelineConfig, outputs: _Outputs, sinks: Sinks) -> None:
     """The end of ``run.json``: backend, dropped frames, speed, the bird's-eye plot and the files written."""
     summary["pose_backend"] = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
@@ -163,18 +164,19 @@ class _StepTimes:
     model_s: float = 0.0
     frames: int = 0
 
-    def per_frame(self, backend) -> dict:
+    def per_frame(self, backend: PoseBackend) -> dict:
         """ms per frame of detection, model and the network alone (an onnx backend's
         ``network_s``: its session runs, counted by the backend), and network passes per frame."""
         n = max(self.frames, 1)
-        onnx = getattr(backend, "backend", backend)  # under the re-detection wrapper
+        onnx: Any = getattr(backend, "backend", backend)  # under the re-detection wrapper; counters read by name
         times = {"detection_ms_per_frame": 1e3 * self.detection_s / n, "model_ms_per_frame": 1e3 * self.model_s / n}
         if hasattr(onnx, "network_s"):
             times.update(network_ms_per_frame=1e3 * onnx.network_s / n, network_passes_per_frame=onnx.network_runs / n)
         return times
 
 
-def _step(backend, model: PedestrianEnvironmentModel, timer: _StepTimes, frame: Frame):
+def _step(backend: PoseBackend, model: PedestrianEnvironmentModel, timer: _StepTimes,
+          frame: Frame) -> tuple[EnvironmentState, Frame]:
     """The network and the model on one frame (the pipeline's middle stage): (state, frame)."""
     start = time.perf_counter()
     frame = dataclasses.replace(frame, detections=backend(frame))
@@ -190,14 +192,15 @@ class _Outputs:
     """The writer stage: each frame's state to the JSON Lines file and the sinks, its overlay
     to a PNG or the overlay video; counts the frames written into ``summary``."""
 
-    def __init__(self, out: Path, rec: Recording | BagRecording, video_out: bool, summary: dict, progress) -> None:
+    def __init__(self, out: Path, rec: Recording | BagRecording, video_out: bool, summary: dict,
+                 progress: Callable[[int, int], None] | None) -> None:
         self.out, self.rec, self.video_out, self.summary, self.progress = out, rec, video_out, summary, progress
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
         self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
         self.last: tuple | None = None  # (state, frame) of the last frame written
 
-    def write(self, result) -> None:
+    def write(self, result: tuple[EnvironmentState, Frame]) -> None:
         state, frame = result
         assert self.writer is not None and self.sinks is not None  # set before the run
         self.writer.write(state)
@@ -213,7 +216,7 @@ class _Outputs:
             write_image(self.out / "overlays" / f"{frame.index:06d}.png", drawn)
         self.last = (state, frame)
 
-    def done(self, result) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
+    def done(self, result: tuple[EnvironmentState, Frame]) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
         self.summary["frames_done"] += 1
         if self.progress is not None:
             self.progress(self.summary["frames_done"], self.summary["frames_total"])
@@ -224,7 +227,7 @@ class _Outputs:
             self.video = None
 
 
-def _open_video(path: Path, rec: Recording | BagRecording, shape) -> VideoOut:
+def _open_video(path: Path, rec: Recording | BagRecording, shape: tuple[int, ...]) -> VideoOut:
     import cv2
 
     stamps = np.array([t for _, t in rec.images]) if rec.images else None

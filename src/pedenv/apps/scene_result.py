@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -30,6 +30,9 @@ from pedenv.pose.redetect import with_redetection
 from pedenv.records import Frame
 from pedenv.stage_timer import StageTimer
 from pedenv.state import EnvironmentState
+
+if TYPE_CHECKING:
+    from pedenv.outputs.parquet import MatchesTableWriter
 
 #: Tracks at least this many frames old count as settled in the busiest-frame choice (what the plot shows).
 SETTLED_AGE = 3
@@ -124,7 +127,7 @@ def merge_scene_results(results: Sequence[SceneResult], info: dict) -> Evaluatio
 
 
 def score_frame(frame: Frame, state: EnvironmentState, samples: ErrorSamples, tracking: TrackingAccumulator,
-                pairs=None) -> int:
+                pairs: MatchesTableWriter | None = None) -> int:
     """Score one labelled frame (paper's matching); returns its count of settled matched tracks."""
     gt, peds = frame.ground_truth, state.pedestrians
     if gt is None:

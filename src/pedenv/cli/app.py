@@ -6,6 +6,7 @@ import errno
 import signal
 import sys
 import warnings
+from types import FrameType
 
 import typer
 from rich.console import Console
@@ -30,7 +31,8 @@ def stdout_console(width: int | None) -> Console:
     return Console(width=width, emoji=False, markup=False)
 
 
-def _one_line_warning(message, category, filename, lineno, line=None) -> str:  # noqa: ARG001 - warnings.formatwarning's signature
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                      line: str | None = None) -> str:  # noqa: ARG001 - warnings.formatwarning's signature
     return f"warning: {message}\n"
 
 
@@ -67,7 +69,7 @@ class _Stop:
     stopping = False  # a stop signal came: the outputs are being closed
 
 
-def _stop(signum, _frame) -> None:
+def _stop(signum: int, _frame: FrameType | None) -> None:
     if _Stop.stopping:
         print("pedenv: still closing the outputs; they are kept (Ctrl-\\ quits at once)", file=sys.stderr, flush=True)
         return

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
@@ -25,11 +26,16 @@ from pedenv.cli.options import (
 )
 from pedenv.datasets import DATASETS
 
+if TYPE_CHECKING:
+    from pedenv.apps.evaluate_command import EvaluateOutcome
+    from pedenv.evaluation.metrics import Metrics
+    from pedenv.evaluation.result import EvaluationResult
+
 #: stdout console for tables and results; wide enough for the tables when piped
 _out = stdout_console(None if sys.stdout.isatty() else 140)
 
 
-def _print_result(metrics, title: str = "") -> None:
+def _print_result(metrics: Metrics, title: str = "") -> None:
     from pedenv.evaluation.report import results_table, summary_lines
 
     _out.print(results_table(metrics, title))
@@ -140,7 +146,7 @@ def evaluate(
     _print_evaluation(outcome, dataset)
 
 
-def _print_evaluation(outcome, dataset: str) -> None:
+def _print_evaluation(outcome: EvaluateOutcome, dataset: str) -> None:
     """The tables of ``pedenv evaluate``; failed scenes of a run as tasks: one error line each, exit code 1."""
     from pedenv.apps.compare import comparison_by_scene_table, comparison_summary_table
 
@@ -151,6 +157,7 @@ def _print_evaluation(outcome, dataset: str) -> None:
         _out.print(comparison_by_scene_table(outcome.methods))
         _out.print(comparison_summary_table(outcome.methods))
     else:
+        assert outcome.metrics is not None  # one method: its metrics are set
         info = outcome.metrics.info
         _print_result(outcome.metrics, f"{dataset}: {info['pose_backend']} skeletons, method {info['method']}")
     if outcome.ablation is not None:
@@ -158,7 +165,7 @@ def _print_evaluation(outcome, dataset: str) -> None:
     _out.print(f"outputs: {outcome.output}", highlight=False)
 
 
-def _print_tasks(result, output: Path) -> None:
+def _print_tasks(result: EvaluationResult, output: Path) -> None:
     """``pedenv evaluate --executor ray`` or ``--resume``: the table; failed scenes are listed, exit code 1."""
     info = result.metrics.info
     _print_result(result.metrics, f"{info['dataset']}: {info['pose_backend']} skeletons, method {info['method']}")

@@ -65,7 +65,7 @@ def clamp_to_range(
 
 
 def clamp_reported(positions: np.ndarray, covariances: np.ndarray, skeletons: np.ndarray, sources: np.ndarray,
-                   origin: np.ndarray, max_range_m: float):
+                   origin: np.ndarray, max_range_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """What the model reports, held to the range like a measurement (the filter may drift beyond).
 
     positions (N, 3), covariances (N, 2, 2), skeletons (N, 17, 3), sources (N,) str; world,

@@ -92,7 +92,8 @@ def keep_most_confident(valid: np.ndarray, confidences: np.ndarray, drop_fractio
 
 
 def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarray, prev_origins: np.ndarray,
-                      usable: np.ndarray, confidences: np.ndarray, config: PaperConfig):
+                      usable: np.ndarray, confidences: np.ndarray,
+                      config: PaperConfig) -> tuple[np.ndarray, np.ndarray]:
     """Initial 3D body-centre estimate from two observations (Eqs. 3-5).
 
     rays, prev_rays: (N, K, 3) unit rays, world frame (K = 17, or 1 for the midpoint

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import importlib
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from pedenv.errors import InputError
 from pedenv.records import Detections, Frame
@@ -32,7 +32,7 @@ POSE_BACKENDS: dict[str, str] = {
 }
 
 
-def create_pose_backend(name: str, **options) -> PoseBackend:
+def create_pose_backend(name: str, **options: Any) -> PoseBackend:  # options: the backend class's keywords
     """Create the backend registered as ``name`` with its keyword ``options``.
 
     ``detector-model:<profile>`` (e.g. ``detector-model:yolo11n-pose-single``) is the

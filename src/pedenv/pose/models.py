@@ -17,11 +17,19 @@ import hashlib
 import os
 import shutil
 import tempfile
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from pedenv.errors import InputError, require_extra
 from pedenv.pose.postprocess import OUTPUT_ROWS, parse_input_size
+
+if TYPE_CHECKING:
+    import onnxruntime as ort
+
+    from pedenv.pose.merge import MergeConfig
+    from pedenv.pose.tiling import DetectionConfig
 
 DEFAULT_WEIGHTS_NAME = "yolo11n-pose.pt"
 #: ``input_sizes`` entry that stands for the export with a dynamic input shape.
@@ -31,7 +39,7 @@ DEFAULT_INPUT_SIZES: tuple = (DYNAMIC,)
 PREPARE_HINT = "run `pedenv models prepare` first (or pass --pose-model PATH.onnx)"
 
 
-def yolo_class():
+def yolo_class() -> Any:  # ultralytics.YOLO (ultralytics has no type stubs)
     """``ultralytics.YOLO``, imported offline with restricted checkpoint loading switched on.
 
     ultralytics reads a ``.pt`` with ``torch.load``; by default that unpickles anything and
@@ -99,19 +107,20 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-def _size_tag(input_size) -> str:
+def _size_tag(input_size: int | str | Sequence[int]) -> str:
     if input_size == DYNAMIC:
         return DYNAMIC
     h, w = parse_input_size(input_size)
     return f"{h}x{w}"
 
 
-def cached_model_path(weights_sha256: str, stem: str, input_size, cache: Path | None = None) -> Path:
+def cached_model_path(weights_sha256: str, stem: str, input_size: int | str | Sequence[int],
+                      cache: Path | None = None) -> Path:
     """Where the ONNX export of the weights with this hash is cached: input (height, width) or ``"dynamic"``."""
     return (cache or cache_dir()) / "models" / weights_sha256[:16] / f"{stem}_{_size_tag(input_size)}.onnx"
 
 
-def find_onnx_model(input_size=None, cache: Path | None = None) -> Path:
+def find_onnx_model(input_size: int | str | Sequence[int] | None = None, cache: Path | None = None) -> Path:
     """The cached ONNX model for ``input_size`` (a fixed export of that size), else the dynamic one.
 
     ``input_size`` None asks for the dynamic model. The default weights' exports are
@@ -143,7 +152,7 @@ class PreparedModel:
     exported: bool  # False when it was already in the cache
 
 
-def export_onnx(weights: Path, input_size, target: Path) -> Path:
+def export_onnx(weights: Path, input_size: int | str | Sequence[int], target: Path) -> Path:
     """Export ``weights`` (.pt) to an ONNX file at ``target``: a fixed input (height, width), or
     ``"dynamic"`` for a dynamic input shape (any height and width, multiples of 32).
 
@@ -190,7 +199,8 @@ def check_onnx_file(path: Path) -> tuple[int | None, int | None]:
     return check_session(session, path)
 
 
-def check_session(session, path) -> tuple[int | None, int | None]:
+def check_session(session: ort.InferenceSession,  # onnxruntime has no stubs: Any to mypy
+                  path: str | Path) -> tuple[int | None, int | None]:
     """The shape checks of :func:`check_onnx_file` on an open onnxruntime session."""
     inputs, outputs = session.get_inputs(), session.get_outputs()
     if len(inputs) != 1 or len(inputs[0].shape) != 4:
@@ -205,7 +215,8 @@ def check_session(session, path) -> tuple[int | None, int | None]:
     return (h if isinstance(h, int) else None, w if isinstance(w, int) else None)
 
 
-def prepare_models(weights: str | Path | None = None, input_sizes=DEFAULT_INPUT_SIZES,
+def prepare_models(weights: str | Path | None = None,
+                   input_sizes: Iterable[int | str | Sequence[int]] = DEFAULT_INPUT_SIZES,
                    cache: Path | None = None, force: bool = False) -> list[PreparedModel]:
     """Export the weights to ONNX for every input size into the cache; reuse cached exports."""
     path = find_weights(weights)
@@ -227,8 +238,9 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     return (384, 640) if width / height >= 1.6 else (640, 640)
 
 
-def backend_options(backend: str, model=None, input_size=None, detection=None, score_threshold=None,
-                    merge=None, device: str = "auto") -> dict:
+def backend_options(backend: str, model: str | Path | None = None, input_size: int | str | Sequence[int] | None = None,
+                    detection: str | DetectionConfig | None = None, score_threshold: float | None = None,
+                    merge: MergeConfig | None = None, device: str = "auto") -> dict:
     """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size,
     detection mode (``fast`` or ``far``, onnx only) and device (``auto``, ``cpu`` or ``cuda``:
     :mod:`pedenv.pose.providers`; ultralytics runs on the CPU, ``cuda`` is refused for it).

@@ -105,7 +105,7 @@ def pack(crops: list[Crop], mosaic_size: tuple[int, int], max_mosaics: int | Non
     return placed
 
 
-def _find_spot(shelves, ch: int, cw: int, height: int, width: int) -> tuple[int, int] | None:
+def _find_spot(shelves: list[list[list[int]]], ch: int, cw: int, height: int, width: int) -> tuple[int, int] | None:
     for m, mosaic in enumerate(shelves):
         for s, (_, shelf_h, x) in enumerate(mosaic):
             if ch <= shelf_h and x + cw + GAP_PX <= width:

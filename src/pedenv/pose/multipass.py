@@ -69,7 +69,8 @@ def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.nd
 Parts = list[tuple[Detections, np.ndarray]]
 
 
-def run_level(infer, image: np.ndarray, passes: list[Pass], fixed_input, settings: DecodeSettings,
+def run_level(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass],
+              fixed_input: tuple[int, int] | None, settings: DecodeSettings,
               config: DetectionConfig, low: list[Detections] | None = None) -> Parts:
     """Run ``passes`` (``settings``: score threshold, NMS, max persons); with ``low`` a list, persons
     scoring ``cascade.min_score`` up to the threshold (whole, not too tall for the level) are

@@ -9,6 +9,7 @@ the frame's aspect; ``far`` adds tiles over the band where far people stand.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
@@ -51,9 +52,10 @@ class OnnxPose:
 
     name = "onnx"
 
-    def __init__(self, model_path: str | Path | None = None, input_size=None, *,
+    def __init__(self, model_path: str | Path | None = None, input_size: int | str | Sequence[int] | None = None, *,
                  detection: str | DetectionConfig | None = None, merge: MergeConfig | None = None,
-                 decoding: DecodeSettings | None = None, session: SessionConfig | None = None, **options) -> None:
+                 decoding: DecodeSettings | None = None, session: SessionConfig | None = None,
+                 **options: Any) -> None:  # options: SessionConfig's and DecodeSettings' fields
         require_extra("onnxruntime", "pose", "the onnx pose backend")
         decode_names = {f.name for f in fields(DecodeSettings)} - {"edge_margin_px"}
         self.session_config = SessionConfig.of(session, {k: v for k, v in options.items() if k not in decode_names})

@@ -8,6 +8,7 @@ threshold, suppresses overlapping boxes (NMS) and maps everything back to image 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -26,7 +27,7 @@ PAD_VALUE = 114
 OUTPUT_ROWS = 5 + 3 * NUM_KEYPOINTS
 
 
-def parse_input_size(size) -> tuple[int, int]:
+def parse_input_size(size: int | np.integer | str | Sequence[int]) -> tuple[int, int]:
     """``640``, ``"640"``, ``"384x640"`` or ``(384, 640)`` -> ``(height, width)`` in pixels.
 
     Both sides must be positive multiples of 32 (the network's stride).
@@ -41,7 +42,7 @@ def parse_input_size(size) -> tuple[int, int]:
         values = [int(size)]
     else:
         try:
-            values = [int(v) for v in size]
+            values = [int(v) for v in size]  # type: ignore[union-attr]  # a bool: the TypeError below
         except TypeError:
             raise InputError(f"input size must be an int or (height, width), got {size!r}") from None
     if len(values) == 1:
@@ -101,7 +102,8 @@ def frame_image(frame: Frame) -> np.ndarray:
     return read_image_rgb(frame.image_path)
 
 
-def letterbox(image: np.ndarray, input_size: tuple[int, int], pad_value: int = PAD_VALUE):
+def letterbox(image: np.ndarray, input_size: tuple[int, int],
+              pad_value: int = PAD_VALUE) -> tuple[np.ndarray, Letterbox]:
     """Scale ``image`` (H, W, 3) uint8 into ``input_size`` (height, width), padding with ``pad_value``.
 
     Returns ``(padded (in_h, in_w, 3) uint8, Letterbox)``.

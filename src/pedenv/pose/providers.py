@@ -14,10 +14,14 @@ from __future__ import annotations
 import importlib.util
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pedenv.errors import InputError
 from pedenv.pose.models import cache_dir
 from pedenv.validation import check_bool, check_choice, check_count
+
+if TYPE_CHECKING:
+    import onnxruntime as ort
 
 #: The valid values of ``device``.
 DEVICES = ("auto", "cpu", "cuda")
@@ -26,7 +30,7 @@ GPU_HINT = ('it needs an NVIDIA GPU with its driver and the gpu extra (pip unins
             'pip install -e ".[gpu]"), or --device auto or cpu')
 
 
-def check_device(device) -> str:
+def check_device(device: object) -> str:
     """``device`` when it is one of :data:`DEVICES`, else one InputError naming them."""
     if not isinstance(device, str) or device not in DEVICES:
         raise InputError(f"device must be one of {', '.join(DEVICES)}, got {device!r}")
@@ -103,7 +107,8 @@ def wanted_providers(device: str, available: list[str], trt_cache: Path | None =
     return providers + [(CUDA, {"cudnn_conv_algo_search": CUDNN_SEARCHES[cudnn_search]}), CPU]
 
 
-def create_session(model_path: Path, config: SessionConfig):
+def create_session(model_path: Path,
+                   config: SessionConfig) -> tuple[ort.InferenceSession, str]:  # onnxruntime: no stubs (Any)
     """An onnxruntime session for ``model_path`` run as ``config`` says, and the provider that
     runs it (the session's first provider, e.g. ``CPUExecutionProvider``).
 

@@ -14,7 +14,7 @@ Settings: :class:`pedenv.pose.redetect_config.RedetectConfig` (the ``fused`` pre
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol, cast
 
 import numpy as np
 
@@ -25,6 +25,10 @@ from pedenv.pose.postprocess import frame_image
 from pedenv.pose.redetect_config import RedetectConfig
 from pedenv.pose.tiling import STRIDE, Pass
 from pedenv.records import Detections, Frame
+
+if TYPE_CHECKING:
+    from pedenv.pose.base import PoseBackend
+    from pedenv.pose.onnx_backend import OnnxPose
 
 #: A predicted box shorter than this (pixels, after clipping to the image) is not searched.
 MIN_BOX_HEIGHT_PX = 8.0
@@ -128,7 +132,7 @@ class RedetectingPose:
     ``crops`` and ``frames`` count the extra network passes and the frames seen.
     """
 
-    def __init__(self, backend, model: TrackPredictor, config: RedetectConfig) -> None:
+    def __init__(self, backend: OnnxPose, model: TrackPredictor, config: RedetectConfig) -> None:
         self.backend, self.model, self.config = backend, model, config
         self.name = backend.name
         self.crops = 0
@@ -181,7 +185,7 @@ class RedetectingPose:
                                      "frames": self.frames, "crops": self.crops, "redetected": self.redetected}}
 
 
-def with_redetection(backend, model: TrackPredictor, config: RedetectConfig):
+def with_redetection(backend: PoseBackend, model: TrackPredictor, config: RedetectConfig) -> PoseBackend:
     """``backend`` wrapped in a :class:`RedetectingPose` when ``config.enabled`` and the backend
     can run crops (the ``onnx`` backend); otherwise ``backend`` itself. A ``stream`` backend
     (:class:`~pedenv.pose.stream.StreamPose`) searches missed tracks itself, in packed crops:
@@ -191,4 +195,4 @@ def with_redetection(backend, model: TrackPredictor, config: RedetectConfig):
         return backend
     if not config.enabled or not hasattr(backend, "infer") or not hasattr(model, "predicted_boxes"):
         return backend
-    return RedetectingPose(backend, model, config)
+    return RedetectingPose(cast("OnnxPose", backend), model, config)  # only the onnx backend has infer

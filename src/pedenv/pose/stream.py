@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from functools import partial
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,13 +23,17 @@ from pedenv.errors import InputError
 from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
 from pedenv.pose.levels import HeightLine
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import crop_around, pack, run_mosaics
+from pedenv.pose.mosaic import Crop, crop_around, pack, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
 from pedenv.pose.schedule import band_tiles, plan_frame, tracks_at_risk, units
 from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, full_pass
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections, Frame
+
+if TYPE_CHECKING:
+    from pedenv.pose.postprocess import DecodeSettings
+    from pedenv.pose.redetect import TrackPredictor
 
 #: Boxes of the latest people found (all passes) kept to fit the band's rows without a calibration.
 FIT_MEMORY = 60
@@ -45,7 +50,7 @@ class StreamPose:
 
     name = "onnx"
 
-    def __init__(self, **options) -> None:
+    def __init__(self, **options: Any) -> None:  # options: OnnxPose's keywords
         from pedenv.pose.onnx_backend import OnnxPose
 
         detection = options.pop("detection", "stream")
@@ -55,14 +60,14 @@ class StreamPose:
                              f"got {detection!r}")
         self.backend = OnnxPose(detection=config, **options)
         self.config: DetectionConfig = config
-        self.model = None
+        self.model: TrackPredictor | None = None
         self.finder = TrackFinder()
         self.accounts = StreamAccounts()
         self.last_passes: list = []
         self.last_note = ""
         self._reset(None)
 
-    def attach_model(self, model) -> None:
+    def attach_model(self, model: TrackPredictor) -> None:
         """Take the tracks' predicted boxes from ``model`` (anything with ``predicted_boxes(frame)``)."""
         self.model = model
 
@@ -70,7 +75,7 @@ class StreamPose:
         """Forget the stream: the next frame is a first frame (a cold start)."""
         self._reset(None)
 
-    def _reset(self, size) -> None:
+    def _reset(self, size: tuple[int, int] | None) -> None:
         self._size = size
         self._last_t: float | None = None
         self._tile_seen: dict[tuple[int, int], float] = {}
@@ -158,7 +163,9 @@ class StreamPose:
         self.accounts.add((first, steps, passes), plan, cold, (len(rows), found_tracks, verified), late)
         return dets
 
-    def _packed(self, image, dets, low, predicted, rows, track_crops, limit: int, settings):
+    def _packed(self, image: np.ndarray, dets: Detections, low: list[Detections], predicted: np.ndarray,
+                rows: np.ndarray, track_crops: list[Crop], limit: int,
+                settings: DecodeSettings) -> tuple[Detections, list[Pass], int, int]:
         """At most ``limit`` packed inputs: the tracks' crops first, then the cascade's candidates
         in the room left (best score first)."""
         cfg = self.config

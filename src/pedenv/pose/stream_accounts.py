@@ -10,7 +10,7 @@ from pedenv.boxes import iou_matrix
 from pedenv.pose.cascade import concat
 from pedenv.pose.redetect import nearest_person, nearest_track
 from pedenv.pose.redetect_config import RedetectConfig
-from pedenv.pose.schedule import units
+from pedenv.pose.schedule import FramePlan, units
 from pedenv.records import Detections
 
 #: A person found in a track's crop scoring below this needs a plausible skeleton (mean keypoint
@@ -76,7 +76,7 @@ class StreamAccounts:
     tiles_late: int = 0
     band_reserve_units: float = 0.0
 
-    def add(self, ran: tuple, plan, cold: bool, counts: tuple[int, int, int], late: int) -> None:
+    def add(self, ran: tuple, plan: FramePlan, cold: bool, counts: tuple[int, int, int], late: int) -> None:
         """One frame: ``ran`` (its whole-frame pass, band tiles, packed inputs), its plan, whether a
         cold start, ``counts`` (tracks searched, found in crops, cascade confirmations) and the
         tiles it left older than the scan period."""

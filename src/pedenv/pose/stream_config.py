@@ -8,12 +8,18 @@ Both sit inside :class:`pedenv.pose.tiling.DetectionConfig` (fields ``stream`` a
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING, TypeVar
 
 from pedenv.errors import InputError
 from pedenv.validation import check_below, check_fields, count, flag, number
 
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
-def section_of(kind: type, name: str, value):
+_T = TypeVar("_T", bound="DataclassInstance")
+
+
+def section_of(kind: type[_T], name: str, value: object) -> _T:
     """``value`` as the nested section ``kind`` (a dict from ``config.json`` is built into it,
     naming ``detection.<name>`` and its valid fields when a field is unknown)."""
     if isinstance(value, kind):

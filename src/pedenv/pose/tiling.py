@@ -12,12 +12,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.pose.stream_config import CascadeConfig, StreamConfig, section_of
 from pedenv.validation import check_below, check_choice, check_fields, check_number, choice, count, number, shown
+
+if TYPE_CHECKING:
+    from pedenv.records import Camera, Frame
 
 MODES = ("fast", "far", "stream")
 STRIDE = 32
@@ -129,7 +133,7 @@ class DetectionConfig:
         check_below("detection.short_person_m", self.short_person_m, "detection.top_m", self.top_m)
 
     @classmethod
-    def named(cls, mode: str, **changes) -> DetectionConfig:
+    def named(cls, mode: str, **changes: Any) -> DetectionConfig:  # changes: field values
         """The config of a mode (``fast``, ``far`` or ``stream``) with some fields changed."""
         check_choice("detection mode", mode, MODES)
         return replace(cls(mode=mode), **changes)
@@ -165,7 +169,8 @@ class CameraGeometry:
     height_m: float
 
     @classmethod
-    def level(cls, K, height_m: float, pitch_down_rad: float = 0.0, roll_rad: float = 0.0) -> CameraGeometry:
+    def level(cls, K: np.ndarray, height_m: float, pitch_down_rad: float = 0.0,
+              roll_rad: float = 0.0) -> CameraGeometry:
         """A camera ``height_m`` above flat ground, pitched down by ``pitch_down_rad``, rolled by ``roll_rad``."""
         base = np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]])  # optical -> (x right, y forward, z up)
         cp, sp, cr, sr = math.cos(pitch_down_rad), math.sin(pitch_down_rad), math.cos(roll_rad), math.sin(roll_rad)
@@ -174,13 +179,13 @@ class CameraGeometry:
         return cls(np.asarray(K, float), pitch @ roll @ base, float(height_m))
 
     @classmethod
-    def of_camera(cls, camera) -> CameraGeometry:
+    def of_camera(cls, camera: Camera) -> CameraGeometry:
         """From a :class:`~pedenv.records.Camera` on a level vehicle (its mount's rotation and height)."""
         mount = camera.cam_to_vehicle
         return cls(np.asarray(camera.intrinsics, float), mount[:3, :3], float(mount[2, 3]))
 
     @classmethod
-    def from_frame(cls, frame) -> CameraGeometry:
+    def from_frame(cls, frame: Frame) -> CameraGeometry:
         """From a :class:`~pedenv.records.Frame`: camera intrinsics and mount, ego pitch and roll."""
         cam_to_vehicle = frame.camera.cam_to_vehicle
         rotation = frame.ego.rotation @ cam_to_vehicle[:3, :3]

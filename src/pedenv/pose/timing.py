@@ -8,13 +8,19 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.validation import check_count
+
+if TYPE_CHECKING:
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.ultralytics_backend import UltralyticsPose
 
 FRAME_SIZE = (900, 1600)  # (height, width)
 
@@ -36,7 +42,7 @@ def benchmark_image() -> np.ndarray:
     return np.random.default_rng(0).integers(0, 256, (*FRAME_SIZE, 3), dtype=np.uint8)
 
 
-def time_detect(backend, image: np.ndarray, repeats: int = 10, warmup: int = 2) -> dict:
+def time_detect(backend: OnnxPose | UltralyticsPose, image: np.ndarray, repeats: int = 10, warmup: int = 2) -> dict:
     """Milliseconds per ``backend.detect(image)``: mean, median and min over ``repeats`` runs."""
     for _ in range(warmup):
         backend.detect(image)
@@ -63,7 +69,8 @@ def benchmark_pose(repeats: int = 10, threads: int = 2, device: str = "auto") ->
     from pedenv.pose.onnx_backend import OnnxPose
 
     image = benchmark_image()
-    runs = [("onnx", (640, 640), lambda: OnnxPose(input_size=(640, 640), threads=threads, device=device)),
+    runs: list[tuple[str, tuple[int, int], Callable[[], OnnxPose | UltralyticsPose]]] = [
+            ("onnx", (640, 640), lambda: OnnxPose(input_size=(640, 640), threads=threads, device=device)),
             ("onnx", (384, 640), lambda: OnnxPose(input_size=(384, 640), threads=threads, device=device)),
             ("ultralytics", (640, 640), _ultralytics)]
     rows = []
@@ -79,7 +86,7 @@ def benchmark_pose(repeats: int = 10, threads: int = 2, device: str = "auto") ->
     return rows
 
 
-def _ultralytics():
+def _ultralytics() -> UltralyticsPose:
     from pedenv.pose.ultralytics_backend import UltralyticsPose
 
     return UltralyticsPose(input_size=640)

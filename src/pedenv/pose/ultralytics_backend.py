@@ -7,6 +7,7 @@ ultralytics is imported only when the backend is created, with ``YOLO_OFFLINE=1`
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -29,8 +30,9 @@ class UltralyticsPose:
 
     name = "ultralytics"
 
-    def __init__(self, weights: str | Path | None = None, input_size=640, score_threshold: float = 0.25,
-                 iou_threshold: float = 0.7, max_detections: int = 300, device: str = "cpu") -> None:
+    def __init__(self, weights: str | Path | None = None, input_size: int | str | Sequence[int] = 640,
+                 score_threshold: float = 0.25, iou_threshold: float = 0.7, max_detections: int = 300,
+                 device: str = "cpu") -> None:
         os.environ["YOLO_OFFLINE"] = "1"
         decoding = DecodeSettings(score_threshold, iou_threshold, max_detections)
         self.score_threshold, self.iou_threshold = decoding.score_threshold, decoding.iou_threshold

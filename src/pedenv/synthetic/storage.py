@@ -37,6 +37,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import DTypeLike
 
 from pedenv.errors import InputError
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth, Scene
@@ -53,7 +54,7 @@ _OPTIONAL = {
 _DETECTIONS = {"keypoints": (NUM_KEYPOINTS, 2), "confidences": (NUM_KEYPOINTS,), "boxes": (4,), "scores": ()}
 
 
-def _stack(rows: list[np.ndarray], tail: tuple, dtype=np.float64) -> np.ndarray:
+def _stack(rows: list[np.ndarray], tail: tuple, dtype: DTypeLike = np.float64) -> np.ndarray:
     return np.concatenate(rows).astype(dtype) if rows else np.zeros((0, *tail), dtype)
 
 

@@ -10,7 +10,7 @@ from pedenv.boxes import giou_matrix
 
 def associate(detection_boxes: np.ndarray, track_boxes: np.ndarray, threshold: float = -0.3,
               max_height_ratio: float = 0.0, allowed: np.ndarray | None = None,
-              extra_cost: np.ndarray | None = None):
+              extra_cost: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Assign detections to tracks as the paper does.
 
     Detections overlapping no track (GIoU <= ``threshold`` with all) start new tracks and

@@ -12,10 +12,14 @@ spread of the road's height and a box cut by the image's edge are simple to stat
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pedenv.geometry import inverse_2x2, invert_transform
+
+if TYPE_CHECKING:
+    from pedenv.records import Frame
 
 #: Pixel spread of a box's foot point (bottom centre) on the person's ground point, as a
 #: share of the box height (stance, box regression) plus a floor in pixels.
@@ -60,7 +64,7 @@ class CameraView:
     timestamp: float
 
     @classmethod
-    def of(cls, frame) -> CameraView:
+    def of(cls, frame: Frame) -> CameraView:
         """The view of a :class:`~pedenv.records.Frame`; the road is the vehicle's plane."""
         normal = frame.ego.rotation[:, 2]
         cam_to_world = frame.cam_to_world
@@ -73,7 +77,7 @@ class CameraView:
         z = (self.ground_offset - xy @ n[:2]) / n[2]
         return np.column_stack([xy, z])
 
-    def jacobian(self, xy: np.ndarray, with_height: bool = False):
+    def jacobian(self, xy: np.ndarray, with_height: bool = False) -> tuple[np.ndarray, ...]:
         """Pixels (T, 2) of ground positions ``xy`` (T, 2), d pixel / d xy (T, 2, 2) and
         whether each lies at least :data:`MIN_DEPTH_M` in front of the camera (T,); with
         ``with_height`` also d pixel / d z (T, 2), the ground point raised off the road,
@@ -112,7 +116,7 @@ def foot_covariance(boxes: np.ndarray, image_height: int) -> np.ndarray:
     return cov
 
 
-def project_ground(view: CameraView, xy: np.ndarray, cov_xy: np.ndarray):
+def project_ground(view: CameraView, xy: np.ndarray, cov_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Ground positions ``xy`` (T, 2) with covariance ``cov_xy`` (T, 2, 2), world, metres,
     into the image: pixels (T, 2), covariance (T, 2, 2) pixels^2, in front (T,) bool.
 

@@ -41,14 +41,16 @@ def split_by_score(scores: np.ndarray | None, count: int, config: TrackingConfig
     return every[sure], every[~sure & (scores >= config.low_score_threshold)]
 
 
-def predicted_ground(filters: FilterColumns, rows: np.ndarray | slice = slice(None)):
+def predicted_ground(filters: FilterColumns,
+                     rows: np.ndarray | slice = slice(None)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Kalman-predicted ground positions (R, 2), their covariance (R, 2, 2) (world, metres)
     and whether each filter holds a state (R,) for table ``rows``."""
     x, P = filters.x[rows], filters.P[rows]
     return x[:, [0, 2]], P[:, [0, 2]][:, :, [0, 2]], filters.started[rows]
 
 
-def ground_terms(boxes: np.ndarray, filters: FilterColumns, view: CameraView | None, config: TrackingConfig):
+def ground_terms(boxes: np.ndarray, filters: FilterColumns, view: CameraView | None,
+                 config: TrackingConfig) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
     """The ground gate's ``(allowed (N, T) bool, extra_cost (N, T))`` for detections
     ``boxes`` (N, 4) pixels and every track row, or ``(None, None)`` when it is off
     (``config.ground_gate`` = 0 or no view). Tracks whose filter holds no state, or whose

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def carry_rows(array: np.ndarray, previous_rows: np.ndarray, fill=0) -> np.ndarray:
+def carry_rows(array: np.ndarray, previous_rows: np.ndarray, fill: float = 0) -> np.ndarray:
     """Re-order per-track ``array`` (T_old, ...) to the new table; new rows get ``fill``.
 
     previous_rows: (T_new,) int, each new row's row in the old table or -1 for a new track.

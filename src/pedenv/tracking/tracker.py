@@ -183,7 +183,8 @@ class Tracker:
         if motion is not None:
             tr.velocities[matched] = MOTION_SMOOTHING * motion + (1.0 - MOTION_SMOOTHING) * tr.velocities[matched]
 
-    def _associate_beyond(self, boxes: np.ndarray, scores: np.ndarray | None, view: CameraView | None):
+    def _associate_beyond(self, boxes: np.ndarray, scores: np.ndarray | None,
+                          view: CameraView | None) -> tuple[list[np.ndarray], np.ndarray, np.ndarray, np.ndarray]:
         """The association of the fused preset: the low-score band in one assignment at its
         cost, the ground gate, lost rows left out. Returns ``(pairs, free live tracks, fresh
         detections, lost rows)``; a weak detection is never fresh."""

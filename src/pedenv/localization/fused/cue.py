@@ -143,7 +143,7 @@ class Sym2:
 IDENTITY, ZERO = Sym2(1.0, 0.0, 1.0), Sym2(0.0, 0.0, 0.0)
 
 
-def range_bearing_covariance(bearing: np.ndarray, range_var: np.ndarray, across_var) -> np.ndarray:
+def range_bearing_covariance(bearing: np.ndarray, range_var: np.ndarray, across_var: np.ndarray | float) -> np.ndarray:
     """Covariance (N, 2, 2) m^2 with ``range_var`` (N,) along the unit ``bearing`` (N, 2)
     and ``across_var`` (N,) or scalar across it: wide along the viewing ray, tight across."""
     bx, by = bearing[:, 0], bearing[:, 1]
@@ -194,7 +194,8 @@ def observed_angle_std(usable: np.ndarray, tangents: np.ndarray, angle_std: floa
     return np.sqrt((0.5 * (diff**2).sum(1) + NOISE_PRIOR_PAIRS * angle_std**2) / (both.sum(1) + NOISE_PRIOR_PAIRS))
 
 
-def stance_ankle(usable: np.ndarray, tangents: np.ndarray, angle_std: float):
+def stance_ankle(usable: np.ndarray, tangents: np.ndarray,
+                 angle_std: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Which ankles stand on the ground. Of two seen ankles whose elevations differ by
     more than :data:`LIFTED_ANKLE_SIGMA` times the noise of their difference plus
     :data:`LIFTED_ANKLE_EXTENT` of the skeleton's extent, the higher is the swing foot

@@ -25,6 +25,7 @@ linearized intersection no longer holds.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
@@ -43,7 +44,18 @@ MIN_GRAZING_SINE = 1e-4
 MIN_NORMAL_DOT = 1e-12
 
 
-def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray, plane_offset: np.ndarray | float):
+@overload
+def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray,
+                       plane_offset: float) -> tuple[np.ndarray, np.ndarray, float]: ...
+
+
+@overload
+def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray,
+                       plane_offset: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+def plane_intersection(rays: np.ndarray, origin: np.ndarray, normal: np.ndarray,
+                       plane_offset: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray | float]:
     """Where rays from ``origin`` meet the plane ``normal . x = plane_offset``.
 
     rays: (..., 3) unit, world. origin: (3,) world, metres. normal: (3,) unit, world.
@@ -74,7 +86,8 @@ def box_bottom_ranges(frame: Frame, boxes: np.ndarray, origin: np.ndarray) -> np
     return np.where((sine > MIN_GRAZING_SINE) & (height > 0), ranges, np.inf)
 
 
-def pixel_jacobians(frame: Frame, rays: np.ndarray, normal: np.ndarray, cam_height: float):
+def pixel_jacobians(frame: Frame, rays: np.ndarray, normal: np.ndarray,
+                    cam_height: float) -> tuple[np.ndarray, np.ndarray]:
     """d ground point / d pixel of rays (N, 2, 3) (unit, world) cut with the plane of unit
     ``normal`` (3,) ``cam_height`` metres below the camera: ``(ju, jv)``, each (N, 2, 2)
     metres per pixel, world x-y per ankle.

@@ -74,7 +74,7 @@ REFERENCE_RANGE_SIGMAS = 3.0
 
 
 def solve_range(tangents: np.ndarray, fractions: np.ndarray, fraction_std: np.ndarray, used: np.ndarray,
-                height_m: np.ndarray, angle_std):
+                height_m: np.ndarray, angle_std: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Fit ``tan_k = alpha + beta f_k`` for N people; the range is ``r = H / beta``.
 
     The elevations are the noisy side, so they are the dependent variable (fitting the

@@ -27,7 +27,7 @@ NUM_TERMS = 9
 CENTRE, CENTRE_SQ, TIME = slice(0, 3), 3, 4
 
 
-def ray_terms(rays: np.ndarray, origin: np.ndarray):
+def ray_terms(rays: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares terms (..., 9) and ``d . o`` (...,) of unit rays d (..., 3), world,
     from ``origin`` o (3,), metres."""
     out = np.empty(rays.shape[:-1] + (NUM_TERMS,))

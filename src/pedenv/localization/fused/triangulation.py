@@ -62,7 +62,7 @@ class Triangulated:
     reasons: np.ndarray
 
 
-def _solve_3x3(s: np.ndarray):
+def _solve_3x3(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Solve the normal equations from summed features (..., 9): the upper triangle of A
     (6) then b (3). Returns ``(points (..., 3), x-y covariance components (..., 3), ok (...,))``."""
     a, b, c, d, e, f = (s[..., i] for i in range(6))
