@@ -31,8 +31,9 @@ def stdout_console(width: int | None) -> Console:
     return Console(width=width, emoji=False, markup=False)
 
 
-def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
-                      line: str | None = None) -> str:  # noqa: ARG001 - warnings.formatwarning's signature
+def _one_line_warning(message: Warning | str, _category: type[Warning], _filename: str, _lineno: int,
+                      _line: str | None = None) -> str:
+    """``warnings.formatwarning`` (called with its arguments by position): the message alone."""
     return f"warning: {message}\n"
 
 
