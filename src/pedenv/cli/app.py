@@ -31,9 +31,8 @@ def stdout_console(width: int | None) -> Console:
     return Console(width=width, emoji=False, markup=False)
 
 
-def _one_line_warning(message: Warning | str, _category: type[Warning], _filename: str, _lineno: int,
-                      _line: str | None = None) -> str:
-    """``warnings.formatwarning`` (called with its arguments by position): the message alone."""
+def _one_line_warning(message: Warning | str, *_where: object, **_line: object) -> str:
+    """``warnings.formatwarning``: the message alone (category, file, line number left out)."""
     return f"warning: {message}\n"
 
 
