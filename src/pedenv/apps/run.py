@@ -21,7 +21,7 @@ from pedenv.errors import InputError
 from pedenv.images import write_image
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
-from pedenv.outputs.output_dir import prepare_output_dir
+from pedenv.outputs.output_dir import holds_files, prepare_output_dir
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
@@ -105,16 +105,12 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     source.check_realtime(pipe.realtime)
     rec = source.load()
     backend = backend or _make_backend(pose, cfg, rec)
-    if hasattr(rec, "check") and _holds_files(Path(output.folder)):  # an earlier run there: every frame's size
+    if hasattr(rec, "check") and holds_files(Path(output.folder)):  # an earlier run there: every frame's size
         rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
         # the frames before a bad one are run and stay on disk
     out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     return rec, backend, out
-
-
-def _holds_files(folder: Path) -> bool:
-    return folder.is_dir() and any(folder.iterdir())
 
 
 def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording) -> PoseBackend:

@@ -37,7 +37,7 @@ def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: st
     blocking = next((p for p in path.parents if p.exists() and not p.is_dir()), None)
     if blocking is not None:
         raise InputError(f"output folder {path} lies under {blocking}, which is a file")
-    if path.is_dir() and any(path.iterdir()):
+    if holds_files(path):
         if not overwrite:
             raise InputError(f"output folder {path} is not empty; pass --overwrite to replace what an earlier run "
                              f"wrote there, or choose another folder")
@@ -53,6 +53,11 @@ def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: st
     except OSError as exc:
         raise InputError(f"output folder {path} cannot be written: {exc.strerror or exc}") from None
     return path
+
+
+def holds_files(path: Path) -> bool:
+    """Whether ``path`` is a folder with something in it (an earlier run, or anything else)."""
+    return path.is_dir() and any(path.iterdir())
 
 
 def _clear(path: Path) -> None:
