@@ -65,7 +65,7 @@ def sequences(samples: Path, only: str | None):
 
 def budgeted_backend(args, config):
     """A stream backend with ``--stream-budget`` units per frame, or None (run_recording makes its own)."""
-    if args.detection != "stream" or args.stream_budget is None:
+    if args.detection != "stream" or (args.stream_budget is None and not args.stream_set):
         return None
     from dataclasses import replace
 
@@ -74,9 +74,25 @@ def budgeted_backend(args, config):
     from pedenv.pose.tiling import DetectionConfig
 
     detection = DetectionConfig.named("stream")
-    detection = replace(detection, stream=replace(detection.stream, budget_units=args.stream_budget))
+    fields = dict(parse_setting(s) for s in args.stream_set)
+    if args.stream_budget is not None:
+        fields["budget_units"] = args.stream_budget
+    detection = replace(detection, stream=replace(detection.stream, **fields))
     return create_pose_backend("onnx", **backend_options("onnx", None, None, detection,
                                                          config.tracking.pose_score_threshold))
+
+
+def parse_setting(text: str) -> tuple[str, object]:
+    """``field=value`` of ``--stream-set`` (value read as JSON: 64, 0.2, true)."""
+    name, _, value = text.partition("=")
+    return name.strip(), json.loads(value)
+
+
+def later_matches(acc) -> int:
+    """Matches (as ``num_matches`` counts them) in an accumulator's frames after its first (a stream's cold start)."""
+    events = acc.mot_events
+    later = events[events.index.get_level_values("FrameId") > 0]
+    return int((later["Type"] == "MATCH").sum())
 
 
 def duplicate_pairs(boxes: np.ndarray, threshold: float = 0.5) -> int:
@@ -108,7 +124,45 @@ def score_run(environment: Path, gt) -> tuple[object, dict]:
         acc.update(ids.tolist(), tids, dist)
         dup += duplicate_pairs(pboxes)
         people += len(peds)
-    return acc, {"frames": len(lines), "reported": people, "duplicate_pairs": dup}
+    return acc, {"frames": len(lines), "reported": people, "duplicate_pairs": dup,
+                 "later_gt": sum(len(ids) for ids, _ in gt[1:]), "later_matches": later_matches(acc)}
+
+
+def summarise(totals: dict, detection: str) -> dict:
+    """Print and return the figures per (data, config): recall, FP, IDSW, IDF1, and for ``stream``
+    the recall on the frames after each sequence's first and the units per frame."""
+    import motmetrics as mm
+
+    print(f"pedenv run --detection {detection} on the real samples (MOT17: guessed camera, standing ego)")
+    print(f"{'data':6s} {'config':11s} {'frames':>6s} {'gt':>4s} {'recall':>6s} {'later':>6s} {'FP':>4s} {'IDSW':>4s} "
+          f"{'IDF1':>6s} {'dup':>4s} {'units':>5s} {'warm':>5s} {'s/frame':>7s}")
+    results = {}
+    for (group, cname), runs in totals.items():
+        df = mm.metrics.create().compute_many([a for _, a, _ in runs], names=[n for n, _, _ in runs],
+                                              metrics=METRICS, generate_overall=True)
+        row = df.loc["OVERALL"]
+        counts = [c for _, _, c in runs]
+        frames = sum(c["frames"] for c in counts)
+        later = sum(c["frames"] - 1 for c in counts)
+        r = {"frames": frames, "gt": int(row["num_objects"]),
+             "recall": float(row["num_matches"] / max(row["num_objects"], 1)),
+             "recall_after_first_frame": (sum(c["later_matches"] for c in counts)
+                                          / max(sum(c["later_gt"] for c in counts), 1)),
+             "false_positives": int(row["num_false_positives"]), "id_switches": int(row["num_switches"]),
+             "idf1": float(row["idf1"]), "duplicate_pairs": sum(c["duplicate_pairs"] for c in counts),
+             "crops": sum(c["crops"] for c in counts),
+             "units_per_frame": sum((c["units"] or 0.0) * c["frames"] for c in counts) / max(frames, 1),
+             "units_per_frame_after_first": sum((c["units_after_cold_start"] or 0.0) * (c["frames"] - 1)
+                                                for c in counts) / max(later, 1),
+             "seconds_per_frame": sum(c["seconds"] for c in counts) / max(frames, 1),
+             "id_switches_by_sequence": {n: int(df.loc[n, "num_switches"]) for n, _, _ in runs},
+             "by_sequence": {n: c for n, _, c in runs}}
+        results[f"{group}/{cname}"] = r
+        print(f"{group:6s} {cname:11s} {frames:6d} {r['gt']:4d} {r['recall']:6.3f} "
+              f"{r['recall_after_first_frame']:6.3f} "
+              f"{r['false_positives']:4d} {r['id_switches']:4d} {r['idf1']:6.3f} {r['duplicate_pairs']:4d} "
+              f"{r['units_per_frame']:5.2f} {r['units_per_frame_after_first']:5.2f} {r['seconds_per_frame']:7.2f}")
+    return results
 
 
 def main(argv=None) -> int:
@@ -118,12 +172,12 @@ def main(argv=None) -> int:
     parser.add_argument("--detection", default="far", choices=["far", "fast", "stream"])
     parser.add_argument("--stream-budget", type=float, default=None,
                         help="stream: network units per frame (default: StreamConfig's).")
+    parser.add_argument("--stream-set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="stream: a StreamConfig field (repeatable), e.g. track_person_px=64.")
     parser.add_argument("--configs", default="paper,fused,fused-image",
                         help="Comma-separated configs to run (paper, fused, fused-image).")
     parser.add_argument("--json", type=Path, default=None, help="Also write the figures here.")
     args = parser.parse_args(argv)
-
-    import motmetrics as mm
 
     from pedenv.apps.options import PoseOptions, RecordingSource
     from pedenv.apps.run import run_recording
@@ -150,29 +204,12 @@ def main(argv=None) -> int:
                 acc, counts = score_run(out / "environment.jsonl", gt)
                 counts["seconds"] = seconds
                 counts["crops"] = summary["pose_backend"].get("redetect", {}).get("crops", 0)
-                counts["units"] = summary["pose_backend"].get("stream", {}).get("units_per_frame")
+                stream = summary["pose_backend"].get("stream", {})
+                counts["units"] = stream.get("units_per_frame")
+                counts["units_after_cold_start"] = stream.get("units_per_frame_after_cold_starts")
                 totals.setdefault((name.split("/")[0], cname), []).append((name, acc, counts))
                 print(f"  {name} {cname}: {counts}", file=sys.stderr)
-    print(f"pedenv run --detection {args.detection} on the real samples (MOT17: guessed camera, standing ego)")
-    print(f"{'data':6s} {'config':11s} {'frames':>6s} {'gt':>4s} {'recall':>6s} {'FP':>4s} {'IDSW':>4s} {'IDF1':>6s} "
-          f"{'dup':>4s} {'crops':>5s} {'s/frame':>7s}")
-    results = {}
-    for (group, cname), runs in totals.items():
-        df = mm.metrics.create().compute_many([a for _, a, _ in runs], names=[n for n, _, _ in runs],
-                                              metrics=METRICS, generate_overall=True)
-        row = df.loc["OVERALL"]
-        frames = sum(c["frames"] for _, _, c in runs)
-        r = {"frames": frames, "gt": int(row["num_objects"]),
-             "recall": float(row["num_matches"] / max(row["num_objects"], 1)),
-             "false_positives": int(row["num_false_positives"]), "id_switches": int(row["num_switches"]),
-             "idf1": float(row["idf1"]), "duplicate_pairs": sum(c["duplicate_pairs"] for _, _, c in runs),
-             "crops": sum(c["crops"] for _, _, c in runs),
-             "seconds_per_frame": sum(c["seconds"] for _, _, c in runs) / max(frames, 1),
-             "id_switches_by_sequence": {n: int(df.loc[n, "num_switches"]) for n, _, _ in runs}}
-        results[f"{group}/{cname}"] = r
-        print(f"{group:6s} {cname:11s} {frames:6d} {r['gt']:4d} {r['recall']:6.3f} {r['false_positives']:4d} "
-              f"{r['id_switches']:4d} {r['idf1']:6.3f} {r['duplicate_pairs']:4d} {r['crops']:5d} "
-              f"{r['seconds_per_frame']:7.2f}")
+    results = summarise(totals, args.detection)
     if args.json:
         args.json.write_text(json.dumps(results, indent=2) + "\n")
     return 0

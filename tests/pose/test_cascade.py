@@ -56,6 +56,10 @@ def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, c
     ("stream", {"scan_period_s": math.nan}, "detection.stream.scan_period_s"),
     ("stream", {"mosaic_width": 600}, "detection.stream.mosaic_width"),
     ("stream", {"cold_start": "yes"}, "detection.stream.cold_start"),
+    ("stream", {"credit_units": -1.0}, "detection.stream.credit_units"),
+    ("stream", {"credit_units": math.nan}, "detection.stream.credit_units"),
+    ("stream", {"track_edge_px": 20.0}, "detection.stream.track_edge_px"),  # not below the 20 px of context
+
     ("cascade", {"min_score": 0.0}, "detection.cascade.min_score"),
     ("cascade", {"max_units": 0}, "detection.cascade.max_units"),
     ("cascade", {"min_height_px": 200.0, "max_height_px": 100.0}, "detection.cascade.min_height_px"),

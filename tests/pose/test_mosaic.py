@@ -1,9 +1,13 @@
 """Packed crops: packing, rendering, and persons found in a mosaic landing at the right image pixels."""
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from pedenv.pose.mosaic import GAP_PX, Crop, crop_around, pack, render, unpack
+from pedenv.datasets.mot17 import read_sequence
+from pedenv.pose.mosaic import GAP_PX, Crop, crop_around, pack, pack_tallest_first, render, unpack
 from pedenv.records import Detections
 
 MOSAIC = (384, 640)
@@ -74,3 +78,58 @@ def test_render_puts_each_crop_scaled_at_its_offset():
     assert bright[:, 0].min() == pytest.approx(oy + (400 - y0) * crop.scale, abs=2)
     assert bright[:, 1].min() == pytest.approx(ox + (100 - x0) * crop.scale, abs=2)
     assert bright[:, 0].max() - bright[:, 0].min() == pytest.approx(90, abs=3)
+
+
+MOT17 = Path(__file__).resolve().parents[2].parent / "shared" / "samples" / "real" / "mot17"
+
+
+def mot17_boxes(sequence: str, frame: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """The ground-truth boxes (N, 4) px of one real MOT17 frame and its (height, width)."""
+    if not MOT17.is_dir():
+        pytest.fail(f"{MOT17}: the real samples are missing (see /work/shared/samples/real/README.md)")
+    seq = read_sequence(MOT17 / sequence)
+    return seq.pedestrians.in_frame(frame).boxes, (seq.info.height, seq.info.width)
+
+
+@pytest.mark.parametrize("sequence, frame, first_fit, tallest_first", [
+    ("MOT17-02-FRCNN", 2, 2, 1),  # 22 people; crops clipped at the image's edges open short shelves
+    ("MOT17-13-FRCNN", 2, 2, 1),  # 22 people seen from a bus, 24-224 px
+    ("MOT17-04-FRCNN", 2, 2, 2),  # 42 people 110-251 px: 2 inputs either way
+])
+def test_tallest_first_packs_a_real_crowd_into_fewer_inputs(sequence, frame, first_fit, tallest_first):
+    boxes, size = mot17_boxes(sequence, frame)
+    crops = [crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
+    assert len({p.mosaic for p in pack(crops, MOSAIC)}) == first_fit
+    placed = pack_tallest_first(crops, MOSAIC)
+    assert len(placed) == len(boxes) and len({p.mosaic for p in placed}) == tallest_first
+    assert sorted(p.item for p in placed) == list(range(len(boxes)))
+
+
+def test_denser_track_crops_hold_a_real_crowd_in_two_inputs():
+    boxes, size = mot17_boxes("MOT17-04-FRCNN", 2)  # the crowd the whole-frame pass misses at night
+    old = [crop_around(b, size, 96.0, 0.35, 3.5, MOSAIC) for b in boxes]
+    new = [crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
+    assert len(pack_tallest_first(old, MOSAIC, max_mosaics=2)) == 26  # of 42: 4 inputs for all
+    assert len(pack_tallest_first(new, MOSAIC, max_mosaics=2)) == 42
+
+
+def test_with_a_limit_the_first_crops_in_priority_order_are_kept():
+    crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(5)] + [Crop((0, 0, 50, 50), 1.0)]
+    placed = pack_tallest_first(crops, MOSAIC, max_mosaics=1)  # 3 tall ones fill the input's width
+    assert sorted(p.item for p in placed) == [0, 1, 2, 5]  # the small one still fits beside them
+
+
+def test_a_person_found_in_a_tallest_first_packed_crop_lands_at_the_right_image_pixels():
+    boxes, size = mot17_boxes("MOT17-13-FRCNN", 2)
+    crops = [replace(crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC), edge_px=8.0) for b in boxes]
+    placed = pack_tallest_first(crops, MOSAIC)
+    in_mosaic = np.array([person_in_mosaic(boxes[p.item], p) for p in placed])
+    kps = np.repeat(0.5 * (in_mosaic[:, None, :2] + in_mosaic[:, None, 2:]), 17, axis=1)
+    found = Detections(kps, np.full((len(placed), 17), 0.9), in_mosaic, np.full(len(placed), 0.8))
+    parts = unpack(found, placed, size, 16.0)
+    for p, (dets, cut) in zip(placed, parts):
+        assert len(dets) == 1 and not cut[0]  # 20 px of context around each: not cut at 8 px of edge
+        np.testing.assert_allclose(dets.boxes[0], boxes[p.item], atol=1e-6)
+    # an edge margin wider than the context (24 px) would cut them
+    assert sum(bool(c[0]) for _, c in unpack(found, [replace(p, crop=replace(p.crop, edge_px=None)) for p in placed],
+                                            size, 24.0)) > 0

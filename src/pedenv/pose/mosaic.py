@@ -27,10 +27,13 @@ GAP_PX = 4
 
 @dataclass(frozen=True)
 class Crop:
-    """An image region ``(x0, y0, x1, y1)`` px (end exclusive) and its ``scale`` (input px per image px)."""
+    """An image region ``(x0, y0, x1, y1)`` px (end exclusive) and its ``scale`` (input px per image px);
+    ``edge_px``: a person within this many input px of an inner edge of the crop is cut (None: the
+    decoding's ``edge_margin_px``)."""
 
     region: tuple[int, int, int, int]
     scale: float
+    edge_px: float | None = None
 
     @property
     def size(self) -> tuple[int, int]:
@@ -105,6 +108,30 @@ def pack(crops: list[Crop], mosaic_size: tuple[int, int], max_mosaics: int | Non
     return placed
 
 
+def pack_tallest_first(crops: list[Crop], mosaic_size: tuple[int, int],
+                       max_mosaics: int | None = None) -> list[Placement]:
+    """Denser packing for ``stream``: the crops are taken in the given (priority) order, each kept
+    when the kept ones still fit in ``max_mosaics`` mosaics packed tallest first (shelves of
+    :func:`pack` then waste no rows under a short crop that opened them). ``Placement.item``
+    indexes ``crops``; the placements come tallest first."""
+    height, width = mosaic_size
+    usable = [i for i, c in enumerate(crops) if c.size[0] + 2 * GAP_PX <= height and c.size[1] + 2 * GAP_PX <= width]
+    if max_mosaics is None:
+        return _tallest_first(crops, usable, mosaic_size)
+    kept: list[int] = []
+    placed: list[Placement] = []
+    for i in usable:
+        trial = _tallest_first(crops, [*kept, i], mosaic_size)
+        if len({p.mosaic for p in trial}) <= max_mosaics:
+            kept, placed = [*kept, i], trial
+    return placed
+
+
+def _tallest_first(crops: list[Crop], items: list[int], mosaic_size: tuple[int, int]) -> list[Placement]:
+    order = sorted(items, key=lambda i: -crops[i].size[0])  # stable: equal heights keep their priority
+    return [Placement(p.crop, p.mosaic, p.offset, order[p.item]) for p in pack([crops[i] for i in order], mosaic_size)]
+
+
 def _find_spot(shelves: list[list[list[int]]], ch: int, cw: int, height: int, width: int) -> tuple[int, int] | None:
     for m, mosaic in enumerate(shelves):
         for s, (_, shelf_h, x) in enumerate(mosaic):
@@ -131,7 +158,8 @@ def render(image: np.ndarray, placements: list[Placement], mosaic_size: tuple[in
 def unpack(dets: Detections, placements: list[Placement], image_size: tuple[int, int],
            edge_margin_px: float) -> list[tuple[Detections, np.ndarray]]:
     """Per placement: the persons of ``dets`` (mosaic input px) whose box centre lies in its crop,
-    in image px, and (N,) bool: cut by an inner crop edge (within ``edge_margin_px`` input px)."""
+    in image px, and (N,) bool: cut by an inner crop edge (within the crop's ``edge_px``, else
+    ``edge_margin_px``, input px)."""
     centres = 0.5 * (dets.boxes[:, :2] + dets.boxes[:, 2:]) if len(dets) else np.zeros((0, 2))
     out = []
     for p in placements:
@@ -143,7 +171,8 @@ def unpack(dets: Detections, placements: list[Placement], image_size: tuple[int,
         kps = (part.keypoints - shift_in) / p.crop.scale + shift_out
         boxes = (part.boxes - np.tile(shift_in, 2)) / p.crop.scale + np.tile(shift_out, 2)
         part = Detections(kps, part.confidences, boxes, part.scores)
-        out.append((part, cut_by_inner_edge(part.boxes, p.crop.region, image_size, edge_margin_px / p.crop.scale)))
+        edge = edge_margin_px if p.crop.edge_px is None else p.crop.edge_px
+        out.append((part, cut_by_inner_edge(part.boxes, p.crop.region, image_size, edge / p.crop.scale)))
     return out
 
 

@@ -1,14 +1,21 @@
 """The ``stream`` scheduler: which network passes a frame gets within its budget (pure functions).
 
-Costs are network units (one 384x640 input). Every frame pays the whole-frame pass. Then,
-in order of what matters most:
+Costs are network units (one 384x640 input). Every frame pays the whole-frame pass. A frame
+may spend ``budget_units`` plus the ``credit`` banked by earlier frames that spent less
+(:class:`CreditBank`; at most ``credit_units``, spent only on tracks at risk). Then, in order
+of what matters most:
 
 1. the packed inputs of the tracks at risk (live tracks the whole-frame pass missed, the
    longest unseen first), as long as they leave the band rotation its share: the units per
-   frame that visit every band tile once per ``scan_period_s`` (``reserve``);
+   frame that visit every band tile once per ``scan_period_s`` (``reserve``); the first
+   packed input is not held back by the reserve;
 2. the band tiles not looked at for longest, while they fit in the budget; a tile that would
    be older than ``scan_period_s`` by the next frame runs even past the budget, once per frame,
-   so the budget is never exceeded by more than one pass.
+   so the budget is never exceeded by more than one pass;
+3. more packed inputs for the tracks in the room no tile fits in (none is left idle).
+
+The bank is charged what a frame spent over the budget (a due tile, banked credit) and
+credited what it spent under it, so the average over many frames stays at the budget.
 """
 
 from __future__ import annotations
@@ -82,37 +89,65 @@ def tracks_at_risk(predicted: np.ndarray, hits: np.ndarray, unseen_s: np.ndarray
 @dataclass(frozen=True)
 class FramePlan:
     """What a frame runs beyond the whole-frame pass: ``mosaics`` packed inputs for the tracks,
-    the rows of the band tiles (oldest first), the units the rotation needs per frame, and
-    whether a tile ran past the budget (it was due)."""
+    the rows of the band tiles (oldest first), the units the rotation needs per frame, whether a
+    tile ran past the budget (it was due), the frame's ``budget`` and the ``credit`` it could
+    spend on top (units)."""
 
     mosaics: int
     tiles: list[int]
     reserve_units: float
     over_budget: bool
+    budget: float = 0.0
+    credit: float = 0.0
 
 
 def plan_frame(full_units: float, mosaic_units: float, mosaics_wanted: int, tile_units: np.ndarray,
-               tile_age_s: np.ndarray, dt_s: float, config: StreamConfig) -> FramePlan:
+               tile_age_s: np.ndarray, dt_s: float, config: StreamConfig, credit: float = 0.0) -> FramePlan:
     """The passes of one frame (module doc). tile_units, tile_age_s: (N,) per band tile (age:
-    seconds since it was last looked at, inf if never); dt_s: the time to the next frame, s."""
+    seconds since it was last looked at, inf if never); dt_s: the time to the next frame, s;
+    credit: units banked by earlier frames (negative: owed), see :class:`CreditBank`."""
     tile_units = np.asarray(tile_units, float)
     tile_age_s = np.asarray(tile_age_s, float)
     budget = config.budget_units
+    credit = min(credit, config.credit_units)
+    allowance = budget + credit
     reserve = float(tile_units.sum()) * min(dt_s / config.scan_period_s, 1.0)
     spent, mosaics = full_units, 0
     while mosaics < mosaics_wanted:
-        room = budget if mosaics == 0 else budget - reserve  # the most at risk before the rotation
+        room = allowance if mosaics == 0 else allowance - reserve  # the most at risk before the rotation
         if spent + mosaic_units > room + 1e-9:
             break
         spent += mosaic_units
         mosaics += 1
     chosen, over = [], False
     for i in np.argsort(-tile_age_s, kind="stable"):
-        if spent + tile_units[i] <= budget + 1e-9:
+        if spent + tile_units[i] <= min(budget, allowance) + 1e-9:
             spent += tile_units[i]
         elif not over and tile_age_s[i] + dt_s > config.scan_period_s:
             spent, over = spent + tile_units[i], True
         else:
             break
         chosen.append(int(i))
-    return FramePlan(mosaics, chosen, reserve, over)
+    while mosaics < mosaics_wanted and spent + mosaic_units <= allowance + 1e-9:  # the room no tile fits in
+        spent += mosaic_units
+        mosaics += 1
+    return FramePlan(mosaics, chosen, reserve, over, budget, credit)
+
+
+@dataclass
+class CreditBank:
+    """Units a stream has saved (positive) or owes (negative) against ``budget_units`` per frame.
+
+    After each frame the bank gains the budget minus what the frame spent, capped at
+    ``credit_units`` (0: no saving); a debt deeper than one frame's budget is forgiven (a frame
+    always pays its whole-frame pass and a due tile). Cold starts are not charged: they are
+    counted apart (``run.json``: ``cold_starts``, ``units_per_frame_after_cold_starts``).
+    """
+
+    budget: float = 0.0
+    credit: float = 0.0
+
+    def charge(self, spent: float, config: StreamConfig) -> None:
+        """A frame that spent ``spent`` units."""
+        self.credit = float(np.clip(self.credit + config.budget_units - spent, -config.budget_units,
+                                    config.credit_units))

@@ -14,6 +14,7 @@ a (re)start scans the whole band when ``cold_start``. :meth:`StreamPose.describe
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
@@ -23,10 +24,10 @@ from pedenv.errors import InputError
 from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
 from pedenv.pose.levels import HeightLine
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import Crop, crop_around, pack, run_mosaics
+from pedenv.pose.mosaic import Crop, crop_around, pack_tallest_first, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
-from pedenv.pose.schedule import band_tiles, plan_frame, tracks_at_risk, units
+from pedenv.pose.schedule import CreditBank, band_tiles, plan_frame, tracks_at_risk, units
 from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections, Frame
@@ -82,6 +83,7 @@ class StreamPose:
         self._fit_boxes = np.zeros((0, 4))
         self._dt = 0.1
         self.finder = TrackFinder()
+        self.bank = CreditBank()
 
     def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
         """One image on its own (no stream): as ``far`` (the whole band), the cascade included."""
@@ -132,24 +134,26 @@ class StreamPose:
                                                                  np.zeros(0, np.int64))
         unseen = self.finder.unseen_s(ids, timestamp)
         rows = tracks_at_risk(predicted, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
+        known = self.finder.search_boxes(ids, predicted)
         mosaic = cfg.stream.mosaic_size
-        track_crops = [crop_around(predicted[r], (height, width), cfg.stream.track_person_px, cfg.stream.track_margin,
-                                   cfg.cascade.max_zoom, mosaic) for r in rows]
+        track_crops = [replace(crop_around(known[r], (height, width), cfg.stream.track_person_px,
+                                           cfg.stream.track_margin, cfg.cascade.max_zoom, mosaic),
+                               edge_px=cfg.stream.track_edge_px) for r in rows]
         early = candidates(concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled else Detections.empty()
         early_crops = candidate_placements(early, (height, width), cfg.cascade, mosaic)
-        wanted = len({p.mosaic for p in pack(track_crops, mosaic)})
-        wanted = max(wanted, len({p.mosaic for p in pack(track_crops + early_crops, mosaic,
-                                                          max_mosaics=wanted + cfg.cascade.max_units)}))
+        wanted = len({p.mosaic for p in pack_tallest_first(track_crops, mosaic)})
+        wanted = max(wanted, len({p.mosaic for p in pack_tallest_first(track_crops + early_crops, mosaic,
+                                                                        max_mosaics=wanted + cfg.cascade.max_units)}))
         ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])
         plan = plan_frame(units(first.input_size), units(mosaic), wanted, np.array([t.units for t in tiles]),
-                          ages, self._dt, cfg.stream)
+                          ages, self._dt, cfg.stream, self.bank.credit)
         chosen = list(range(len(tiles))) if cold else plan.tiles
         steps = [tiles[i].step for i in chosen]
         parts += run(steps)
         for i in chosen:
             self._tile_seen[tiles[i].key] = timestamp
         dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, max_detections=b.max_detections)
-        extra, passes, found_tracks, verified = self._packed(image, dets, low, predicted, rows, track_crops,
+        extra, passes, found_tracks, verified = self._packed(image, dets, low, known, rows, track_crops,
                                                              plan.mosaics + (cfg.cascade.max_units if cold else 0),
                                                              settings)
         if len(extra):
@@ -159,6 +163,9 @@ class StreamPose:
         self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= cfg.fit_min_score]])[-FIT_MEMORY:]
         self.last_passes = [first, *steps, *passes]
         self.last_note = ("cold start, whole band; " if cold else "") + note
+        if not cold:
+            self.bank.charge(sum(units(p.input_size) for p in self.last_passes), cfg.stream)
+        self.accounts.credit_units = self.bank.credit
         late = sum(1 for i, a in enumerate(ages) if i not in chosen and cfg.stream.scan_period_s < a < math.inf)
         self.accounts.add((first, steps, passes), plan, cold, (len(rows), found_tracks, verified), late)
         return dets
@@ -172,8 +179,8 @@ class StreamPose:
         mosaic = cfg.stream.mosaic_size
         cands = candidates(concat(low), dets, cfg.cascade) if cfg.cascade.enabled else Detections.empty()
         cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), cfg.cascade, mosaic)
-        tracks = pack(track_crops, mosaic, max_mosaics=limit)
-        placements = pack([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
+        tracks = sorted(pack_tallest_first(track_crops, mosaic, max_mosaics=limit), key=lambda p: p.item)
+        placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
         if not placements:
             return Detections.empty(), [], 0, 0
         results, passes = run_mosaics(self.backend.infer, image, placements, mosaic, settings)

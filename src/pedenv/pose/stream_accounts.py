@@ -30,6 +30,7 @@ class TrackFinder:
     def __init__(self, match: RedetectConfig | None = None) -> None:
         self.match = match or RedetectConfig()
         self._seen: dict[int, float] = {}
+        self._last: dict[int, np.ndarray] = {}
 
     def unseen_s(self, ids: np.ndarray, timestamp: float) -> np.ndarray:
         """(T,) seconds since each track of ``ids`` was last detected (0 for a new one)."""
@@ -40,9 +41,22 @@ class TrackFinder:
         """Tracks whose predicted box (T, 4) px some detected box (N, 4) px overlaps by more than ``iou`` were seen."""
         if not len(ids) or not len(boxes):
             return
-        seen = iou_matrix(np.asarray(predicted, float), np.asarray(boxes, float)).max(axis=1) > iou
-        for i in np.asarray(ids)[seen]:
-            self._seen[int(i)] = timestamp
+        overlap = iou_matrix(np.asarray(predicted, float), np.asarray(boxes, float))
+        seen = overlap.max(axis=1) > iou
+        for row in np.flatnonzero(seen):
+            self._seen[int(ids[row])] = timestamp
+            self._last[int(ids[row])] = np.asarray(boxes, float)[int(np.argmax(overlap[row]))]
+
+    def search_boxes(self, ids: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """(T, 4) px: each track's predicted box (T, 4) px grown to hold the box it was last
+        detected at (the prediction's motion may be wrong after few sightings)."""
+        out = np.asarray(predicted, float).reshape(-1, 4).copy()
+        for row, i in enumerate(np.asarray(ids)):
+            last = self._last.get(int(i))
+            if last is not None:
+                out[row, :2] = np.minimum(out[row, :2], last[:2])
+                out[row, 2:] = np.maximum(out[row, 2:], last[2:])
+        return out
 
     def pick(self, predicted: np.ndarray, rows: list[int], results: list[tuple[Detections, np.ndarray]]) -> Detections:
         """Per searched track (``rows`` of ``predicted`` (T, 4) px) the person of its crop's
@@ -66,9 +80,12 @@ class StreamAccounts:
     restarts: int = 0
     cold_starts: int = 0
     units: dict[str, float] = field(default_factory=lambda: {"whole_frame": 0.0, "band_tiles": 0.0, "packed": 0.0})
+    warm_units: float = 0.0
     max_units: float = 0.0
     max_units_warm: float = 0.0
     frames_over_budget: int = 0
+    frames_on_credit: int = 0
+    credit_units: float = 0.0
     tracks_at_risk: int = 0
     tracks_found: int = 0
     cascade_confirmed: int = 0
@@ -91,8 +108,10 @@ class StreamAccounts:
         self.cold_starts += int(cold)
         self.max_units = max(self.max_units, total)
         if not cold:
+            self.warm_units += total
             self.max_units_warm = max(self.max_units_warm, total)
         self.frames_over_budget += int(plan.over_budget and not cold)
+        self.frames_on_credit += int(not cold and not plan.over_budget and total > plan.budget + 1e-9)
         self.tracks_at_risk += at_risk
         self.tracks_found += found
         self.cascade_confirmed += verified
@@ -105,8 +124,10 @@ class StreamAccounts:
         return {"frames": self.frames, "restarts": self.restarts, "cold_starts": self.cold_starts,
                 "units_per_frame": sum(self.units.values()) / n,
                 "units_per_frame_by_use": {k: v / n for k, v in self.units.items()},
+                "units_per_frame_after_cold_starts": self.warm_units / max(self.frames - self.cold_starts, 1),
                 "max_units_per_frame": self.max_units, "max_units_per_frame_after_cold_start": self.max_units_warm,
                 "frames_past_budget_for_a_due_tile": self.frames_over_budget,
+                "frames_past_budget_on_credit": self.frames_on_credit, "credit_units_left": self.credit_units,
                 "band_units_per_frame_needed": self.band_reserve_units,
                 "tracks_at_risk_searched": self.tracks_at_risk, "tracks_found_in_crops": self.tracks_found,
                 "cascade_confirmed": self.cascade_confirmed, "tile_visits": self.tile_visits,

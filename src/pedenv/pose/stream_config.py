@@ -93,14 +93,20 @@ class StreamConfig:
     cascade's candidates in the free room of those inputs. Costs are in network units (one
     384x640 input).
 
-    budget_units: network units per frame (1..64; at least one whole-frame pass). The whole-frame
-        pass always runs; a frame never spends more than this plus one pass (cold starts aside).
+    budget_units: network units per frame on average (1..64; at least one whole-frame pass). The
+        whole-frame pass always runs; a frame never spends more than this plus its banked credit
+        plus one pass (cold starts aside, counted apart).
+    credit_units: the most units a stream banks from frames that spent less than the budget, to
+        spend on tracks at risk in a crowded frame (0..64; 0: every frame on its own budget). A
+        frame's overspend (a due tile) is owed back the same way, so the average stays at the budget.
     scan_period_s: every band tile is looked at at least once this often, seconds (0.05..60), as
         far as the budget allows (``run.json`` says when it did not): a new person far away is
         found within this time. Lowering it spends more of the budget on the band.
     track_person_px: a track's height in its crop's network input, px (32..384).
     track_margin: context around a predicted box, a share of its height on every side (0..2).
-        Raising it tolerates worse predictions, with fewer input px per person.
+        Raising it tolerates worse predictions, with fewer crops per packed input.
+    track_edge_px: a person found within this many input px of an inner edge of a track's crop is
+        cut, not the track (0..64; below ``track_margin * track_person_px``, the context).
     track_min_hits: only tracks detected at least this many times are looked for (1..1000). A new
         track (one hit) is looked for at once: a person the band rotation found once is kept.
     missed_iou: a track whose predicted box overlaps no whole-frame detection by more than this
@@ -113,9 +119,11 @@ class StreamConfig:
     """
 
     budget_units: float = number(3.0, 1.0, 64.0)
+    credit_units: float = number(3.0, 0.0, 64.0)
     scan_period_s: float = number(1.0, 0.05, 60.0)
-    track_person_px: float = number(96.0, 32.0, 384.0)
-    track_margin: float = number(0.35, 0.0, 2.0)
+    track_person_px: float = number(80.0, 32.0, 384.0)
+    track_margin: float = number(0.25, 0.0, 2.0)
+    track_edge_px: float = number(8.0, 0.0, 64.0)
     track_min_hits: int = count(1, 1, 1000)
     missed_iou: float = number(0.3, 0.0, 1.0)
     max_gap_s: float = number(2.0, 0.1, 3600.0)
@@ -125,6 +133,9 @@ class StreamConfig:
 
     def __post_init__(self) -> None:
         check_fields("detection.stream", self)
+        if self.track_edge_px >= max(self.track_margin * self.track_person_px, 1.0):
+            raise InputError(f"detection.stream.track_edge_px ({self.track_edge_px}) must be below the context "
+                             f"track_margin * track_person_px ({self.track_margin * self.track_person_px:g} px)")
         for name in ("mosaic_height", "mosaic_width"):
             if getattr(self, name) % 32:
                 raise InputError(f"detection.stream.{name} must be a multiple of 32, got {getattr(self, name)}")
