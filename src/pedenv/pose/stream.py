@@ -2,13 +2,15 @@
 
 A stateful pose backend that sees each frame's model state (the tracks' predicted boxes,
 :meth:`~pedenv.model.PedestrianEnvironmentModel.predicted_boxes`). Every frame: the
-whole-frame pass; the live tracks it missed, in crops around their predicted boxes packed
-several to one input (:mod:`pedenv.pose.mosaic`); the far band's tiles in rotation, the
-oldest first (:mod:`pedenv.pose.schedule`); the cascade's low-scoring candidates in the
-room left in the packed inputs (:mod:`pedenv.pose.cascade`). A time step longer than
-``max_gap_s`` (or backwards) or a new frame size restarts the state; the first frame after
-a (re)start scans the whole band when ``cold_start``. :meth:`StreamPose.describe` (saved in
-``run.json``) says how the budget was spent.
+whole-frame pass; the live tracks it missed, in crops around their predicted boxes (grown to
+hold where each was last detected) packed tallest first, about twenty to one input
+(:mod:`pedenv.pose.mosaic`); the far band's tiles in rotation, the oldest first
+(:mod:`pedenv.pose.schedule`); the cascade's low-scoring candidates in the room left in the
+packed inputs (:mod:`pedenv.pose.cascade`). A credit bank
+(:class:`~pedenv.pose.schedule.CreditBank`) lends a crowded frame what quiet frames saved. A
+time step longer than ``max_gap_s`` (or backwards) or a new frame size restarts the state;
+the first frame after a (re)start scans the whole band when ``cold_start``.
+:meth:`StreamPose.describe` (saved in ``run.json``) says how the budget was spent.
 """
 
 from __future__ import annotations
