@@ -58,7 +58,9 @@ def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, c
     ("stream", {"cold_start": "yes"}, "detection.stream.cold_start"),
     ("stream", {"credit_units": -1.0}, "detection.stream.credit_units"),
     ("stream", {"credit_units": math.nan}, "detection.stream.credit_units"),
-    ("stream", {"track_edge_px": 20.0}, "detection.stream.track_edge_px"),  # not below the 20 px of context
+    ("stream", {"track_edge_px": 40.0}, "detection.stream.track_edge_px"),  # not below the 33.6 px of context
+    ("stream", {"crowd_edge_px": 20.0}, "detection.stream.crowd_edge_px"),  # not below the 20 px of context
+    ("stream", {"crowd_person_px": 8.0}, "detection.stream.crowd_person_px"),
 
     ("cascade", {"min_score": 0.0}, "detection.cascade.min_score"),
     ("cascade", {"max_units": 0}, "detection.cascade.max_units"),

@@ -68,3 +68,19 @@ def test_a_single_image_is_seen_as_far_sees_it(stream, frames):
     dets = stream.detect(images[0], samples[0].geometry)
     assert stream.config == DetectionConfig.named("stream") and len(dets) >= 7
     assert {p.kind for p in stream.last_passes} >= {"full", "band"}
+
+
+def test_a_crowd_gets_the_smaller_crops_and_a_few_tracks_the_usual_ones(stream):
+    from pedenv.datasets.mot17 import read_sequence
+
+    seq = read_sequence(KITTI.parent / "mot17" / "MOT17-04-FRCNN")
+    boxes = seq.pedestrians.in_frame(2).boxes  # 42 people, 110-251 px, at 30 Hz
+    stream._dt = 1 / 30
+    band = (1.0, np.full(36, 1.75), np.full(36, 0.2))  # its band (measured): 36 tiles, seen 0.2 s ago
+    crops, plan = stream._plan_tracks(boxes, [], (1080, 1920), band)
+    heights = boxes[:, 3] - boxes[:, 1]
+    assert plan.mosaics == 2  # the budget of 3 units: the whole frame and 2 packed inputs
+    np.testing.assert_allclose([c.scale for c in crops], 80.0 / heights)  # the crowd's crops: all 42 fit in 2
+    crops, plan = stream._plan_tracks(boxes[:8], [], (1080, 1920), band)
+    assert plan.mosaics == 1
+    np.testing.assert_allclose([c.scale for c in crops], 96.0 / heights[:8])  # few: the usual crops

@@ -29,7 +29,7 @@ from pedenv.pose.merge import merge_detections
 from pedenv.pose.mosaic import Crop, crop_around, pack_tallest_first, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
-from pedenv.pose.schedule import CreditBank, band_tiles, plan_frame, tracks_at_risk, units
+from pedenv.pose.schedule import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk, units
 from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections, Frame
@@ -137,18 +137,11 @@ class StreamPose:
         unseen = self.finder.unseen_s(ids, timestamp)
         rows = tracks_at_risk(predicted, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
         known = self.finder.search_boxes(ids, predicted)
-        mosaic = cfg.stream.mosaic_size
-        track_crops = [replace(crop_around(known[r], (height, width), cfg.stream.track_person_px,
-                                           cfg.stream.track_margin, cfg.cascade.max_zoom, mosaic),
-                               edge_px=cfg.stream.track_edge_px) for r in rows]
         early = candidates(concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled else Detections.empty()
-        early_crops = candidate_placements(early, (height, width), cfg.cascade, mosaic)
-        wanted = len({p.mosaic for p in pack_tallest_first(track_crops, mosaic)})
-        wanted = max(wanted, len({p.mosaic for p in pack_tallest_first(track_crops + early_crops, mosaic,
-                                                                        max_mosaics=wanted + cfg.cascade.max_units)}))
+        early_crops = candidate_placements(early, (height, width), cfg.cascade, cfg.stream.mosaic_size)
         ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])
-        plan = plan_frame(units(first.input_size), units(mosaic), wanted, np.array([t.units for t in tiles]),
-                          ages, self._dt, cfg.stream, self.bank.credit)
+        track_crops, plan = self._plan_tracks(known[rows], early_crops, (height, width),
+                                              (units(first.input_size), np.array([t.units for t in tiles]), ages))
         chosen = list(range(len(tiles))) if cold else plan.tiles
         steps = [tiles[i].step for i in chosen]
         parts += run(steps)
@@ -171,6 +164,25 @@ class StreamPose:
         late = sum(1 for i, a in enumerate(ages) if i not in chosen and cfg.stream.scan_period_s < a < math.inf)
         self.accounts.add((first, steps, passes), plan, cold, (len(rows), found_tracks, verified), late)
         return dets
+
+    def _plan_tracks(self, boxes: np.ndarray, early_crops: list[Crop], image_size: tuple[int, int],
+                     costs: tuple[float, np.ndarray, np.ndarray]) -> tuple[list[Crop], FramePlan]:
+        """The crops of the tracks to search (``boxes`` (K, 4) px, most at risk first) and the
+        frame's plan; ``costs``: the whole-frame pass's units, the band tiles' units and ages (s).
+        The usual crops when the plan pays for all of them, else the crowd's smaller ones."""
+        cfg = self.config
+        mosaic = cfg.stream.mosaic_size
+        for person_px, margin, edge_px in cfg.stream.crop_styles:
+            crops = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic),
+                             edge_px=edge_px) for box in boxes]
+            needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
+            with_cascade = pack_tallest_first(crops + early_crops, mosaic, max_mosaics=needed + cfg.cascade.max_units)
+            wanted = max(needed, len({p.mosaic for p in with_cascade}))
+            plan = plan_frame(costs[0], units(mosaic), wanted, costs[1], costs[2], self._dt, cfg.stream,
+                              self.bank.credit)
+            if plan.mosaics >= needed:
+                break
+        return crops, plan
 
     def _packed(self, image: np.ndarray, dets: Detections, low: list[Detections], predicted: np.ndarray,
                 rows: np.ndarray, track_crops: list[Crop], limit: int,
