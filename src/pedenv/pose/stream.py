@@ -2,14 +2,13 @@
 
 A stateful pose backend that sees each frame's model state (the tracks' predicted boxes,
 :meth:`~pedenv.model.PedestrianEnvironmentModel.predicted_boxes`). Every frame: the
-whole-frame pass; the live tracks it missed, in crops around their predicted boxes (grown to
-hold where each was last detected) packed tallest first, about twenty to one input
-(:mod:`pedenv.pose.mosaic`); the far band's tiles in rotation, the oldest first
-(:mod:`pedenv.pose.schedule`); the cascade's low-scoring candidates in the room left in the
-packed inputs (:mod:`pedenv.pose.cascade`). A credit bank
-(:class:`~pedenv.pose.schedule.CreditBank`) lends a crowded frame what quiet frames saved. A
-time step longer than ``max_gap_s`` (or backwards) or a new frame size restarts the state;
-the first frame after a (re)start scans the whole band when ``cold_start``.
+whole-frame pass; the live tracks it missed, in crops around their predicted boxes packed
+tallest first, about ten to one input, twenty in a crowd (:mod:`pedenv.pose.mosaic`); the far
+band's tiles in rotation, the oldest first (:mod:`pedenv.pose.schedule`); the cascade's
+low-scoring candidates in the room left in the packed inputs (:mod:`pedenv.pose.cascade`). A
+credit bank (:class:`~pedenv.pose.schedule.CreditBank`) lends a crowded frame what quiet frames
+saved. A time step longer than ``max_gap_s`` (or backwards) or a new frame size restarts the
+state; the first frame after a (re)start scans the whole band when ``cold_start``.
 :meth:`StreamPose.describe` (saved in ``run.json``) says how the budget was spent.
 """
 
@@ -136,7 +135,7 @@ class StreamPose:
                                                                  np.zeros(0, np.int64))
         unseen = self.finder.unseen_s(ids, timestamp)
         rows = tracks_at_risk(predicted, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
-        known = self.finder.search_boxes(ids, predicted)
+        known = np.asarray(predicted, float).reshape(-1, 4)
         early = candidates(concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled else Detections.empty()
         early_crops = candidate_placements(early, (height, width), cfg.cascade, cfg.stream.mosaic_size)
         ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])

@@ -30,7 +30,6 @@ class TrackFinder:
     def __init__(self, match: RedetectConfig | None = None) -> None:
         self.match = match or RedetectConfig()
         self._seen: dict[int, float] = {}
-        self._last: dict[int, np.ndarray] = {}
 
     def unseen_s(self, ids: np.ndarray, timestamp: float) -> np.ndarray:
         """(T,) seconds since each track of ``ids`` was last detected (0 for a new one)."""
@@ -41,22 +40,9 @@ class TrackFinder:
         """Tracks whose predicted box (T, 4) px some detected box (N, 4) px overlaps by more than ``iou`` were seen."""
         if not len(ids) or not len(boxes):
             return
-        overlap = iou_matrix(np.asarray(predicted, float), np.asarray(boxes, float))
-        seen = overlap.max(axis=1) > iou
-        for row in np.flatnonzero(seen):
-            self._seen[int(ids[row])] = timestamp
-            self._last[int(ids[row])] = np.asarray(boxes, float)[int(np.argmax(overlap[row]))]
-
-    def search_boxes(self, ids: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-        """(T, 4) px: each track's predicted box (T, 4) px grown to hold the box it was last
-        detected at (the prediction's motion may be wrong after few sightings)."""
-        out = np.asarray(predicted, float).reshape(-1, 4).copy()
-        for row, i in enumerate(np.asarray(ids)):
-            last = self._last.get(int(i))
-            if last is not None:
-                out[row, :2] = np.minimum(out[row, :2], last[:2])
-                out[row, 2:] = np.maximum(out[row, 2:], last[2:])
-        return out
+        seen = iou_matrix(np.asarray(predicted, float), np.asarray(boxes, float)).max(axis=1) > iou
+        for i in np.asarray(ids)[seen]:
+            self._seen[int(i)] = timestamp
 
     def pick(self, predicted: np.ndarray, rows: list[int], results: list[tuple[Detections, np.ndarray]]) -> Detections:
         """Per searched track (``rows`` of ``predicted`` (T, 4) px) the person of its crop's
