@@ -99,6 +99,17 @@ def test_the_credit_bank_keeps_the_long_run_average_at_the_budget(credit_units):
     assert spent.max() <= config.budget_units + credit_units + one_pass + 1e-9
 
 
+def test_a_debt_is_paid_by_the_tiles_not_by_the_tracks_most_at_risk():
+    # vtest.avi (measured): a 4:3 frame's whole pass is 1.25 units, its band 6 tiles of 0.67; after
+    # a due tile ran past the budget the bank owes 0.9: the tracks' first packed input still runs
+    # (before, it did not: 12 % fewer packed inputs, 86 % of far's people instead of 94 %)
+    config = StreamConfig()
+    plan = plan_frame(1.25, 1.0, 2, np.full(6, 0.67), np.full(6, 0.5), 0.1, config, credit=-0.9)
+    assert (plan.mosaics, plan.tiles, plan.over_budget) == (1, [], False)  # 2.25 units: 0.75 paid back
+    plan = plan_frame(1.25, 1.0, 2, np.full(6, 0.67), np.full(6, 0.5), 0.1, config)
+    assert (plan.mosaics, plan.tiles) == (1, [0])  # no debt: a tile too (2.92 units)
+
+
 def test_credit_from_quiet_frames_is_spent_on_a_crowded_one():
     config = StreamConfig(budget_units=3.0, credit_units=3.0, scan_period_s=60.0)
     wanted = np.array([0, 0, 0, 5, 5, 5])  # three quiet frames (the whole-frame pass only), then a crowd

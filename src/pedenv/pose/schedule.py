@@ -8,14 +8,15 @@ of what matters most:
 1. the packed inputs of the tracks at risk (live tracks the whole-frame pass missed, the
    longest unseen first), as long as they leave the band rotation its share: the units per
    frame that visit every band tile once per ``scan_period_s`` (``reserve``); the first
-   packed input is not held back by the reserve;
+   packed input is held back neither by the reserve nor by a debt;
 2. the band tiles not looked at for longest, while they fit in the budget; a tile that would
    be older than ``scan_period_s`` by the next frame runs even past the budget, once per frame,
    so the budget is never exceeded by more than one pass;
 3. more packed inputs for the tracks in the room no tile fits in (none is left idle).
 
 The bank is charged what a frame spent over the budget (a due tile, banked credit) and
-credited what it spent under it, so the average over many frames stays at the budget.
+credited what it spent under it; a debt is paid by the tiles that are not due and by the
+tracks' further packed inputs, so the average over many frames stays at the budget.
 """
 
 from __future__ import annotations
@@ -114,7 +115,8 @@ def plan_frame(full_units: float, mosaic_units: float, mosaics_wanted: int, tile
     reserve = float(tile_units.sum()) * min(dt_s / config.scan_period_s, 1.0)
     spent, mosaics = full_units, 0
     while mosaics < mosaics_wanted:
-        room = allowance if mosaics == 0 else allowance - reserve  # the most at risk before the rotation
+        # the most at risk first, even owing (the debt is paid by the tiles), then the rotation's share
+        room = max(allowance, budget) if mosaics == 0 else allowance - reserve
         if spent + mosaic_units > room + 1e-9:
             break
         spent += mosaic_units
