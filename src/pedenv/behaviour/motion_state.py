@@ -17,13 +17,18 @@ MOTION_STATE_NAMES = ("standing", "walking", "running")
 class VelocityStats:
     """Velocities (N, 2) m/s with covariances (N, 2, 2), summarised once for the cues that use them:
     speed (N,) m/s, unit (N, 2) its direction (zero at standstill), var_along and var_across (N,)
-    (m/s)^2 the variance along and across it, var_largest (N,) the covariance's larger eigenvalue."""
+    (m/s)^2 the variance along and across it; covariances (N, 2, 2) (m/s)^2 as given."""
 
     speed: np.ndarray
     unit: np.ndarray
     var_along: np.ndarray
     var_across: np.ndarray
-    var_largest: np.ndarray
+    covariances: np.ndarray
+
+    def var_largest(self) -> np.ndarray:
+        """(N,) (m/s)^2 the covariance's larger eigenvalue."""
+        a, b, d = self.covariances[:, 0, 0], self.covariances[:, 0, 1], self.covariances[:, 1, 1]
+        return 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
 
 
 def velocity_stats(velocities: np.ndarray, velocity_covariances: np.ndarray) -> VelocityStats:
@@ -36,8 +41,7 @@ def velocity_stats(velocities: np.ndarray, velocity_covariances: np.ndarray) -> 
     uxx, uyy, uxy2 = ux * ux, uy * uy, 2.0 * ux * uy * b
     along = uxx * a + uxy2 + uyy * d
     across = uyy * a - uxy2 + uxx * d
-    largest = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
-    return VelocityStats(speed, velocities * inv[:, None], along, across, largest)
+    return VelocityStats(speed, velocities * inv[:, None], along, across, velocity_covariances)
 
 
 def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -48,7 +52,8 @@ def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> t
 
 def speed_from(v: VelocityStats) -> tuple[np.ndarray, np.ndarray]:
     """:func:`speed_and_std` from the :class:`VelocityStats`."""
-    var = np.where(v.speed > 1e-6, v.var_along, v.var_largest)
+    moving = v.speed > 1e-6
+    var = v.var_along if moving.all() else np.where(moving, v.var_along, v.var_largest())
     return v.speed, np.sqrt(np.maximum(var, 0.0))
 
 
@@ -59,10 +64,9 @@ def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, c
     deviations; down once the speed falls below the exit threshold. Between the two the
     state holds, so it does not flicker.
     """
+    # the state may fall to the number of exit thresholds the speed stays above, and rises to the
+    # number of entry thresholds it clearly exceeds (the entries lie above the exits)
     low = speed - config.speed_sigmas * speed_std
-    state = np.asarray(previous, np.int8).copy()
-    state[(state == RUNNING) & (speed < config.run_exit_mps)] = WALKING
-    state[(state == WALKING) & (speed < config.walk_exit_mps)] = STANDING
-    state[(state == STANDING) & (low > config.walk_enter_mps)] = WALKING
-    state[(state == WALKING) & (low > config.run_enter_mps)] = RUNNING
-    return state
+    floor = (low > config.walk_enter_mps).astype(np.int8) + (low > config.run_enter_mps)
+    ceiling = (speed >= config.walk_exit_mps).astype(np.int8) + (speed >= config.run_exit_mps)
+    return np.maximum(np.minimum(np.asarray(previous, np.int8), ceiling), floor)
