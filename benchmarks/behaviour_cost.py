@@ -4,7 +4,9 @@ path sampled as ``benchmarks/behaviour.py`` does) run through a fresh model per 
 settings taking turns scene by scene and round by round so that the shared machine's load falls
 on all alike. For each setting the best round per scene is kept (the least disturbed), summed:
 the wall time of ``model.update`` and, inside it, the behaviour estimator's own clock, and their
-ratio (the cues' share of the rest of ``update``). Detections are drawn before timing.
+ratio (the cues' share of the rest of ``update``); of the cues, the clocks of the orientation
+(``BehaviourEstimator._orient``, where the tree has it) and of the ego's path and the conflict
+(``predict_ego_path``, ``conflict_of``). Detections are drawn before timing.
 
     PYTHONPATH=src python benchmarks/behaviour_cost.py --intervals 0,0.3
     PYTHONPATH=/tmp/beh-before/src python benchmarks/behaviour_cost.py --intervals 0   # a tree without the field
@@ -19,6 +21,7 @@ import time
 
 from behaviour_synthetic import BENCH_HORIZONS
 
+import pedenv.behaviour.estimator as estimator
 from pedenv.config import Config
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.synthetic import SCENARIOS, generate_scenes
@@ -32,36 +35,61 @@ def config_of(interval_s: float) -> Config:
     return Config().replace(behaviour={"horizons_s": list(BENCH_HORIZONS), **extra})
 
 
-def time_scene(frames: list, config: Config) -> tuple[float, float, int]:
-    """Wall time (s) of ``model.update`` over the frames, the behaviour cues' part of it (s) and the
-    number of pedestrians reported, with a fresh model."""
+#: Seconds spent in the parts of the cues timed apart (see :func:`install_clocks`).
+CLOCKS = {"orientation": 0.0, "conflict": 0.0}
+
+
+def install_clocks() -> None:
+    """Time the estimator's orientation step and its calls of the ego path and the conflict."""
+    def timed(fn, key):
+        def run(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                CLOCKS[key] += time.perf_counter() - start
+        return run
+
+    estimator.conflict_of = timed(estimator.conflict_of, "conflict")
+    estimator.predict_ego_path = timed(estimator.predict_ego_path, "conflict")
+    if hasattr(estimator.BehaviourEstimator, "_orient"):
+        estimator.BehaviourEstimator._orient = timed(estimator.BehaviourEstimator._orient, "orientation")
+    else:
+        CLOCKS["orientation"] = float("nan")
+
+
+def time_scene(frames: list, config: Config) -> list[float]:
+    """Wall time (s) of ``model.update`` over the frames, the behaviour cues' part of it, of that the
+    orientation's and the ego path's and conflict's (s), and the number of pedestrians reported,
+    with a fresh model."""
     model = PedestrianEnvironmentModel(config)
-    wall, people = 0.0, 0
+    wall, people, before = 0.0, 0, dict(CLOCKS)
     for frame in frames:
         start = time.perf_counter()
         state = model.update(frame)
         wall += time.perf_counter() - start
         people += len(state.pedestrians)
     assert model.behaviour is not None, "the fused preset computes the behaviour cues"
-    return wall, model.behaviour.elapsed_s, people
+    return [wall, model.behaviour.elapsed_s, CLOCKS["orientation"] - before["orientation"],
+            CLOCKS["conflict"] - before["conflict"], people]
 
 
 def measure(names: list[str], intervals: list[float], rounds: int) -> dict[float, list[float]]:
-    """Per interval: [update s, behaviour s, frames, pedestrians], each scene's best round, summed."""
+    """Per interval the sums over the scenes (each scene's fastest round) of :func:`time_scene`'s
+    figures, and the number of frames."""
     configs = {i: config_of(i) for i in intervals}
-    totals = {i: [0.0, 0.0, 0, 0] for i in intervals}
+    totals = {i: [0.0] * 6 for i in intervals}
     for scene in generate_scenes(0, names):
         detector = DetectorModel(0)
         frames = [dataclasses.replace(f, detections=detector(f)) for f in scene.frames]
-        best: dict[float, tuple[float, float, int]] = {}
+        best: dict[float, list[float]] = {}
         for _ in range(rounds):
             for i in intervals:
                 run = time_scene(frames, configs[i])
                 if i not in best or run[0] < best[i][0]:
                     best[i] = run
         for i in intervals:
-            t = totals[i]
-            t[0], t[1], t[2], t[3] = t[0] + best[i][0], t[1] + best[i][1], t[2] + len(frames), t[3] + best[i][2]
+            totals[i] = [a + b for a, b in zip(totals[i], best[i] + [len(frames)])]
     return totals
 
 
@@ -74,13 +102,17 @@ def main(argv: list[str] | None = None) -> int:
     names = [n for n in args.scenes.split(",") if n] or list(SCENARIOS)
     intervals = [float(v) for v in args.intervals.split(",")]
     load = os.getloadavg()[0]
+    install_clocks()
     totals = measure(names, intervals, max(args.rounds, 1))
-    print(f"load: {load:.2f} before, {os.getloadavg()[0]:.2f} after (1-minute average)")
-    print("| orientation_interval_s | frames | pedestrians per frame | update ms | behaviour ms | share of the rest |")
-    print("|---|---|---|---|---|---|")
-    for i, (update, extra, frames, people) in totals.items():
-        print(f"| {i:g} | {frames} | {people / max(frames, 1):.1f} | {1e3 * update / frames:.2f} | "
-              f"{1e3 * extra / frames:.3f} | {100 * extra / max(update - extra, 1e-12):.1f} % |")
+    print(f"load: {load:.2f} before, {os.getloadavg()[0]:.2f} after (1-minute average); times in ms per frame")
+    print("| orientation_interval_s | frames | pedestrians | update | behaviour | share of the rest | "
+          "orientation | ego path + conflict | behaviour less ego path + conflict, share |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for i, (update, extra, orient, conflict, people, frames) in totals.items():
+        rest = max(update - extra, 1e-12)
+        print(f"| {i:g} | {frames:.0f} | {people / frames:.1f} | {1e3 * update / frames:.2f} | "
+              f"{1e3 * extra / frames:.3f} | {100 * extra / rest:.1f} % | {1e3 * orient / frames:.3f} | "
+              f"{1e3 * conflict / frames:.3f} | {100 * (extra - conflict) / rest:.1f} % |")
     return 0
 
 

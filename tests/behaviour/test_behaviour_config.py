@@ -17,6 +17,8 @@ def test_on_in_fused_off_in_paper_and_round_trips():
 @pytest.mark.parametrize("field, value, message", [
     ("enabled", "yes", "behaviour.enabled"),
     ("orientation_bins", 5, "behaviour.orientation_bins"),
+    ("orientation_interval_s", -0.1, "behaviour.orientation_interval_s"),
+    ("orientation_interval_s", float("inf"), "behaviour.orientation_interval_s"),
     ("width_ratio_std", -1.0, "behaviour.width_ratio_std"),
     ("conflict_probability", 1.0, "behaviour.conflict_probability"),
     ("horizons_s", (2.0, 1.0), "behaviour.horizons_s"),

@@ -48,6 +48,8 @@ class TrackStore:
     def rows(self, ids: np.ndarray, now: float) -> np.ndarray:
         """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now`` (s)."""
         index = np.searchsorted(self.ids, ids)
+        if len(self.ids) and (self.ids[np.minimum(index, len(self.ids) - 1)] == ids).all():
+            return index  # the usual frame: every track known
         found = index < len(self.ids)
         found[found] = self.ids[index[found]] == ids[found]
         if not found.all():
@@ -67,7 +69,8 @@ class TrackStore:
         are live tracks: a dropped track may wait a few frames)."""
         if len(self.ids) <= len(live_ids):
             return
-        mask = np.isin(self.ids, live_ids)
+        mask = ((self.ids[:, None] == live_ids).any(axis=1) if len(self.ids) * len(live_ids) < 4096
+                else np.isin(self.ids, live_ids))
         if not mask.all():
             self._take(mask)
 
