@@ -22,6 +22,7 @@ import time
 from behaviour_synthetic import BENCH_HORIZONS
 
 import pedenv.behaviour.estimator as estimator
+from pedenv.behaviour.config import BehaviourConfig
 from pedenv.config import Config
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.synthetic import SCENARIOS, generate_scenes
@@ -29,9 +30,12 @@ from pedenv.synthetic.detector import DetectorModel
 
 
 def config_of(interval_s: float) -> Config:
-    """The benchmark's configuration with ``orientation_interval_s`` (left out where 0: a tree from
-    before the field also runs)."""
-    extra = {"orientation_interval_s": interval_s} if interval_s else {}
+    """The benchmark's configuration with ``orientation_interval_s`` (a tree from before the field
+    runs with 0: every frame)."""
+    known = "orientation_interval_s" in BehaviourConfig.__dataclass_fields__
+    if interval_s and not known:
+        raise SystemExit("this tree has no behaviour.orientation_interval_s: use --intervals 0")
+    extra = {"orientation_interval_s": interval_s} if known else {}
     return Config().replace(behaviour={"horizons_s": list(BENCH_HORIZONS), **extra})
 
 

@@ -71,7 +71,7 @@ def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
 
 def test_the_orientation_interval_holds_the_orientation_between_updates(frames):
     model = PedestrianEnvironmentModel(Config().replace(behaviour={"orientation_interval_s": 0.3}))
-    every = PedestrianEnvironmentModel(Config())
+    every = PedestrianEnvironmentModel(Config().replace(behaviour={"orientation_interval_s": 0.0}))
     held: dict = {}
     for k, frame in enumerate(frames[:12]):  # 10 Hz: the grids are updated at frames 0, 3, 6 and 9
         peds, reference = model.update(frame).pedestrians, every.update(frame).pedestrians.behaviour

@@ -27,7 +27,8 @@ class BehaviourConfig:
         long has passed since their last update, all tracks together; in between, each track
         reports those of its last update (a track new since then: ``unavailable``) and the next
         update predicts its grid over the whole gap. 0 updates them every frame; raising it
-        costs less per frame and reacts later (by at most this long).
+        costs less per frame and reacts later (by at most this long). The default, 0.3 s (every
+        third frame at 10 Hz), keeps the cues' cost down (``benchmarks/behaviour_cost.py``).
     person_height_m: the body height the expected shoulder and hip widths are scaled from.
     keypoint_pixel_std: pixel noise of one keypoint; turns the shoulder and hip widths' pixel
         noise into the spread of their width ratios.
@@ -71,7 +72,7 @@ class BehaviourConfig:
 
     enabled: bool = flag(False)
     orientation_bins: int = count(72, 12, 360)
-    orientation_interval_s: float = number(0.0, 0.0, 1.0)
+    orientation_interval_s: float = number(0.3, 0.0, 1.0)
     person_height_m: float = number(1.72, 0.5, 2.5)
     keypoint_pixel_std: float = number(3.0, 0.01, 100.0)
     min_keypoint_confidence: float = number(0.3, 0.0, 0.99)
