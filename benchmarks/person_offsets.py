@@ -48,6 +48,8 @@ import numpy as np
 
 from pedenv.synthetic.detector_fit import Offsets
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def _project(P: np.ndarray, points: np.ndarray) -> np.ndarray:
     x = np.column_stack([points, np.ones(len(points))]) @ P.T
@@ -155,7 +157,7 @@ def ankle_heights(samples: Path, dets: dict) -> dict[str, list[float]]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--samples", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "samples" / "real")
+    parser.add_argument("--samples", type=Path, default=ROOT.parent / "shared" / "samples" / "real")
     parser.add_argument("--detections", type=Path, required=True, help="cache written by real_detections.py")
     parser.add_argument("--ankle-heights", action="store_true", required=True,
                         help="the lower ankle keypoint's height above the 3D truth's ground (module notes)")

@@ -187,7 +187,8 @@ class FusedConfig:
     [0, 1]; road_height_std_m [0, 2]; road_curvature_std_per_m [0, 0.1];
     ground_max_distance_m [1, 1000]; static_ground_max_relative_std (0, 1];
     static_ground_height_std_m [0, 1]; static_camera_tilt_std_deg [0, 10];
-    static_camera_height_std_m [0, 5]; ankle_keypoint_offset_m [-0.5, 0.5]; history_length 1..100; min_baseline_m [0, 100];
+    static_camera_height_std_m [0, 5]; ankle_keypoint_offset_m [-0.5, 0.5]; history_length 1..100;
+    min_baseline_m [0, 100];
     min_parallax_rad [0, 0.5]; pedestrian_speed_std_mps [0, 10]; outlier_sigma (0, 100];
     gate_probability (0, 1); lateral_std_m [0, 5]; stance_std_m [0, 2]; keypoint_span_scale
     [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].

@@ -93,7 +93,8 @@ def test_box_bottom_bounds_the_range():
 
 
 def test_static_ground_variance_adds_the_calibrations_error():
-    config = FusedConfig(static_ground_height_std_m=0.02, static_camera_tilt_std_deg=0.2, static_camera_height_std_m=0.04)
+    config = FusedConfig(static_ground_height_std_m=0.02, static_camera_tilt_std_deg=0.2,
+                         static_camera_height_std_m=0.04)
     # 0.02^2 + 0.04^2 = 0.002 m^2, plus (0.2 deg in rad * r)^2: 0.0034907^2 * 100 = 0.0012185 at 10 m
     np.testing.assert_allclose(static_ground_variance(np.array([0.0, 10.0, 50.0]), config),
                                [0.002, 0.0032185, 0.0324617], rtol=1e-4)

@@ -112,7 +112,8 @@ def ankle_height(config: FusedConfig) -> float:
     """Metres above the ground of a standing person's ankle keypoint: the anatomical ankle
     (:data:`~pedenv.localization.fused.height.KEYPOINT_HEIGHT_FRACTION` of
     ``person_height_mean_m``) plus the pose source's ``ankle_keypoint_offset_m``."""
-    return float(KEYPOINT_HEIGHT_FRACTION[ANKLE_KEYPOINTS[0]]) * config.person_height_mean_m + config.ankle_keypoint_offset_m
+    anatomical = float(KEYPOINT_HEIGHT_FRACTION[ANKLE_KEYPOINTS[0]]) * config.person_height_mean_m
+    return anatomical + config.ankle_keypoint_offset_m
 
 
 def static_ground_variance(ranges: np.ndarray, config: FusedConfig) -> np.ndarray:
