@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -93,13 +94,21 @@ def _clip(value: float, limit: float) -> float:
 
 
 def _trend(times: list[float], values: list[tuple[float, float]]) -> np.ndarray:
-    """(3, 2) coefficients ``c0 + c1 t + c2 t^2`` of the least-squares polynomial through
-    ``values`` (P, 2) at ``times`` (P,) s (t = 0: now): degree 2 with 3 or more points, 1 with 2, 0 with 1."""
+    """(3, 2) coefficients ``c0 + c1 t + c2 t^2`` of the least-squares polynomials through the two
+    columns of ``values`` (P, 2) at ``times`` (P,) s (t = 0: now): degree 2 with 3 or more points,
+    1 with 2, 0 with 1."""
+    return _fit_map(tuple(round(t, 6) for t in times)) @ np.asarray(values)
+
+
+@lru_cache(maxsize=32)
+def _fit_map(times: tuple[float, ...]) -> np.ndarray:
+    """(3, P): the least-squares map from values at ``times`` (P,) to the coefficients (rows of
+    degree 2 and above zero where there are too few points); the poses' times repeat frame to frame."""
     degree = min(len(times) - 1, 2)
-    design = np.vander(np.asarray(times), degree + 1, increasing=True)
-    coefficients = np.zeros((3, 2))
-    coefficients[:degree + 1] = np.linalg.lstsq(design, np.asarray(values), rcond=None)[0]
-    return coefficients
+    design = np.asarray(times)[:, None] ** np.arange(degree + 1.0)
+    out = np.zeros((3, len(times)))
+    out[: degree + 1] = np.linalg.pinv(design)
+    return out
 
 
 def _speed(a: tuple, b: tuple) -> float:
@@ -112,36 +121,31 @@ def _turn(a: tuple, b: tuple) -> float:
     return math.remainder(b[3] - a[3], 2.0 * math.pi) / (b[0] - a[0])
 
 
-def ramp(value: float, slope: float, limit: float, trend_s: float, times: np.ndarray
-         ) -> tuple[np.ndarray, np.ndarray]:
-    """A rate (the acceleration) that changes at ``slope`` per second for ``trend_s``
-    seconds, then holds, never beyond ``limit`` in size (nor beyond ``value``'s): its first and
-    second integrals (K,) from 0 to ``times`` (K,) s."""
+@lru_cache(maxsize=8)
+def _bases(times: tuple[float, ...], trend_s: float) -> np.ndarray:
+    """(4, K) at ``times`` (K,) s: ``t``, ``t^2 / 2``, and the first and second integrals of a rate
+    rising at 1 per second for ``trend_s`` seconds, then holding."""
     t = np.asarray(times, float)
-    first, second = value * t, 0.5 * value * t**2
-    if trend_s <= 0.0 or slope == 0.0:
-        return first, second
-    slope = (_clip(value + slope * trend_s, max(limit, abs(value))) - value) / trend_s
     r = np.minimum(t, trend_s)
     e = t - r
-    return (first + slope * (0.5 * r**2 + trend_s * e),
-            second + slope * (r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2))
+    return np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
 
 
 def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_acceleration: float = math.inf
               ) -> np.ndarray:
-    """Signed distance (K,) metres along the path after ``times`` (K,) s, increasing: ``v t`` plus
-    the acceleration's second integral, which changes at the jerk for ``trend_s`` seconds, then
-    holds (never beyond ``max_acceleration``); held once braking reaches a stop (the ego does not
-    reverse by braking)."""
-    t = np.asarray(times, float)
-    v = motion.speed
-    gain, s = ramp(motion.acceleration, motion.jerk, max_acceleration, trend_s, t)
-    s = s + v * t
-    if abs(v) > 1e-9:
-        sign = math.copysign(1.0, v)
-    else:  # from standing: the way the speed goes
-        sign = math.copysign(1.0, float(gain[-1])) if len(t) and gain[-1] != 0.0 else 1.0
+    """Signed distance (K,) metres along the path after ``times`` (K,) s, increasing: ``v t + a t^2 / 2``
+    with the acceleration changing at the jerk for ``trend_s`` seconds, then holding (never beyond
+    ``max_acceleration``, nor beyond its size now); held once braking reaches a stop (the ego
+    does not reverse by braking)."""
+    v, a = motion.speed, motion.acceleration
+    if trend_s > 0.0 and motion.jerk != 0.0:
+        jerk = (_clip(a + motion.jerk * trend_s, max(max_acceleration, abs(a))) - a) / trend_s
+    else:
+        trend_s, jerk = 0.0, 0.0
+    b = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
+    s = v * b[0] + a * b[1] + jerk * b[3]
+    gain = a * b[0, -1] + jerk * b[2, -1]  # the speed's change by the end
+    sign = math.copysign(1.0, v if abs(v) > 1e-9 else (gain or 1.0))  # standing: the way the speed goes
     return sign * np.maximum.accumulate(sign * s)  # past a stop: held
 
 
