@@ -17,7 +17,8 @@ measurements up to now:
 - ``WLS W s``: a weighted least-squares line through the last W seconds of measurements;
 - ``floor W s``: the Cramer-Rao bound of any unbiased estimate from the last W seconds
   ("track": all of it) for a walker at constant velocity, were the noise white with the
-  covariances ``r`` pedenv reports: the expected ``|2 s * error|`` (200 draws per row).
+  covariances ``r`` pedenv reports: the expected ``|2 s * error|`` (200 draws per row; rows with
+  a single measurement in the window have none and are left out).
 """
 
 from __future__ import annotations
@@ -96,37 +97,54 @@ def refiltered(rows: list, acceleration_std: float, gate: float = 25.0) -> list[
     return out
 
 
-def _normal(rows: list, i: int, window_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Normal matrix (4, 4) and vector (4,) of the line ``[x, vx, y, vy]`` at row i's time through
-    the measurements of the last ``window_s`` seconds."""
-    A, b, t = np.zeros((4, 4)), np.zeros(4), rows[i][0]
-    for th, z, r, *_ in rows[: i + 1]:
-        if t - th <= window_s + 1e-6 and np.isfinite(z).all():
-            H = np.array([[1.0, th - t, 0.0, 0.0], [0.0, 0.0, 1.0, th - t]])
-            Ht_w = H.T @ np.linalg.inv(r)
-            A, b = A + Ht_w @ H, b + Ht_w @ z
-    return A, b
+class Normals:
+    """The normal equations of the line ``[x, vx, y, vy]`` through a track's measurements over any
+    window, from prefix sums of ``W = r^-1``, ``W t``, ``W t^2`` and ``W z``, ``t W z`` (O(1) each)."""
+
+    def __init__(self, rows: list) -> None:
+        self.t = np.array([row[0] for row in rows])
+        ok = np.array([np.isfinite(row[1]).all() and np.isfinite(row[2]).all() for row in rows])
+        w = np.array([np.linalg.inv(row[2]) if k else np.zeros((2, 2)) for row, k in zip(rows, ok)])
+        wz = np.einsum("nij,nj->ni", w, np.array([np.where(k, row[1], 0.0) for row, k in zip(rows, ok)]))
+        t = self.t[:, None, None]
+        self.w = [np.concatenate([np.zeros((1, 2, 2)), np.cumsum(w * t**k, axis=0)]) for k in range(3)]
+        self.wz = [np.concatenate([np.zeros((1, 2)), np.cumsum(wz * self.t[:, None] ** k, axis=0)]) for k in range(2)]
+        self.count = np.concatenate([[0], np.cumsum(ok)])
+
+    def at(self, i: int, window_s: float) -> tuple[np.ndarray, np.ndarray, int]:
+        """Normal matrix (4, 4), vector (4,) at row i's time, and the number of measurements, over
+        the last ``window_s`` seconds."""
+        t = self.t[i]
+        j = int(np.searchsorted(self.t, t - window_s - 1e-6))
+        s0, s1, s2 = (m[i + 1] - m[j] for m in self.w)
+        z0, z1 = (m[i + 1] - m[j] for m in self.wz)
+        m1, m2 = s1 - t * s0, s2 - 2.0 * t * s1 + t * t * s0  # the moments in (th - t)
+        A, b = np.zeros((4, 4)), np.zeros(4)
+        p, v = [0, 2], [1, 3]
+        A[np.ix_(p, p)], A[np.ix_(p, v)], A[np.ix_(v, p)], A[np.ix_(v, v)] = s0, m1, m1, m2
+        b[p], b[v] = z0, z1 - t * z0
+        return A, b, int(self.count[i + 1] - self.count[j])
 
 
 def least_squares(rows: list, window_s: float) -> list[np.ndarray]:
     """The velocity (2,) of the weighted line through each row's last ``window_s`` seconds (the
     filter's where fewer than 3 measurements span 0.25 s)."""
-    out = []
+    normals, out = Normals(rows), []
     for i, row in enumerate(rows):
-        span = [th for th, z, *_ in rows[: i + 1] if row[0] - th <= window_s + 1e-6 and np.isfinite(z).all()]
-        if len(span) < 3 or span[-1] - span[0] < 0.25:
-            out.append(row[3])
-            continue
-        A, b = _normal(rows, i, window_s)
-        out.append(np.linalg.solve(A, b)[1::2])
+        A, b, n = normals.at(i, window_s)
+        first = normals.t[int(np.searchsorted(normals.t, row[0] - window_s - 1e-6))]
+        out.append(np.linalg.solve(A, b)[1::2] if n >= 3 and row[0] - first >= 0.25 else row[3])
     return out
 
 
 def floor(rows: list, window_s: float, rng: np.random.Generator) -> list[float]:
     """Per row: the expected ``|2 s * velocity error|`` (m) at the Cramer-Rao bound (white noise ``r``)."""
-    out = []
+    normals, out = Normals(rows), []
     for i in range(len(rows)):
-        A = _normal(rows, i, window_s)[0]
+        A, _, n = normals.at(i, window_s)
+        if n < 2:  # one measurement: no velocity, no bound
+            out.append(np.nan)
+            continue
         try:
             cov = 4.0 * np.linalg.inv(A)[np.ix_([1, 3], [1, 3])]
             draws = rng.standard_normal((200, 2)) @ np.linalg.cholesky(cov + 1e-12 * np.eye(2)).T
