@@ -5,6 +5,7 @@ conflict events, motion state and cost on the synthetic scenes. Prints the table
         --out /tmp/det-far.npz
     PYTHONPATH=src python benchmarks/behaviour.py --detections /tmp/det-far.npz
     PYTHONPATH=src python benchmarks/behaviour.py --skip-real --scenes red-light-crossing
+    PYTHONPATH=src python benchmarks/behaviour.py --skip-real --seed 1       # other walkers and timings
 """
 
 from __future__ import annotations
