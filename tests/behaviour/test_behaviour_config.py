@@ -26,6 +26,8 @@ def test_on_in_fused_off_in_paper_and_round_trips():
     ("walk_exit_mps", 0.9, "walk_exit_mps < walk_enter_mps"),
     ("conflict_step_s", 0.9, "behaviour.conflict_step_s"),
     ("max_ego_gap_s", float("nan"), "behaviour.max_ego_gap_s"),
+    ("ego_trend_s", -0.5, "behaviour.ego_trend_s"),
+    ("max_ego_jerk_mps3", 100.0, "behaviour.max_ego_jerk_mps3"),
 ])
 def test_bad_values_name_the_field(field, value, message):
     kwargs = {field: value}

@@ -59,6 +59,9 @@ class BehaviourConfig:
     max_yaw_rate_radps: a fitted ego yaw rate is clipped to this (a spike is not followed).
     max_ego_acceleration_mps2: the ego's fitted acceleration (or braking) is clipped to this;
         0 predicts at constant speed.
+    ego_trend_s: for this long into the prediction the ego's acceleration changes at its fitted
+        jerk (a start or a stop still building up), then holds; 0 predicts at the acceleration now.
+    max_ego_jerk_mps3: the fitted jerk is clipped to this (a noisy pose is not followed far).
     ego_speed_std_mps, ego_yaw_rate_std_radps: the spread of the ego's speed and yaw rate over
         the horizon (the driver may brake or steer); with no motion known, 5 times as much.
     corridor_half_width_m: half the width of the corridor around the ego's path (half the
@@ -94,6 +97,8 @@ class BehaviourConfig:
     max_ego_gap_s: float = number(1.0, 0.05, 30.0)
     max_yaw_rate_radps: float = number(1.0, 0.01, 5.0)
     max_ego_acceleration_mps2: float = number(4.0, 0.0, 15.0)
+    ego_trend_s: float = number(1.0, 0.0, 5.0)
+    max_ego_jerk_mps3: float = number(2.0, 0.0, 50.0)
     ego_speed_std_mps: float = number(0.5, 0.0, 10.0)
     ego_yaw_rate_std_radps: float = number(0.05, 0.0, 2.0)
     corridor_half_width_m: float = number(1.5, 0.1, 10.0)

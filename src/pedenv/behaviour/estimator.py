@@ -129,7 +129,8 @@ class BehaviourEstimator:
                               and np.abs(P).max() < STATE_LIMIT[1]):  # False for NaN
             x, P = _usable_states(peds, x, P, started)
         self.ego.add(frame.timestamp, frame.ego)
-        path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times)
+        path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times, self.config.ego_trend_s,
+                                self.config.max_ego_acceleration_mps2)
         self.store.keep(live_ids)
         if len(peds) == 0:
             beh = dataclasses.replace(Behaviour.empty(self.horizons), conflict_horizon=float(self.conflict_times[-1]),
