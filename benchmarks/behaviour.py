@@ -5,6 +5,7 @@ conflict events, motion state and cost on the synthetic scenes. Prints the table
         --out /tmp/det-far.npz
     PYTHONPATH=src python benchmarks/behaviour.py --detections /tmp/det-far.npz
     PYTHONPATH=src python benchmarks/behaviour.py --skip-real --scenes red-light-crossing
+    PYTHONPATH=src python benchmarks/behaviour.py --skip-real --seed 1       # other walkers and timings
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--skip-real", action="store_true")
     parser.add_argument("--skip-synthetic", action="store_true")
     parser.add_argument("--scenes", default="", help="comma-separated synthetic scenes (default: all)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scenes")
     parser.add_argument("--profile", default=None, help="detector-model profile (default: its default)")
     parser.add_argument("--duration", type=float, default=None, help="seconds per scene (default: each scene's own)")
     parser.add_argument("--terrain", action="store_true", help="rolling terrain instead of flat ground")
@@ -40,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
         print_real(real_orientation(args.samples, args.detections, Config()))
     if not args.skip_synthetic:
         names = [n for n in args.scenes.split(",") if n] or None
-        rows, timing = synthetic_behaviour(0, args.profile, names, args.duration, args.terrain)
+        rows, timing = synthetic_behaviour(args.seed, args.profile, names, args.duration, args.terrain)
         print_synthetic(rows, timing)
     return 0
 

@@ -1,81 +1,122 @@
-"""CPU time of the behaviour cues alone, per frame: the synthetic scenes run once through the model
-(``fused`` preset, as ``benchmarks/behaviour.py``) while every call of the behaviour estimator is
-recorded; the recorded calls are then replayed through fresh estimators ``--repeat`` times and the
-best process time (``time.process_time``, less disturbed by other jobs than the wall clock) is
-printed, with the wall time of ``model.update`` in the first run for scale. Compare two trees by
-running this file with each on ``PYTHONPATH``, alternating.
+"""The behaviour cues' cost inside ``model.update``, per frame, for several ``orientation_interval_s``
+in one run: the synthetic scenes (seed 0, default detector model, ``fused`` preset, the predicted
+path sampled as ``benchmarks/behaviour.py`` does) run through a fresh model per setting, the
+settings taking turns scene by scene and round by round so that the shared machine's load falls
+on all alike. For each setting the best round per scene is kept (the least disturbed), summed:
+the wall time of ``model.update`` and, inside it, the behaviour estimator's own clock, and their
+ratio (the cues' share of the rest of ``update``); of the cues, the clocks of the orientation
+(``BehaviourEstimator._orient``, where the tree has it) and of the ego's path and the conflict
+(``predict_ego_path``, ``conflict_of``). Detections are drawn before timing.
 
-    PYTHONPATH=src python benchmarks/behaviour_cost.py
-    PYTHONPATH=/tmp/beh-before/src python benchmarks/behaviour_cost.py --scenes red-light-crossing
+    PYTHONPATH=src python benchmarks/behaviour_cost.py --intervals 0,0.3
+    PYTHONPATH=/tmp/beh-before/src python benchmarks/behaviour_cost.py --intervals 0   # a tree without the field
 """
 
 from __future__ import annotations
 
 import argparse
-import copy
 import dataclasses
 import os
 import time
 
 from behaviour_synthetic import BENCH_HORIZONS
 
-from pedenv.behaviour.estimator import BehaviourEstimator
+import pedenv.behaviour.estimator as estimator
+from pedenv.behaviour.config import BehaviourConfig
 from pedenv.config import Config
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.synthetic import SCENARIOS, generate_scenes
 from pedenv.synthetic.detector import DetectorModel
 
 
-def record(names: list[str], seed: int = 0) -> tuple[list[list[tuple]], float, int]:
-    """Per scene the behaviour estimator's calls (deep copies of their arguments), the wall time
-    of ``model.update`` over all frames (s) and the number of frames."""
-    config = Config().replace(behaviour={"horizons_s": list(BENCH_HORIZONS)})
-    scenes, wall, frames = [], 0.0, 0
-    for scene in generate_scenes(seed, names):
-        model, detector, calls = PedestrianEnvironmentModel(config), DetectorModel(seed), []
-        estimator = model.behaviour
-        assert estimator is not None, "the fused preset computes the behaviour cues"
-        inner = estimator.update
+def config_of(interval_s: float) -> Config:
+    """The benchmark's configuration with ``orientation_interval_s`` (a tree from before the field
+    runs with 0: every frame)."""
+    known = "orientation_interval_s" in BehaviourConfig.__dataclass_fields__
+    if interval_s and not known:
+        raise SystemExit("this tree has no behaviour.orientation_interval_s: use --intervals 0")
+    extra = {"orientation_interval_s": interval_s} if known else {}
+    return Config().replace(behaviour={"horizons_s": list(BENCH_HORIZONS), **extra})
 
-        def recording(*args, inner=inner, calls=calls):
-            calls.append(copy.deepcopy(args))
-            return inner(*args)
 
-        estimator.update = recording  # type: ignore[method-assign]
-        for frame in scene.frames:
-            frame = dataclasses.replace(frame, detections=detector(frame))
+#: Seconds spent in the parts of the cues timed apart (see :func:`install_clocks`).
+CLOCKS = {"orientation": 0.0, "conflict": 0.0}
+
+
+def install_clocks() -> None:
+    """Time the estimator's orientation step and its calls of the ego path and the conflict."""
+    def timed(fn, key):
+        def run(*args, **kwargs):
             start = time.perf_counter()
-            model.update(frame)
-            wall += time.perf_counter() - start
-        scenes.append(calls)
-        frames += len(scene.frames)
-    return scenes, wall, frames
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                CLOCKS[key] += time.perf_counter() - start
+        return run
+
+    estimator.conflict_of = timed(estimator.conflict_of, "conflict")
+    estimator.predict_ego_path = timed(estimator.predict_ego_path, "conflict")
+    if hasattr(estimator.BehaviourEstimator, "_orient"):
+        estimator.BehaviourEstimator._orient = timed(estimator.BehaviourEstimator._orient, "orientation")
+    else:
+        CLOCKS["orientation"] = float("nan")
 
 
-def replay(scenes: list[list[tuple]], config: Config) -> float:
-    """Process time (s) of the behaviour cues over the recorded calls, fresh estimators per scene."""
-    start = time.process_time()
-    for calls in scenes:
-        estimator = BehaviourEstimator(config.behaviour, config.kalman.acceleration_std_mps2)
-        for args in calls:
-            estimator.update(*args)
-    return time.process_time() - start
+def time_scene(frames: list, config: Config) -> list[float]:
+    """Wall time (s) of ``model.update`` over the frames, the behaviour cues' part of it, of that the
+    orientation's and the ego path's and conflict's (s), and the number of pedestrians reported,
+    with a fresh model."""
+    model = PedestrianEnvironmentModel(config)
+    wall, people, before = 0.0, 0, dict(CLOCKS)
+    for frame in frames:
+        start = time.perf_counter()
+        state = model.update(frame)
+        wall += time.perf_counter() - start
+        people += len(state.pedestrians)
+    assert model.behaviour is not None, "the fused preset computes the behaviour cues"
+    return [wall, model.behaviour.elapsed_s, CLOCKS["orientation"] - before["orientation"],
+            CLOCKS["conflict"] - before["conflict"], people]
+
+
+def measure(names: list[str], intervals: list[float], rounds: int) -> dict[float, list[float]]:
+    """Per interval the sums over the scenes (each scene's fastest round) of :func:`time_scene`'s
+    figures, and the number of frames."""
+    configs = {i: config_of(i) for i in intervals}
+    totals = {i: [0.0] * 6 for i in intervals}
+    for scene in generate_scenes(0, names):
+        detector = DetectorModel(0)
+        frames = [dataclasses.replace(f, detections=detector(f)) for f in scene.frames]
+        best: dict[float, list[float]] = {}
+        for _ in range(rounds):
+            for i in intervals:
+                run = time_scene(frames, configs[i])
+                if i not in best or run[0] < best[i][0]:
+                    best[i] = run
+        for i in intervals:
+            totals[i] = [a + b for a, b in zip(totals[i], best[i] + [len(frames)])]
+    return totals
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", default="", help="comma-separated synthetic scenes (default: all)")
-    parser.add_argument("--repeat", type=int, default=3, help="replays; the best is printed")
+    parser.add_argument("--intervals", default="0", help="comma-separated orientation_interval_s values")
+    parser.add_argument("--rounds", type=int, default=3, help="runs per scene and setting; the fastest is kept")
     args = parser.parse_args(argv)
     names = [n for n in args.scenes.split(",") if n] or list(SCENARIOS)
-    scenes, wall, frames = record(names)
-    config = Config().replace(behaviour={"horizons_s": list(BENCH_HORIZONS)})
-    best = min(replay(scenes, config) for _ in range(max(args.repeat, 1)))
-    n_peds = sum(len(call[1]) for calls in scenes for call in calls)
-    print(f"load: {os.getloadavg()[0]:.2f} (1-minute average)")
-    print(f"{frames} frames, {n_peds / max(frames, 1):.1f} pedestrians per frame: behaviour cues "
-          f"{1e3 * best / max(frames, 1):.3f} ms CPU per frame (best of {args.repeat} replays); "
-          f"model.update {1e3 * wall / max(frames, 1):.2f} ms wall per frame in the recording run")
+    intervals = [float(v) for v in args.intervals.split(",")]
+    load = os.getloadavg()[0]
+    install_clocks()
+    totals = measure(names, intervals, max(args.rounds, 1))
+    print(f"load: {load:.2f} before, {os.getloadavg()[0]:.2f} after (1-minute average); times in ms per frame")
+    print("| orientation_interval_s | frames | pedestrians | update | behaviour | share of the rest | "
+          "orientation | ego path + conflict | behaviour less ego path + conflict, share |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for i, (update, extra, orient, conflict, people, frames) in totals.items():
+        rest = max(update - extra, 1e-12)
+        print(f"| {i:g} | {frames:.0f} | {people / frames:.1f} | {1e3 * update / frames:.2f} | "
+              f"{1e3 * extra / frames:.3f} | {100 * extra / rest:.1f} % | {1e3 * orient / frames:.3f} | "
+              f"{1e3 * conflict / frames:.3f} | {100 * (extra - conflict) / rest:.1f} % |")
     return 0
 
 

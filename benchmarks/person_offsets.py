@@ -22,15 +22,33 @@ model's ``person_offset_u`` / ``person_offset_v`` are what the synthetic skeleto
 ``sqrt(real**2 - synthetic**2)``, converted from box heights to keypoint extents. The
 measuring and the fit live in :mod:`pedenv.synthetic.detector_fit` (the profile test reruns
 the synthetic side); ``fit_detector_model.py --person-offsets`` records everything.
+
+``--ankle-heights`` measures, in metres, how high the network's lower ankle keypoint (the one
+the ground cue cuts with the ground) sits above the ground under the person: the bottom of
+the annotated 3D box, in the camera frame (y down) at the box's depth ``z``,
+``y_bottom - (v_ankle - c_y) z / f_y``. Per person the median over their frames, then the
+median and quartiles across persons, for KITTI (tracking and object samples) and nuScenes
+apart; the ground cue's ``fused.ankle_keypoint_offset_m`` is the KITTI median minus the
+anatomical ankle height (0.046 x 1.72 m). The detections are the cache of
+``real_detections.py``::
+
+    PYTHONPATH=src python benchmarks/real_detections.py --mode far --min-score 0.25 \\
+        --only kitti,nuscenes --out /tmp/det-far.npz
+    PYTHONPATH=src python benchmarks/person_offsets.py --detections /tmp/det-far.npz --ankle-heights
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from pedenv.synthetic.detector_fit import Offsets
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _project(P: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -74,3 +92,96 @@ def real_offsets(samples: Path, dets: dict) -> tuple[Offsets, Offsets]:
             add(boxes2d, dets[f"mot17/{folder.name}/{f}"], gt.boxes, uv, gt.visibility >= 0.8,
                 lambda g, n=folder.name, ids=gt.ids: ("mot17", n, int(ids[g])))
     return truth3d, boxes2d
+
+
+#: A matched person counts when both ankle keypoints are at least this confident (the
+#: ground cue needs a stance ankle it can trust; a guessed ankle would measure the guess).
+ANKLE_CONFIDENCE = 0.5
+
+
+def lower_ankle_heights(det: dict, truth_boxes: np.ndarray, bottoms_cam: np.ndarray, K: np.ndarray,
+                        counted: np.ndarray) -> dict[int, float]:
+    """Truth index -> metres the matched detection's lower ankle keypoint lies above the truth's
+    3D box bottom. det: one image's cached detections; truth_boxes (M, 4) px; bottoms_cam
+    (M, 3) the boxes' bottom centres, camera frame (y down), metres; K (3, 3) px; counted (M,) bool."""
+    from pedenv.boxes import greedy_match, iou_matrix
+    from pedenv.synthetic.detector_fit import ANKLES, SCORE
+
+    keep = np.asarray(det["scores"]) > SCORE
+    kp, cf = np.asarray(det["keypoints"])[keep], np.asarray(det["confidences"])[keep]
+    truth = np.asarray(truth_boxes, float).reshape(-1, 4)
+    out = {}
+    for d, g in greedy_match(iou_matrix(np.asarray(det["boxes"])[keep], truth), np.asarray(det["scores"])[keep], 0.5):
+        if counted[g] and (cf[d, ANKLES] >= ANKLE_CONFIDENCE).all():
+            v = float(kp[d, ANKLES, 1].max())  # the lower ankle: the larger image row
+            z = float(bottoms_cam[g, 2])
+            out[int(g)] = float(bottoms_cam[g, 1] - (v - K[1, 2]) * z / K[1, 1])
+    return out
+
+
+def ankle_heights(samples: Path, dets: dict) -> dict[str, list[float]]:
+    """Per dataset (``kitti``, ``nuscenes``) each person's median lower-ankle height above the
+    ground under them, metres (module notes), over the cached detections ``dets``."""
+    from pedenv.datasets import kitti_files as kitti
+    from pedenv.datasets import nuscenes_cameras
+
+    per: dict[tuple, list[float]] = {}
+    training = samples / "kitti" / "tracking_mini" / "training"
+    for name in kitti.tracking_sequence_names(training):
+        seq = kitti.read_tracking_sequence(training, name)
+        for f in seq.frames:
+            ped = seq.labels.in_frame(f).of_type("Pedestrian")
+            found = lower_ankle_heights(dets[f"kitti/{name}/{f}"], ped.boxes, ped.locations, seq.calib.P2[:, :3],
+                                        ped.occluded <= 1)
+            for g, h in found.items():
+                per.setdefault(("kitti", name, int(ped.track_id[g])), []).append(h)
+    obj = samples / "kitti" / "object_samples" / "training"
+    for p in sorted((obj / "image_2").glob("*.png")):
+        ped = kitti.read_labels(obj / "label_2" / f"{p.stem}.txt").of_type("Pedestrian")
+        calib = kitti.read_calib(obj / "calib" / f"{p.stem}.txt")
+        for g, h in lower_ankle_heights(dets[f"kitti-object/{p.stem}"], ped.boxes, ped.locations, calib.P2[:, :3],
+                                        ped.occluded <= 1).items():
+            per.setdefault(("kitti", p.stem, g), []).append(h)
+    nuscenes = samples / "nuscenes-0061"  # when the cache holds its cameras
+    for cam in nuscenes_cameras.read_cameras(nuscenes) if any(k.startswith("nuscenes/") for k in dets) else []:
+        ped = cam.pedestrians
+        bottoms = ped.centers_cam + np.column_stack([np.zeros(len(ped)), ped.sizes_wlh[:, 2] / 2, np.zeros(len(ped))])
+        for g, h in lower_ankle_heights(dets[f"nuscenes/{cam.camera}"], ped.boxes, bottoms, cam.K,
+                                        np.ones(len(ped), bool)).items():
+            per.setdefault(("nuscenes", cam.camera, g), []).append(h)
+    out: dict[str, list[float]] = {"kitti": [], "nuscenes": []}
+    for key, heights in per.items():
+        out[key[0]].append(float(np.median(heights)))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=Path, default=ROOT.parent / "shared" / "samples" / "real")
+    parser.add_argument("--detections", type=Path, required=True, help="cache written by real_detections.py")
+    parser.add_argument("--ankle-heights", action="store_true", required=True,
+                        help="the lower ankle keypoint's height above the 3D truth's ground (module notes)")
+    args = parser.parse_args(argv)
+    from fit_detector_model import load
+
+    from pedenv.localization.fused.height import ANKLE_FRACTION
+
+    dets = load(args.detections)
+    dets.pop("_meta", None)
+    found = ankle_heights(args.samples, dets)
+    found["kitti+nuscenes"] = found["kitti"] + found["nuscenes"]
+    anatomical = ANKLE_FRACTION * 1.72
+    summary = {}
+    for name, heights in found.items():
+        h = np.array(heights)
+        if len(h):
+            q1, med, q3 = np.percentile(h, [25, 50, 75])
+            summary[name] = {"persons": len(h), "median_m": round(float(med), 4),
+                             "iqr_m": [round(float(q1), 4), round(float(q3), 4)],
+                             "offset_over_anatomical_m": round(float(med - anatomical), 4)}
+    print(json.dumps(summary, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -105,9 +105,31 @@ class FusedConfig:
         ray grazes the ground, the linearized cut no longer holds and the height prior is
         sharper. Raising it uses the ground cue farther out.
     static_ground_height_std_m: the ground's unevenness under a pedestrian against a static
-        camera's calibrated plane (paving, gutters), metres, per person; a static camera has
-        no pitch or height noise, so this replaces ``road_height_std_m`` and
-        ``road_curvature_std_per_m``. Raising it widens its ground cue along the ray.
+        camera's calibrated plane (paving, gutters), metres, per person; a static camera does
+        not pitch or bounce, so this and its calibration's own error (the next two) replace
+        ``road_height_std_m`` and ``road_curvature_std_per_m``. Raising it widens its ground
+        cue along the ray.
+    static_camera_tilt_std_deg: how far a static camera's calibrated pitch and roll (each)
+        may be off, degrees, per camera. An estimated calibration tilts the ground it cuts by
+        ``d`` times its error at ``d`` metres, so the foot point's range errs by about
+        ``r^2 / h`` times it (range ``r``, camera height ``h``): 0.2 deg moves a person 25 m
+        from a camera 1.73 m up by 1.3 m. 0.2: a hand fit of a ground grid, as UCMCTrack's
+        MOT17 cameras were made (its tool sets the angles in 0.1 deg steps and draws dots
+        0.5 m apart out to 10 m, whose farthest rows lie 0.5 deg apart from 1.73 m: a misfit
+        under half a row is hard to see). A judgment of that method, not fitted to any
+        truth. 0 for an exactly known camera (the synthetic scenes). Raising it makes the
+        ground cue count less far from the camera, where the height cue takes over.
+    static_camera_height_std_m: how far a static camera's calibrated height above the ground
+        may be off, metres (every ground range scales with it). 0.04: one step of that tool's
+        height control. 0 for an exactly known camera. Raising it widens the ground cue along the ray.
+    ankle_keypoint_offset_m: how far the pose source's ankle keypoint sits above the
+        anatomical ankle (0.046 of ``person_height_mean_m``, 0.079 m above the ground),
+        metres: the ground cue cuts the ankle's ray with the ground raised by both. 0.039:
+        the real YOLO11n-pose network's lower ankle lies 0.118 m above the 3D boxes' bottom
+        on KITTI (median of 8 persons, IQR 0.107-0.139;
+        ``benchmarks/person_offsets.py --ankle-heights``). The synthetic skeletons put it at
+        the anatomical height (0 for them). Raising it moves ground-cue estimates nearer,
+        by about ``r * offset / h``.
     history_length: past observations of a track kept for triangulation. Raising it
         gives more baseline when driving slowly, at more cost per pedestrian; older rays
         add little (a walker's drift grows with their age): on the built-in terrain
@@ -164,7 +186,9 @@ class FusedConfig:
     (0, 0.5]; keypoint_pixel_std (0, 100]; min_keypoint_confidence [0, 1); ankle_height_std_m
     [0, 1]; road_height_std_m [0, 2]; road_curvature_std_per_m [0, 0.1];
     ground_max_distance_m [1, 1000]; static_ground_max_relative_std (0, 1];
-    static_ground_height_std_m [0, 1]; history_length 1..100; min_baseline_m [0, 100];
+    static_ground_height_std_m [0, 1]; static_camera_tilt_std_deg [0, 10];
+    static_camera_height_std_m [0, 5]; ankle_keypoint_offset_m [-0.5, 0.5]; history_length 1..100;
+    min_baseline_m [0, 100];
     min_parallax_rad [0, 0.5]; pedestrian_speed_std_mps [0, 10]; outlier_sigma (0, 100];
     gate_probability (0, 1); lateral_std_m [0, 5]; stance_std_m [0, 2]; keypoint_span_scale
     [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].
@@ -181,6 +205,9 @@ class FusedConfig:
     ground_max_distance_m: float = number(20.0, 1.0, 1000.0)
     static_ground_max_relative_std: float = number(0.2, 0.0, 1.0, low_open=True)
     static_ground_height_std_m: float = number(0.02, 0.0, 1.0)
+    static_camera_tilt_std_deg: float = number(0.2, 0.0, 10.0)
+    static_camera_height_std_m: float = number(0.04, 0.0, 5.0)
+    ankle_keypoint_offset_m: float = number(0.039, -0.5, 0.5)
     history_length: int = count(6, 1, MAX_HISTORY_LENGTH)
     min_baseline_m: float = number(0.3, 0.0, 100.0)
     min_parallax_rad: float = number(0.01, 0.0, 0.5)

@@ -17,6 +17,8 @@ def test_on_in_fused_off_in_paper_and_round_trips():
 @pytest.mark.parametrize("field, value, message", [
     ("enabled", "yes", "behaviour.enabled"),
     ("orientation_bins", 5, "behaviour.orientation_bins"),
+    ("orientation_interval_s", -0.1, "behaviour.orientation_interval_s"),
+    ("orientation_interval_s", float("inf"), "behaviour.orientation_interval_s"),
     ("width_ratio_std", -1.0, "behaviour.width_ratio_std"),
     ("conflict_probability", 1.0, "behaviour.conflict_probability"),
     ("horizons_s", (2.0, 1.0), "behaviour.horizons_s"),
@@ -24,6 +26,8 @@ def test_on_in_fused_off_in_paper_and_round_trips():
     ("walk_exit_mps", 0.9, "walk_exit_mps < walk_enter_mps"),
     ("conflict_step_s", 0.9, "behaviour.conflict_step_s"),
     ("max_ego_gap_s", float("nan"), "behaviour.max_ego_gap_s"),
+    ("ego_trend_s", -0.5, "behaviour.ego_trend_s"),
+    ("max_ego_jerk_mps3", 100.0, "behaviour.max_ego_jerk_mps3"),
 ])
 def test_bad_values_name_the_field(field, value, message):
     kwargs = {field: value}

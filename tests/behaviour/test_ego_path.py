@@ -6,6 +6,7 @@ import pytest
 from pedenv.behaviour.config import BehaviourConfig
 from pedenv.behaviour.ego_path import EgoHistory, predict_ego_path
 from pedenv.records import EgoPose
+from pedenv.synthetic.ego_motion import integrate_track, smooth_step
 
 CFG = BehaviourConfig(enabled=True)
 TIMES = np.linspace(0.0, 2.0, 21)
@@ -63,3 +64,37 @@ def test_an_accelerating_ego_reaches_farther_and_a_braking_one_stops():
     path = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), m, TIMES)
     assert m.acceleration == pytest.approx(-4.0)  # clipped to max_ego_acceleration_mps2
     assert path.length == pytest.approx(m.speed**2 / 8.0, abs=0.05) and path.direction == 1.0
+
+
+def _scripted(speed, yaw_rate, now):
+    """The ego of a scenario profile (:func:`pedenv.synthetic.ego_motion.integrate_track`): its
+    motion fitted from the poses up to ``now`` (s, 10 Hz), its predicted path and its true path
+    (21 samples, 0 .. 2 s ahead)."""
+    track = integrate_track(np.round(np.arange(0.0, now + 2.0 + 1e-9, 0.1), 6), speed, yaw_rate)
+    h, k = EgoHistory(CFG), int(round(now / 0.1))
+    for i in range(k + 1):
+        h.add(track.times[i], EgoPose.from_xy_yaw(*track.xy[i], track.yaw[i]))
+    m = h.motion()
+    path = predict_ego_path(EgoPose.from_xy_yaw(*track.xy[k], track.yaw[k]), m, TIMES, CFG.ego_trend_s,
+                            CFG.max_ego_acceleration_mps2)
+    return m, path, track.xy[k:k + 21]
+
+
+def test_an_ego_starting_from_standstill_is_followed_through_its_jerk():
+    # start-from-standstill's profile, 0.5 s into the start: 2.69 m covered in the next 2 s; the
+    # acceleration alone (0.55 m/s^2, as ego_trend_s = 0) reaches 1.38 m, the fit of main before 0.83 m
+    m, path, truth = _scripted(lambda t: 11.0 * smooth_step(t, 4.0, 7.0), lambda t: 0.0 * t, 4.5)
+    assert m.speed == pytest.approx(0.138, abs=0.005) and m.acceleration == pytest.approx(0.551, abs=0.01)
+    assert m.jerk == pytest.approx(1.10, abs=0.02)
+    assert path.length == pytest.approx(2.66, abs=0.03) and np.linalg.norm(path.xy[-1] - truth[-1]) < 0.05
+    steady = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), m, TIMES)  # no trend
+    assert steady.length == pytest.approx(1.38, abs=0.03)
+
+
+@pytest.mark.parametrize("now, rate, end_error", [(6.3, 0.235, 1.06), (6.4, 0.353, 0.04), (6.7, 0.327, 0.23)])
+def test_an_ego_starting_a_turn_is_followed_by_its_yaw_rate_now(now, rate, end_error):
+    # turn-intersection's onset (0.35 rad/s reached in 0.5 s from 6 s) at 5 m/s: the yaw rate
+    # fitted now; the 0.5 s mean of main before gave 0.05, 0.11, 0.30 rad/s (2.9, 2.4, 0.5 m at 2 s)
+    m, path, truth = _scripted(lambda t: 5.0 + 0.0 * t, lambda t: 0.35 * smooth_step(t, 6.0, 0.5), now)
+    assert m.yaw_rate == pytest.approx(rate, abs=0.005)
+    assert np.linalg.norm(path.xy[-1] - truth[-1]) == pytest.approx(end_error, abs=0.03)

@@ -66,3 +66,28 @@ def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
     b = peds.behaviour
     assert all(np.isfinite(np.asarray(getattr(b, f), float)).all() for f in b.__dataclass_fields__)
     assert np.allclose(b.predicted_positions[:, 0], state.pedestrians.positions[:, :2])  # standing where reported
+
+
+
+def test_the_orientation_interval_holds_the_orientation_between_updates(frames):
+    model = PedestrianEnvironmentModel(Config().replace(behaviour={"orientation_interval_s": 0.3}))
+    every = PedestrianEnvironmentModel(Config().replace(behaviour={"orientation_interval_s": 0.0}))
+    held: dict = {}
+    for k, frame in enumerate(frames[:12]):  # 10 Hz: the grids are updated at frames 0, 3, 6 and 9
+        peds, reference = model.update(frame).pedestrians, every.update(frame).pedestrians.behaviour
+        b = peds.behaviour
+        assert np.array_equal(b.predicted_positions, reference.predicted_positions)  # the rest: every frame
+        assert np.array_equal(b.motion_state, reference.motion_state)
+        assert all(np.isfinite(np.asarray(getattr(b, f), float)).all() for f in b.__dataclass_fields__)
+        now = {t: (b.yaw[i], b.yaw_std[i], b.facing_probability[i], b.head_facing_probability[i],
+                   b.orientation_availability[i]) for i, t in enumerate(peds.track_ids.tolist())}
+        if k == 0:
+            assert np.array_equal(b.yaw, reference.yaw) and np.array_equal(b.yaw_std, reference.yaw_std)
+        if k % 3 == 0:
+            held.update(now)
+            continue
+        for track, values in now.items():
+            if track in held:
+                assert values == held[track]  # as at its last update
+            else:
+                assert values[1] > 1.8 and values[4] == hf.UNAVAILABLE  # new since: nothing known yet

@@ -39,3 +39,11 @@ def test_probability_within_counts_the_cells_near_the_centre():
     p = _peaked([0.0], kappa=400.0)
     assert hf.probability_within(p, np.array([0.0]), np.radians(30))[0] > 0.99
     assert hf.probability_within(p, np.array([np.pi]), np.radians(30))[0] < 0.01
+
+
+def test_a_shared_time_step_takes_the_kernel_and_agrees_with_the_fourier_path():
+    p = np.vstack([_peaked([0.3]), _peaked([2.0, 2.0 + np.pi]), hf.uniform(1, 72)])
+    g = hf.grid(72)
+    shared = hf.spread(p, np.full(3, 0.1), np.radians(45), g)  # one dt: the circulant kernel
+    mixed = hf.spread(np.vstack([p, p[:1]]), np.array([0.1, 0.1, 0.1, 0.2]), np.radians(45), g)  # the FFT
+    assert np.abs(shared - mixed[:3]).max() < 1e-15 and np.allclose(shared.sum(axis=1), 1.0)

@@ -22,6 +22,13 @@ class BehaviourConfig:
     enabled: compute the cues (orientation, facing, motion state, predicted path, conflict).
     orientation_bins: cells of the grid filter on the circle (12..360; 72 = 5 degrees).
         More cells resolve the heading finer and cost more.
+    orientation_interval_s: the heading grids (skeleton cue, walking direction, filter, the
+        reported yaw, its spread and availability, body and head facing) are updated when this
+        long has passed since their last update, all tracks together; in between, each track
+        reports those of its last update (a track new since then: ``unavailable``) and the next
+        update predicts its grid over the whole gap. 0 updates them every frame; raising it
+        costs less per frame and reacts later (by at most this long). The default, 0.3 s (every
+        third frame at 10 Hz), keeps the cues' cost down (``benchmarks/behaviour_cost.py``).
     person_height_m: the body height the expected shoulder and hip widths are scaled from.
     keypoint_pixel_std: pixel noise of one keypoint; turns the shoulder and hip widths' pixel
         noise into the spread of their width ratios.
@@ -52,6 +59,9 @@ class BehaviourConfig:
     max_yaw_rate_radps: a fitted ego yaw rate is clipped to this (a spike is not followed).
     max_ego_acceleration_mps2: the ego's fitted acceleration (or braking) is clipped to this;
         0 predicts at constant speed.
+    ego_trend_s: for this long into the prediction the ego's acceleration changes at its fitted
+        jerk (a start or a stop still building up), then holds; 0 predicts at the acceleration now.
+    max_ego_jerk_mps3: the fitted jerk is clipped to this (a noisy pose is not followed far).
     ego_speed_std_mps, ego_yaw_rate_std_radps: the spread of the ego's speed and yaw rate over
         the horizon (the driver may brake or steer); with no motion known, 5 times as much.
     corridor_half_width_m: half the width of the corridor around the ego's path (half the
@@ -65,6 +75,7 @@ class BehaviourConfig:
 
     enabled: bool = flag(False)
     orientation_bins: int = count(72, 12, 360)
+    orientation_interval_s: float = number(0.3, 0.0, 1.0)
     person_height_m: float = number(1.72, 0.5, 2.5)
     keypoint_pixel_std: float = number(3.0, 0.01, 100.0)
     min_keypoint_confidence: float = number(0.3, 0.0, 0.99)
@@ -86,6 +97,8 @@ class BehaviourConfig:
     max_ego_gap_s: float = number(1.0, 0.05, 30.0)
     max_yaw_rate_radps: float = number(1.0, 0.01, 5.0)
     max_ego_acceleration_mps2: float = number(4.0, 0.0, 15.0)
+    ego_trend_s: float = number(1.0, 0.0, 5.0)
+    max_ego_jerk_mps3: float = number(2.0, 0.0, 50.0)
     ego_speed_std_mps: float = number(0.5, 0.0, 10.0)
     ego_yaw_rate_std_radps: float = number(0.05, 0.0, 2.0)
     corridor_half_width_m: float = number(1.5, 0.1, 10.0)

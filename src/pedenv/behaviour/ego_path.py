@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -21,7 +22,8 @@ UNKNOWN_MOTION_FACTOR = 5.0
 class EgoMotion:
     """The ego's motion now: speed (m/s, signed), yaw rate (rad/s), their standard deviations
     over the prediction, whether they were measured (False: unknown, taken as standing) and the
-    longitudinal acceleration (m/s^2, signed like the speed's axis)."""
+    longitudinal acceleration (m/s^2, signed like the speed's axis) and its rate of change (jerk,
+    m/s^3)."""
 
     speed: float
     yaw_rate: float
@@ -29,6 +31,7 @@ class EgoMotion:
     yaw_rate_std: float
     known: bool
     acceleration: float = 0.0
+    jerk: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -68,26 +71,44 @@ class EgoHistory:
             self.poses.pop(0)
 
     def motion(self) -> EgoMotion:
-        """Speed, yaw rate and acceleration from the window's poses: the speeds over its older and
-        newer half give the acceleration (clipped to ``max_ego_acceleration_mps2``); the speed is
-        the newer half's carried to now. A yaw rate beyond ``max_yaw_rate_radps`` (a spike) is
-        clipped and its spread widened by the excess."""
+        """Speed, acceleration and jerk, and the yaw rate now, from the window's poses: quadratic
+        fits (least squares, in time) of the speeds and yaw rates between consecutive poses,
+        evaluated now (a line with 3 poses, the mean with 2). The acceleration is clipped to
+        ``max_ego_acceleration_mps2``, the jerk to ``max_ego_jerk_mps3``; a yaw rate beyond
+        ``max_yaw_rate_radps`` (a spike) is clipped and its spread widened by the excess."""
         cfg, poses = self.config, self.poses
         if len(poses) < 2 or poses[-1][0] - poses[0][0] <= 1e-6:
             return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * cfg.ego_speed_std_mps,
                              UNKNOWN_MOTION_FACTOR * cfg.ego_yaw_rate_std_radps, False)
-        mid = len(poses) // 2
-        speed, rate = _speed(poses[0], poses[-1]), _turn(poses[0], poses[-1])
-        acceleration = 0.0
-        if len(poses) >= 3:
-            older, newer = _speed(poses[0], poses[mid]), _speed(poses[mid], poses[-1])
-            gap = 0.5 * (poses[-1][0] - poses[0][0])
-            acceleration = min(max((newer - older) / gap, -cfg.max_ego_acceleration_mps2),
-                               cfg.max_ego_acceleration_mps2)
-            speed = newer + acceleration * 0.5 * (poses[-1][0] - poses[mid][0])
-        clipped = min(max(rate, -cfg.max_yaw_rate_radps), cfg.max_yaw_rate_radps)
+        pairs = [(0.5 * (a[0] + b[0]) - poses[-1][0], _speed(a, b), _turn(a, b)) for a, b in zip(poses, poses[1:])]
+        fit = _trend([p[0] for p in pairs], [(p[1], p[2]) for p in pairs])  # (3, 2): value, slope, curvature
+        speed, rate = float(fit[0, 0]), float(fit[0, 1])
+        acceleration = _clip(float(fit[1, 0]), cfg.max_ego_acceleration_mps2)
+        clipped = _clip(rate, cfg.max_yaw_rate_radps)
         return EgoMotion(speed, clipped, cfg.ego_speed_std_mps, cfg.ego_yaw_rate_std_radps + abs(rate - clipped),
-                         True, acceleration)
+                         True, acceleration, _clip(2.0 * float(fit[2, 0]), cfg.max_ego_jerk_mps3))
+
+
+def _clip(value: float, limit: float) -> float:
+    return min(max(value, -limit), limit)
+
+
+def _trend(times: list[float], values: list[tuple[float, float]]) -> np.ndarray:
+    """(3, 2) coefficients ``c0 + c1 t + c2 t^2`` of the least-squares polynomials through the two
+    columns of ``values`` (P, 2) at ``times`` (P,) s (t = 0: now): degree 2 with 3 or more points,
+    1 with 2, 0 with 1."""
+    return _fit_map(tuple(round(t, 6) for t in times)) @ np.asarray(values)
+
+
+@lru_cache(maxsize=32)
+def _fit_map(times: tuple[float, ...]) -> np.ndarray:
+    """(3, P): the least-squares map from values at ``times`` (P,) to the coefficients (rows of
+    degree 2 and above zero where there are too few points); the poses' times repeat frame to frame."""
+    degree = min(len(times) - 1, 2)
+    design = np.asarray(times)[:, None] ** np.arange(degree + 1.0)
+    out = np.zeros((3, len(times)))
+    out[: degree + 1] = np.linalg.pinv(design)
+    return out
 
 
 def _speed(a: tuple, b: tuple) -> float:
@@ -100,21 +121,41 @@ def _turn(a: tuple, b: tuple) -> float:
     return math.remainder(b[3] - a[3], 2.0 * math.pi) / (b[0] - a[0])
 
 
-def travelled(motion: EgoMotion, times: np.ndarray) -> np.ndarray:
-    """Signed distance (K,) metres along the path after ``times`` (K,) s: ``v t + a t^2 / 2``,
-    held once braking reaches a stop (the ego does not reverse by braking)."""
-    v, a = motion.speed, motion.acceleration
+@lru_cache(maxsize=8)
+def _bases(times: tuple[float, ...], trend_s: float) -> np.ndarray:
+    """(4, K) at ``times`` (K,) s: ``t``, ``t^2 / 2``, and the first and second integrals of a rate
+    rising at 1 per second for ``trend_s`` seconds, then holding."""
     t = np.asarray(times, float)
-    if a * v < 0:  # braking: stop at -v / a
-        t = np.minimum(t, -v / a)
-    return v * t + 0.5 * a * t**2
+    r = np.minimum(t, trend_s)
+    e = t - r
+    return np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
 
 
-def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray) -> EgoPath:
-    """The path at ``times`` (K,) s ahead from the pose now: an arc of the curvature now (yaw rate
-    over speed), along which the ego covers :func:`travelled`."""
+def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_acceleration: float = math.inf
+              ) -> np.ndarray:
+    """Signed distance (K,) metres along the path after ``times`` (K,) s, increasing: ``v t + a t^2 / 2``
+    with the acceleration changing at the jerk for ``trend_s`` seconds, then holding (never beyond
+    ``max_acceleration``, nor beyond its size now); held once braking reaches a stop (the ego
+    does not reverse by braking)."""
+    v, a = motion.speed, motion.acceleration
+    if trend_s > 0.0 and motion.jerk != 0.0:
+        jerk = (_clip(a + motion.jerk * trend_s, max(max_acceleration, abs(a))) - a) / trend_s
+    else:
+        trend_s, jerk = 0.0, 0.0
+    b = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
+    s = v * b[0] + a * b[1] + jerk * b[3]
+    gain = a * b[0, -1] + jerk * b[2, -1]  # the speed's change by the end
+    sign = math.copysign(1.0, v if abs(v) > 1e-9 else (gain or 1.0))  # standing: the way the speed goes
+    return sign * np.maximum.accumulate(sign * s)  # past a stop: held
+
+
+def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0,
+                     max_acceleration: float = math.inf) -> EgoPath:
+    """The path at ``times`` (K,) s ahead (increasing, from 0) from the pose now: an arc of the
+    curvature now (yaw rate over speed), along which the ego covers :func:`travelled` (its
+    acceleration changing at the jerk for ``trend_s`` s, never beyond ``max_acceleration``)."""
     times = np.asarray(times, float)
-    s = travelled(motion, times)
+    s = travelled(motion, times, trend_s, max_acceleration)
     last = float(s[-1])
     direction = -1.0 if last < 0 or (last == 0 and motion.speed < 0) else 1.0
     dist = np.abs(s)

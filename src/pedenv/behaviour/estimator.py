@@ -16,7 +16,7 @@ from pedenv.behaviour import facing, heading_filter, motion_state
 from pedenv.behaviour.config import BehaviourConfig
 from pedenv.behaviour.conflict import conflict_of
 from pedenv.behaviour.ego_path import EgoHistory, EgoPath, predict_ego_path
-from pedenv.behaviour.motion_state import velocity_stats
+from pedenv.behaviour.motion_state import VelocityStats, velocity_stats
 from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
 from pedenv.behaviour.prediction import PathPredictor
 from pedenv.geometry import inverse_intrinsics
@@ -25,11 +25,16 @@ from pedenv.state import Behaviour, Pedestrians
 
 
 class TrackStore:
-    """Per track id: ``p (T, B)`` heading distribution, ``state (T,)`` int8 motion state,
-    ``time (T,)`` seconds of its last update. Rows are kept sorted by id."""
+    """Per track id: ``p (T, B)`` heading distribution, ``time (T,)`` seconds of its last update
+    (a new track's grid is flat, dated to the last orientation so that the tracks share one
+    prediction step), ``state (T,)`` int8 motion state, and the orientation last computed
+    (:meth:`BehaviourEstimator._orient`): ``held (4, T)`` the yaw (radians, world), its spread
+    (radians) and the body's and the head's facing probability, ``available (T,)`` int8. A new
+    track holds ``flat`` (4,), the values of the flat grid, and ``UNAVAILABLE`` until then. Rows
+    are kept sorted by id."""
 
-    def __init__(self, bins: int) -> None:
-        self.bins = bins
+    def __init__(self, bins: int, flat: np.ndarray) -> None:
+        self.bins, self.flat = bins, flat
         self.clear()
 
     def clear(self) -> None:
@@ -37,10 +42,14 @@ class TrackStore:
         self.p = np.zeros((0, self.bins))
         self.state = np.zeros(0, np.int8)
         self.time = np.zeros(0)
+        self.held = np.zeros((4, 0))
+        self.available = np.zeros(0, np.int8)
 
     def rows(self, ids: np.ndarray, now: float) -> np.ndarray:
-        """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now``."""
+        """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now`` (s)."""
         index = np.searchsorted(self.ids, ids)
+        if len(self.ids) and (self.ids[np.minimum(index, len(self.ids) - 1)] == ids).all():
+            return index  # the usual frame: every track known
         found = index < len(self.ids)
         found[found] = self.ids[index[found]] == ids[found]
         if not found.all():
@@ -49,6 +58,8 @@ class TrackStore:
             self.p = np.concatenate([self.p, heading_filter.uniform(len(new), self.bins)])
             self.state = np.concatenate([self.state, np.zeros(len(new), np.int8)])
             self.time = np.concatenate([self.time, np.full(len(new), now)])
+            self.held = np.concatenate([self.held, np.repeat(self.flat[:, None], len(new), axis=1)], axis=1)
+            self.available = np.concatenate([self.available, np.full(len(new), heading_filter.UNAVAILABLE, np.int8)])
             self._take(np.argsort(self.ids, kind="stable"))
             index = np.searchsorted(self.ids, ids)
         return index
@@ -58,12 +69,14 @@ class TrackStore:
         are live tracks: a dropped track may wait a few frames)."""
         if len(self.ids) <= len(live_ids):
             return
-        mask = np.isin(self.ids, live_ids)
+        mask = ((self.ids[:, None] == live_ids).any(axis=1) if len(self.ids) * len(live_ids) < 4096
+                else np.isin(self.ids, live_ids))
         if not mask.all():
             self._take(mask)
 
     def _take(self, index: np.ndarray) -> None:
         self.ids, self.p, self.state, self.time = self.ids[index], self.p[index], self.state[index], self.time[index]
+        self.held, self.available = self.held[:, index], self.available[index]
 
 
 class BehaviourEstimator:
@@ -73,12 +86,15 @@ class BehaviourEstimator:
     def __init__(self, config: BehaviourConfig, acceleration_std: float) -> None:
         self.config = config
         self.acceleration_std = acceleration_std
-        self.store = TrackStore(config.orientation_bins)
         self.ego = EgoHistory(config)
         self.grid = heading_filter.grid(config.orientation_bins)  # the trig and Fourier tables, once
         self.cells = self.grid.cells
         self.angles = (math.radians(config.heading_random_walk_deg), math.radians(config.available_std_deg),
                        math.radians(config.facing_half_angle_deg))  # random walk, available spread, facing
+        flat_yaw, flat_std, _ = heading_filter.summary(heading_filter.uniform(1, config.orientation_bins), 1.0)
+        self.store = TrackStore(config.orientation_bins, np.array([flat_yaw[0], flat_std[0],
+                                                                   self.angles[2] / math.pi, 0.0]))
+        self.oriented_at = -math.inf  # when the heading grids were last updated (``orientation_interval_s``)
         self.horizons = np.asarray(config.horizons_s, float)
         k = int(round(config.conflict_horizon_s / config.conflict_step_s))
         self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
@@ -97,6 +113,7 @@ class BehaviourEstimator:
     def reset(self) -> None:
         self.store.clear()
         self.ego.reset()
+        self.oriented_at = -math.inf
 
     def update(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, started: np.ndarray,
                live_ids: np.ndarray) -> Pedestrians:
@@ -112,7 +129,8 @@ class BehaviourEstimator:
                               and np.abs(P).max() < STATE_LIMIT[1]):  # False for NaN
             x, P = _usable_states(peds, x, P, started)
         self.ego.add(frame.timestamp, frame.ego)
-        path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times)
+        path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times, self.config.ego_trend_s,
+                                self.config.max_ego_acceleration_mps2)
         self.store.keep(live_ids)
         if len(peds) == 0:
             beh = dataclasses.replace(Behaviour.empty(self.horizons), conflict_horizon=float(self.conflict_times[-1]),
@@ -123,31 +141,48 @@ class BehaviourEstimator:
         return dataclasses.replace(peds, behaviour=beh)
 
     def _cues(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, path: EgoPath) -> Behaviour:
-        cfg, t, store, g = self.config, frame.timestamp, self.store, self.grid
-        rows = store.rows(peds.track_ids, t)
-        walk, available_std, half = self.angles
-        p = heading_filter.spread(store.p[rows], t - store.time[rows], walk, g)
-        cam_to_world = frame.cam_to_world
-        rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
-        cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
-                            float(frame.camera.intrinsics[0, 0]), cfg)
-        cos_a, velocity = cue.toward @ g.cos_sin, velocity_stats(x[:, 1::2], P[:, 1::2, 1::2])
-        moving, _ = walking_likelihood(velocity, g.cos_sin, cfg)
-        p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin, cfg) * moving)
-        store.p[rows], store.time[rows] = p, t
-        yaw, yaw_std, available = heading_filter.summary(p, available_std)
+        cfg, t, store = self.config, frame.timestamp, self.store
+        rows = store.rows(peds.track_ids, self.oriented_at if self.oriented_at > -math.inf else t)
+        velocity = velocity_stats(x[:, 1::2], P[:, 1::2, 1::2])
+        if not 0.0 <= t - self.oriented_at < cfg.orientation_interval_s - REFRESH_TOLERANCE_S:
+            self._orient(frame, peds, rows, velocity)
+            self.oriented_at = t
+        held = store.held[:, rows]
         speed, speed_std = motion_state.speed_from(velocity)
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
         ahead, ahead_cov = self.predictor(x, P)
         conflict = conflict_of(path, self.conflict_predictor.components(x, P), cfg.corridor_half_width_m,
                                cfg.corridor_front_m)
-        return Behaviour(yaw, yaw_std, available, facing.body_facing_from(p, cos_a, math.cos(half)),
-                         facing.head_facing(cue, half), state, speed, speed_std, self.horizons, ahead,
-                         ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
+        return Behaviour(held[0], held[1], store.available[rows], held[2], held[3], state, speed, speed_std,
+                         self.horizons, ahead, ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
                          conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s,
                          float(self.conflict_times[-1]), path.motion.speed, path.motion.yaw_rate, path.xy)
 
+    def _orient(self, frame: Frame, peds: Pedestrians, rows: np.ndarray, velocity: VelocityStats) -> None:
+        """Predict the heading grids of the store's ``rows`` (N,) to the frame's time, update them with
+        the skeleton cue and the walking direction (``velocity``, N) and keep what they say
+        (``TrackStore.held``, ``TrackStore.available``)."""
+        cfg, t, store, g = self.config, frame.timestamp, self.store, self.grid
+        walk, available_std, half = self.angles
+        p = heading_filter.spread(store.p[rows], t - store.time[rows], walk, g)
+        cam_to_world = frame.cam_to_world
+        rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
+        cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
+                            float(frame.camera.intrinsics[0, 0]), cfg)
+        cos_a = cue.toward @ g.cos_sin
+        moving, _ = walking_likelihood(velocity, g.cos_sin, cfg)
+        p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin, cfg) * moving)
+        store.p[rows], store.time[rows] = p, t
+        yaw, yaw_std, available = heading_filter.summary(p, available_std)
+        store.held[:, rows] = (yaw, yaw_std, facing.body_facing_from(p, cos_a, math.cos(half)),
+                               facing.head_facing(cue, half))
+        store.available[rows] = available
+
+
+#: Timestamps this close (s) to ``orientation_interval_s`` after the last orientation count as that far
+#: (frame times are not exact multiples of the frame period).
+REFRESH_TOLERANCE_S = 1e-3
 
 #: A filter state (m, m/s) or covariance entry (m^2, ...) beyond these is not used (an overflowed track).
 STATE_LIMIT = (1e6, 1e8)

@@ -42,6 +42,23 @@ class Grid:
         self.neighbours = np.arange(-3, 4)
         step = self.neighbours * (2.0 * np.pi / bins)
         self.neighbour_cos_sin = np.column_stack([np.cos(step), np.sin(step)])
+        self._kernels: dict[float, np.ndarray] = {}
+
+    def kernel(self, var: float) -> np.ndarray:
+        """(B, B) the circulant matrix that convolves a row p (B,) with a wrapped normal of variance
+        ``var`` rad^2 (``p @ kernel``), kept per variance (a frame's tracks share one)."""
+        matrix = self._kernels.get(var)
+        if matrix is None:
+            row = np.fft.irfft(np.exp(-0.5 * min(var, 1e3) * self.freq_sq), n=self.bins)  # the kernel, by cell offset
+            matrix = row[(np.arange(self.bins)[None, :] - np.arange(self.bins)[:, None]) % self.bins]
+            if len(self._kernels) >= MAX_KERNELS:
+                self._kernels.clear()
+            self._kernels[var] = matrix
+        return matrix
+
+
+#: Kernels a :class:`Grid` keeps (one per distinct prediction variance; a frame rate's few).
+MAX_KERNELS = 64
 
 
 _GRIDS: dict[int, Grid] = {}
@@ -61,8 +78,12 @@ def uniform(n: int, bins: int) -> np.ndarray:
 
 def spread(p: np.ndarray, dt: np.ndarray, random_walk_rad: float, g: Grid) -> np.ndarray:
     """p (N, B) convolved with a wrapped normal of variance ``q^2 dt`` per row (dt (N,) seconds,
-    finite), not normalised (its rows keep their sums, up to the clipped rounding)."""
-    var = random_walk_rad**2 * np.minimum(np.maximum(dt, 0.0), 1e3)
+    finite), not normalised (its rows keep their sums, up to the clipped rounding). Rows sharing
+    one ``dt`` (the usual frame) take one matrix product with :meth:`Grid.kernel`, others the FFT."""
+    dt = np.minimum(np.maximum(dt, 0.0), 1e3)
+    if len(dt) and (dt == dt[0]).all():
+        return np.maximum(p @ g.kernel(random_walk_rad**2 * float(dt[0])), 0.0)
+    var = random_walk_rad**2 * dt
     damp = np.exp(np.multiply.outer(-0.5 * np.minimum(var, 1e3), g.freq_sq))
     return np.maximum(np.fft.irfft(np.fft.rfft(p, axis=1) * damp, n=g.bins, axis=1), 0.0)
 

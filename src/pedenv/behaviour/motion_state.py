@@ -15,15 +15,29 @@ MOTION_STATE_NAMES = ("standing", "walking", "running")
 
 @dataclass(frozen=True)
 class VelocityStats:
-    """Velocities (N, 2) m/s with covariances (N, 2, 2), summarised once for the cues that use them:
-    speed (N,) m/s, unit (N, 2) its direction (zero at standstill), var_along and var_across (N,)
-    (m/s)^2 the variance along and across it, var_largest (N,) the covariance's larger eigenvalue."""
+    """Velocities (N, 2) m/s with covariances (N, 2, 2) (m/s)^2, summarised once per frame for the
+    cues that use them: speed (N,) m/s and var_along (N,) (m/s)^2, the variance along the velocity;
+    the rest on demand (the walking direction needs them only when the heading grids are updated)."""
 
     speed: np.ndarray
-    unit: np.ndarray
     var_along: np.ndarray
-    var_across: np.ndarray
-    var_largest: np.ndarray
+    velocities: np.ndarray
+    covariances: np.ndarray
+
+    def unit(self) -> np.ndarray:
+        """(N, 2) the velocity's direction (zero at standstill)."""
+        return self.velocities * (1.0 / np.maximum(self.speed, 1e-9))[:, None]
+
+    def var_across(self) -> np.ndarray:
+        """(N,) (m/s)^2 the variance across the velocity (0 at standstill)."""
+        vx, vy = self.velocities[:, 0], self.velocities[:, 1]
+        a, b, d = self.covariances[:, 0, 0], self.covariances[:, 0, 1], self.covariances[:, 1, 1]
+        return (a * (vy * vy) - (2.0 * b) * (vx * vy) + d * (vx * vx)) / np.maximum(self.speed, 1e-9) ** 2
+
+    def var_largest(self) -> np.ndarray:
+        """(N,) (m/s)^2 the covariance's larger eigenvalue."""
+        a, b, d = self.covariances[:, 0, 0], self.covariances[:, 0, 1], self.covariances[:, 1, 1]
+        return 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
 
 
 def velocity_stats(velocities: np.ndarray, velocity_covariances: np.ndarray) -> VelocityStats:
@@ -31,13 +45,8 @@ def velocity_stats(velocities: np.ndarray, velocity_covariances: np.ndarray) -> 
     vx, vy = velocities[:, 0], velocities[:, 1]
     a, b, d = velocity_covariances[:, 0, 0], velocity_covariances[:, 0, 1], velocity_covariances[:, 1, 1]
     speed = np.hypot(vx, vy)
-    inv = 1.0 / np.maximum(speed, 1e-9)
-    ux, uy = vx * inv, vy * inv
-    uxx, uyy, uxy2 = ux * ux, uy * uy, 2.0 * ux * uy * b
-    along = uxx * a + uxy2 + uyy * d
-    across = uyy * a - uxy2 + uxx * d
-    largest = 0.5 * (a + d) + np.sqrt(np.maximum(0.25 * (a - d) ** 2 + b**2, 0.0))
-    return VelocityStats(speed, velocities * inv[:, None], along, across, largest)
+    along = (a * (vx * vx) + (2.0 * b) * (vx * vy) + d * (vy * vy)) / np.maximum(speed, 1e-9) ** 2
+    return VelocityStats(speed, along, velocities, velocity_covariances)
 
 
 def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -48,21 +57,22 @@ def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> t
 
 def speed_from(v: VelocityStats) -> tuple[np.ndarray, np.ndarray]:
     """:func:`speed_and_std` from the :class:`VelocityStats`."""
-    var = np.where(v.speed > 1e-6, v.var_along, v.var_largest)
+    moving = v.speed > 1e-6
+    var = v.var_along if moving.all() else np.where(moving, v.var_along, v.var_largest())
     return v.speed, np.sqrt(np.maximum(var, 0.0))
 
 
 def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, config: BehaviourConfig) -> np.ndarray:
-    """(N,) int8 states after this frame, from the previous ones (N,) (a new track: standing).
+    """(N,) int8 states after this frame, from the previous ones (N,) (a new track: standing), the
+    speed (N,) m/s and its standard deviation (N,) (finite: the estimator's states are).
 
     Up a state once the speed exceeds its entry threshold by ``speed_sigmas`` standard
     deviations; down once the speed falls below the exit threshold. Between the two the
     state holds, so it does not flicker.
     """
+    # the state may fall to the number of exit thresholds the speed stays above, and rises to the
+    # number of entry thresholds it clearly exceeds (the entries lie above the exits)
     low = speed - config.speed_sigmas * speed_std
-    state = np.asarray(previous, np.int8).copy()
-    state[(state == RUNNING) & (speed < config.run_exit_mps)] = WALKING
-    state[(state == WALKING) & (speed < config.walk_exit_mps)] = STANDING
-    state[(state == STANDING) & (low > config.walk_enter_mps)] = WALKING
-    state[(state == WALKING) & (low > config.run_enter_mps)] = RUNNING
-    return state
+    floor = np.searchsorted((config.walk_enter_mps, config.run_enter_mps), low, side="left")  # entries < low
+    ceiling = np.searchsorted((config.walk_exit_mps, config.run_exit_mps), speed, side="right")  # exits <= speed
+    return np.maximum(np.minimum(previous, ceiling), floor).astype(np.int8)

@@ -180,9 +180,9 @@ def walking_likelihood(v: VelocityStats, cos_sin: np.ndarray, config: BehaviourC
     cosines and sines (2, B)."""
     speed = v.speed
     use = (speed > config.min_walking_speed_mps) & (speed > config.speed_sigmas * np.sqrt(np.maximum(v.var_along, 0.0)))
-    spread = np.radians(config.walking_direction_std_deg) ** 2 + v.var_across / np.maximum(speed, 1e-9) ** 2
+    spread = np.radians(config.walking_direction_std_deg) ** 2 + v.var_across() / np.maximum(speed, 1e-9) ** 2
     kappa = np.where(use, np.minimum(1.0 / np.maximum(spread, 1e-6), 1e4), 0.0)[:, None]  # unused: exp(0)
-    return _floored(np.exp(kappa * (v.unit @ cos_sin - 1.0))), use
+    return _floored(np.exp(kappa * (v.unit() @ cos_sin - 1.0))), use
 
 
 def _floored(like: np.ndarray) -> np.ndarray:

@@ -9,7 +9,8 @@ from pedenv.skeleton import CocoKeypoint as KP
 
 from fused_frames import make_frame, skeletons_of
 
-FAR = FusedConfig(ground_max_distance_m=60.0)
+#: The frames' exact skeletons have their ankles at the anatomical height: no pose-network offset.
+FAR = FusedConfig(ground_max_distance_m=60.0, ankle_keypoint_offset_m=0.0)
 
 
 def run_ground(frame, config=FAR, noise_px=None):
@@ -47,6 +48,7 @@ def test_pixel_jacobian_matches_finite_differences():
         lateral_std_m=0.0,
         stance_std_m=0.0,
         keypoint_pixel_std=1.0,
+        ankle_keypoint_offset_m=0.0,
     )
     frame = make_frame(np.array([[15.0, 2.0, 0.0]]), pitch=0.02, roll=0.01)
     cue = run_ground(frame, config, noise_px=1.0)

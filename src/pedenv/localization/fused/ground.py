@@ -16,7 +16,9 @@ A ``static`` camera (:attr:`pedenv.records.Camera.mount`) stands on the ground i
 calibrated on: its pitch, roll and height are exact, so the road-height terms and the
 range limit ``ground_max_distance_m`` (made for a camera 1.5 m above a pitching vehicle)
 do not apply. Its ground cue has the foot point's own variance (pixel noise, the ankle's
-lift, the stance, the body's spread, ``static_ground_height_std_m``) and declines
+lift, the stance, the body's spread, ``static_ground_height_std_m``) plus the calibration's
+own error (an estimated camera's height and tilt, ``static_camera_height_std_m`` and
+``static_camera_tilt_std_deg``: a tilt error moves the cut by ``r^2 / h`` times it) and declines
 ``beyond-range`` only where that variance along the ray exceeds
 ``static_ground_max_relative_std`` of the range, where the ray grazes the ground and the
 linearized intersection no longer holds.
@@ -106,6 +108,27 @@ def pixel_jacobians(frame: Frame, rays: np.ndarray, normal: np.ndarray,
     return ju, jv
 
 
+def ankle_height(config: FusedConfig) -> float:
+    """Metres above the ground of a standing person's ankle keypoint: the anatomical ankle
+    (:data:`~pedenv.localization.fused.height.KEYPOINT_HEIGHT_FRACTION` of
+    ``person_height_mean_m``) plus the pose source's ``ankle_keypoint_offset_m``."""
+    anatomical = float(KEYPOINT_HEIGHT_FRACTION[ANKLE_KEYPOINTS[0]]) * config.person_height_mean_m
+    return anatomical + config.ankle_keypoint_offset_m
+
+
+def static_ground_variance(ranges: np.ndarray, config: FusedConfig) -> np.ndarray:
+    """(N,) m^2, the variance of the calibrated ground's height under a static camera's
+    pedestrians ``ranges`` (N,) metres away (horizontal): its unevenness
+    (``static_ground_height_std_m``), the camera's height error (``static_camera_height_std_m``)
+    and its pitch and roll error (``static_camera_tilt_std_deg`` each), which tilts the ground
+    about the camera by ``r`` times the angle at range ``r`` (in any direction: pitch in front,
+    roll to the side). Carried along the ray by ``1 / sine`` like any height error, so the
+    range's spread grows like ``r^2 / h`` times the tilt.
+    """
+    tilt = np.radians(config.static_camera_tilt_std_deg) * np.asarray(ranges, float)
+    return config.static_ground_height_std_m**2 + config.static_camera_height_std_m**2 + tilt**2
+
+
 @dataclass(frozen=True)
 class AnkleHits:
     """N pedestrians' two ankle rays (left, right) cut with the road plane under them.
@@ -132,9 +155,9 @@ class AnkleHits:
     @classmethod
     def of(cls, frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> AnkleHits:
         """The stance ankles of ``skeletons`` on the vehicle's road plane, lifted by the
-        ankle's resting height."""
+        ankle keypoint's resting height (:func:`ankle_height`)."""
         origin, normal = skeletons.origin, frame.ego.rotation[:, 2]
-        rest = KEYPOINT_HEIGHT_FRACTION[ANKLE_KEYPOINTS[0]] * config.person_height_mean_m
+        rest = ankle_height(config)
         road = float(normal @ frame.ego.translation) + rest  # the plane's offset, metres
         rays = skeletons.rays[:, list(ANKLE_KEYPOINTS)]  # (N, 2, 3)
         points, sine, cam_height = plane_intersection(rays, origin, normal, road)
@@ -211,11 +234,12 @@ def frame_covariance(ankles: AnkleHits, near: np.ndarray, weight: np.ndarray, al
 def person_covariance(ranges: np.ndarray, along: np.ndarray, static: bool, config: FusedConfig) -> np.ndarray:
     """(N, 2, 2) m^2, the part of the error that repeats for the same person: the road under
     a pedestrian ``ranges`` (N,) metres away stays off the vehicle's plane frame after frame
-    (a ``static`` camera's calibrated ground: only its own unevenness), and so does the
+    (a ``static`` camera's calibrated ground: its unevenness and the calibration's own
+    error, :func:`static_ground_variance`), and so does the
     body's sideways spread about its ground point (lean). along: (N, 2) as in :func:`frame_covariance`.
     """
     if static:
-        road = np.full(len(ranges), config.static_ground_height_std_m**2)
+        road = static_ground_variance(ranges, config)
     else:
         road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * ranges**2) ** 2
     ax, ay, lat = along[:, 0], along[:, 1], config.lateral_std_m**2
