@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 
 from pedenv.apps.distributed import SCENES_FOLDER, evaluate_distributed, evaluate_on
@@ -123,3 +124,38 @@ def test_resume_refuses_a_scene_checkpointed_with_another_method(short_dataset, 
     again = evaluate_distributed(short_dataset, executor=RESUME, scenes=[name], config=Config(method="paper"),
                                  output_dir=tmp_path / "run")
     assert again.extras["resumed"] == [name] and again.metrics.info["method"] == "paper"
+
+
+def test_ctrl_c_while_a_checkpoint_is_written_leaves_no_checkpoint_and_prints_nothing(short_dataset, tmp_path,
+                                                                                     monkeypatch):
+    """numpy's savez leaves its ZipFile open when interrupted; written straight into the temporary file, the
+    ZipFile later closed itself on the closed file and printed a traceback at exit (seen in a CI run's Ctrl-C)."""
+    import gc
+    import sys
+
+    from numpy.lib import format as npy_format
+
+    from pedenv.apps.scene_checkpoint import load_checkpoint, save_checkpoint
+
+    evaluate_distributed(short_dataset, executor=SERIAL, output_dir=tmp_path / "run")
+    name = short_dataset.scene_names()[0]
+    checkpoint = tmp_path / "run" / SCENES_FOLDER / name / "result.npz"
+    with np.load(checkpoint) as npz:
+        run = json.loads(str(npz["meta"]))["run"]
+    result = load_checkpoint(checkpoint, name, run)
+    write_array, calls = npy_format.write_array, []
+
+    def interrupted(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return write_array(*args, **kwargs)
+
+    unraisable = []
+    monkeypatch.setattr(sys, "unraisablehook", unraisable.append)
+    monkeypatch.setattr(npy_format, "write_array", interrupted)
+    target = tmp_path / "again.npz"
+    with pytest.raises(KeyboardInterrupt):
+        save_checkpoint(target, result, run)
+    gc.collect()
+    assert len(calls) == 3 and unraisable == [] and not target.exists()

@@ -18,6 +18,7 @@ with a line naming the scene and the first differences: resuming merges it into 
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import os
 import zipfile
@@ -70,9 +71,10 @@ def save_checkpoint(path: Path, result: SceneResult, run: dict) -> None:
             "busiest_count": result.busiest_count, "timer": vars(result.timer), "run": run,
             "tracking": list(result.tracking), "busiest": busiest}
     arrays["meta"] = np.array(json.dumps(meta, allow_nan=False))
+    buffer = io.BytesIO()  # numpy's savez leaves its ZipFile open when interrupted (Ctrl-C): never on a closed file
+    np.savez(buffer, **arrays)
     tmp = path.with_name(path.name + ".tmp")
-    with tmp.open("wb") as f:
-        np.savez(f, **arrays)
+    tmp.write_bytes(buffer.getbuffer())
     os.replace(tmp, path)
 
 
