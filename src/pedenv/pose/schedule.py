@@ -146,7 +146,6 @@ class CreditBank:
     counted apart (``run.json``: ``cold_starts``, ``units_per_frame_after_cold_starts``).
     """
 
-    budget: float = 0.0
     credit: float = 0.0
 
     def charge(self, spent: float, config: StreamConfig) -> None:
