@@ -54,21 +54,29 @@ class EgoPath:
 
 class EgoHistory:
     """The ego's recent poses (timestamp, x, y, yaw), at most ``config.ego_window_s`` old; a
-    gap longer than ``config.max_ego_gap_s`` forgets them."""
+    gap longer than ``config.max_ego_gap_s`` forgets them. Between consecutive poses it keeps
+    ``pairs``: their mid time (s), signed speed (m/s) and yaw rate (rad/s), each computed once."""
 
     def __init__(self, config: BehaviourConfig) -> None:
         self.config = config
         self.poses: list[tuple[float, float, float, float]] = []
+        self.pairs: list[tuple[float, float, float]] = []
 
     def reset(self) -> None:
-        self.poses = []
+        self.poses, self.pairs = [], []
 
     def add(self, timestamp: float, ego: EgoPose) -> None:
+        timestamp = float(timestamp)
         if self.poses and timestamp - self.poses[-1][0] > self.config.max_ego_gap_s:
-            self.poses = []
-        self.poses.append((float(timestamp), float(ego.translation[0]), float(ego.translation[1]), ego.yaw))
+            self.reset()
+        pose = (timestamp, float(ego.translation[0]), float(ego.translation[1]), float(ego.yaw))
+        if self.poses:
+            last = self.poses[-1]
+            self.pairs.append((0.5 * (last[0] + timestamp), _speed(last, pose), _turn(last, pose)))
+        self.poses.append(pose)
         while len(self.poses) > 2 and timestamp - self.poses[1][0] >= self.config.ego_window_s:
             self.poses.pop(0)
+            self.pairs.pop(0)
 
     def motion(self) -> EgoMotion:
         """Speed, acceleration and jerk, and the yaw rate now, from the window's poses: quadratic
@@ -80,24 +88,18 @@ class EgoHistory:
         if len(poses) < 2 or poses[-1][0] - poses[0][0] <= 1e-6:
             return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * cfg.ego_speed_std_mps,
                              UNKNOWN_MOTION_FACTOR * cfg.ego_yaw_rate_std_radps, False)
-        pairs = [(0.5 * (a[0] + b[0]) - poses[-1][0], _speed(a, b), _turn(a, b)) for a, b in zip(poses, poses[1:])]
-        fit = _trend([p[0] for p in pairs], [(p[1], p[2]) for p in pairs])  # (3, 2): value, slope, curvature
-        speed, rate = float(fit[0, 0]), float(fit[0, 1])
-        acceleration = _clip(float(fit[1, 0]), cfg.max_ego_acceleration_mps2)
+        now = poses[-1][0]
+        fit = (_fit_map(tuple([round(p[0] - now, 6) for p in self.pairs]))
+               @ np.array([p[1:] for p in self.pairs])).tolist()  # (3, 2): value, slope, curvature
+        speed, rate = fit[0]
+        acceleration = _clip(fit[1][0], cfg.max_ego_acceleration_mps2)
         clipped = _clip(rate, cfg.max_yaw_rate_radps)
         return EgoMotion(speed, clipped, cfg.ego_speed_std_mps, cfg.ego_yaw_rate_std_radps + abs(rate - clipped),
-                         True, acceleration, _clip(2.0 * float(fit[2, 0]), cfg.max_ego_jerk_mps3))
+                         True, acceleration, _clip(2.0 * fit[2][0], cfg.max_ego_jerk_mps3))
 
 
 def _clip(value: float, limit: float) -> float:
     return min(max(value, -limit), limit)
-
-
-def _trend(times: list[float], values: list[tuple[float, float]]) -> np.ndarray:
-    """(3, 2) coefficients ``c0 + c1 t + c2 t^2`` of the least-squares polynomials through the two
-    columns of ``values`` (P, 2) at ``times`` (P,) s (t = 0: now): degree 2 with 3 or more points,
-    1 with 2, 0 with 1."""
-    return _fit_map(tuple(round(t, 6) for t in times)) @ np.asarray(values)
 
 
 @lru_cache(maxsize=32)

@@ -152,7 +152,7 @@ class BehaviourEstimator:
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
         ahead, ahead_cov = self.predictor(x, P)
-        conflict = conflict_of(path, self.conflict_predictor.components(x, P), cfg.corridor_half_width_m,
+        conflict = conflict_of(path, *self.conflict_predictor.stacked(x, P), cfg.corridor_half_width_m,
                                cfg.corridor_front_m)
         return Behaviour(held[0], held[1], store.available[rows], held[2], held[3], state, speed, speed_std,
                          self.horizons, ahead, ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,

@@ -31,7 +31,7 @@ class PathPredictor:
                 self.covariance_map[4 * _POS[i] + _VEL[j], :, i, j] += t
                 self.covariance_map[4 * _VEL[i] + _POS[j], :, i, j] += t
                 self.covariance_map[4 * _VEL[i] + _VEL[j], :, i, j] += t * t
-        # the same by component, each (N, H) contiguous: x, y; xx, xy, yy
+        # the same by component (:meth:`stacked`): x, y; xx, xy, yy
         self.component_maps = (np.ascontiguousarray(self.position_map.transpose(0, 2, 1).reshape(4, 2 * h)),
                                np.ascontiguousarray(self.covariance_map[:, :, [0, 0, 1], [0, 1, 1]]
                                                     .transpose(0, 2, 1).reshape(16, 3 * h)),
@@ -48,14 +48,13 @@ class PathPredictor:
         cov = (P.reshape(n, 16) @ self.covariance_map + self.noise).reshape(n, h, 2, 2)
         return positions, cov
 
-
-    def components(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
-        """The same as :meth:`__call__`, by component: positions ``x, y`` (N, H) metres and the
-        covariances' ``xx, xy, yy`` (N, H) m^2."""
-        h = len(self.horizons)
-        positions = x @ self.component_maps[0]
-        cov = P.reshape(len(P), 16) @ self.component_maps[1] + self.component_maps[2]
-        return positions[:, :h], positions[:, h:], cov[:, :h], cov[:, h:2 * h], cov[:, 2 * h:]
+    def stacked(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The same as :meth:`__call__`, the components stacked: positions (N, 2, H) world x, y
+        metres and covariances (N, 3, H) m^2, the components xx, xy, yy."""
+        n, h = len(x), len(self.horizons)
+        positions = (x @ self.component_maps[0]).reshape(n, 2, h)
+        cov = (P.reshape(n, 16) @ self.component_maps[1] + self.component_maps[2]).reshape(n, 3, h)
+        return positions, cov
 
 
 def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleration_std: float
