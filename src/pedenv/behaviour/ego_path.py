@@ -124,13 +124,15 @@ def _turn(a: tuple, b: tuple) -> float:
 
 
 @lru_cache(maxsize=8)
-def _bases(times: tuple[float, ...], trend_s: float) -> np.ndarray:
+def _bases(times: tuple[float, ...], trend_s: float) -> tuple[np.ndarray, float, float]:
     """(4, K) at ``times`` (K,) s: ``t``, ``t^2 / 2``, and the first and second integrals of a rate
-    rising at 1 per second for ``trend_s`` seconds, then holding."""
+    rising at 1 per second for ``trend_s`` seconds, then holding; and the first and third at the
+    last time."""
     t = np.asarray(times, float)
     r = np.minimum(t, trend_s)
     e = t - r
-    return np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
+    b = np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
+    return b, float(b[0, -1]), float(b[2, -1])
 
 
 def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_acceleration: float = math.inf
@@ -144,11 +146,13 @@ def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_ac
         jerk = (_clip(a + motion.jerk * trend_s, max(max_acceleration, abs(a))) - a) / trend_s
     else:
         trend_s, jerk = 0.0, 0.0
-    b = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
+    b, end_t, end_rate = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
     s = v * b[0] + a * b[1] + jerk * b[3]
-    gain = a * b[0, -1] + jerk * b[2, -1]  # the speed's change by the end
+    gain = a * end_t + jerk * end_rate  # the speed's change by the end
     sign = math.copysign(1.0, v if abs(v) > 1e-9 else (gain or 1.0))  # standing: the way the speed goes
-    return sign * np.maximum.accumulate(sign * s)  # past a stop: held
+    if sign > 0:
+        return np.maximum.accumulate(s)  # past a stop: held
+    return -np.maximum.accumulate(-s)
 
 
 def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0,
@@ -166,13 +170,16 @@ def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s
     yaw = ego.yaw
     heading = yaw + (0.0 if direction > 0 else math.pi)
     turn = curvature * dist
-    xy = np.empty((len(times), 2))
+    x0, y0 = float(ego.translation[0]), float(ego.translation[1])
     if abs(curvature) < 1e-6:
-        xy[:, 0] = ego.translation[0] + dist * math.cos(heading)
-        xy[:, 1] = ego.translation[1] + dist * math.sin(heading)
+        xy = np.multiply.outer(dist, (math.cos(heading), math.sin(heading)))
+        xy += (x0, y0)
     else:
-        xy[:, 0] = ego.translation[0] + (np.sin(heading + turn) - math.sin(heading)) / curvature
-        xy[:, 1] = ego.translation[1] + (math.cos(heading) - np.cos(heading + turn)) / curvature
+        angle = heading + turn
+        xy = np.stack([np.sin(angle), -np.cos(angle)], axis=1)
+        xy -= (math.sin(heading), -math.cos(heading))
+        xy /= curvature
+        xy += (x0, y0)
     lateral = np.hypot((0.5 * motion.yaw_rate_std) * times * dist,
                        (0.5 * motion.speed_std) * times * np.abs(np.sin(turn)))
     return EgoPath(times, xy, yaw + turn, lateral, motion, curvature, float(dist[-1]), direction)

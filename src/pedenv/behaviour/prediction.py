@@ -57,6 +57,26 @@ class PathPredictor:
         return positions, cov
 
 
+class JointPredictor:
+    """Two :class:`PathPredictor` at once (the reported path's horizons H and the corridor's steps K),
+    their maps side by side, so that a frame's predictions are still two matrix products."""
+
+    def __init__(self, reported: PathPredictor, stacked: PathPredictor) -> None:
+        self.sizes = (len(reported.horizons), len(stacked.horizons))
+        self.position_map = np.concatenate([reported.position_map, stacked.component_maps[0]], axis=1)
+        self.covariance_map = np.concatenate([reported.covariance_map, stacked.component_maps[1]], axis=1)
+        self.noise = np.concatenate([reported.noise, stacked.component_maps[2]])
+
+    def __call__(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The reported path's positions (N, H, 2) and covariances (N, H, 2, 2) (:meth:`PathPredictor.__call__`)
+        and the corridor's positions (N, 2, K) and covariances (N, 3, K) (:meth:`PathPredictor.stacked`)."""
+        n, (h, k) = len(x), self.sizes
+        positions = x @ self.position_map
+        cov = P.reshape(n, 16) @ self.covariance_map + self.noise
+        return (positions[:, :2 * h].reshape(n, h, 2), cov[:, :4 * h].reshape(n, h, 2, 2),
+                positions[:, 2 * h:].reshape(n, 2, k), cov[:, 4 * h:].reshape(n, 3, k))
+
+
 def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleration_std: float
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Positions (N, H, 2) world x-y, metres, and covariances (N, H, 2, 2) m^2 at ``horizons``
