@@ -3,7 +3,9 @@
 The ego's path (:mod:`pedenv.behaviour.ego_path`) is a circular arc (or a straight line), so
 each point has a closed-form arc length ``s`` along it and offset ``d`` across it. The corridor
 is the band ``|d| < corridor_half_width_m`` for ``0 <= s <= L + corridor_front_m`` (L: the
-distance the ego covers within the horizon, accelerating or braking; the extension is its front). At each time step
+distance the ego covers within the horizon, accelerating or braking; the extension is its front),
+closed by a half disc of that radius (every point within the half width of the path's end, as
+``benchmarks/behaviour_synthetic.py``'s truth). At each time step
 the pedestrian's predicted position (a Gaussian) lies inside with probability
 ``P(|d| < w)`` (its spread across the path plus the path's own). The probability of entering
 within the horizon is the largest of these (a lower bound of the union); the entry time's
@@ -164,8 +166,10 @@ def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_w
     frame = PathFrame(path)
     s, d, rel, dist2 = frame.coordinates(positions)
     sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + path.lateral_std**2, 1e-8))
-    edges = ndtr((half_width_m * _EDGES - d) / sd)
-    inside = (edges[0] - edges[1]) * ((s >= 0.0) & (s <= length))  # behind the ego or beyond the corridor: 0
+    beyond = np.maximum(s - length, 0.0)  # past the corridor's straight part: its round end's half chord
+    half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0))
+    edges = ndtr((half * _EDGES - d) / sd)
+    inside = (edges[0] - edges[1]) * (s >= 0.0)  # behind the ego: 0
     running = np.maximum.accumulate(inside, axis=1)
     prob = np.minimum(np.maximum(running[:, -1], 0.0), 1.0)
     some = prob > 1e-3

@@ -159,6 +159,11 @@ class BehaviourEstimator:
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
         ahead, ahead_cov, steps, steps_cov = self.predictor(x, P)
+        fast = speed > cfg.max_pedestrian_speed_mps
+        if fast.any():  # the corridor's prediction at most that fast
+            capped = x.copy()
+            capped[np.ix_(fast, (1, 3))] *= (cfg.max_pedestrian_speed_mps / speed[fast])[:, None]
+            steps, steps_cov = self.predictor(capped, P)[2:]
         conflict = conflict_of(path, steps, steps_cov, cfg.corridor_half_width_m, cfg.corridor_front_m)
         return Behaviour(held[0], held[1], store.available[rows], held[2], held[3], state, speed, speed_std,
                          self.horizons, ahead, ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
