@@ -71,6 +71,7 @@ def test_the_corridor_ends_in_a_half_disc(beyond, across, inside):
 def test_the_coordinates_and_normal_of_a_turning_path():
     motion = EgoMotion(8.0, 0.4, 0.5, 0.05, True)  # radius 20 m, turning left: the normal points inwards
     path = predict_ego_path(EgoPose.from_xy_yaw(0, 0, 0), motion, TIMES)
-    s, d, normal = path_coordinates(path, np.array([[0.0, 1.0], [0.0, -1.0], [20 * np.sin(0.6), 20 * (1 - np.cos(0.6))]]))
+    points = np.array([[0.0, 1.0], [0.0, -1.0], [20 * np.sin(0.6), 20 * (1 - np.cos(0.6))]])
+    s, d, normal = path_coordinates(path, points)
     assert s[:2] == pytest.approx([0.0, 0.0], abs=1e-9) and d[:2] == pytest.approx([1.0, -1.0], abs=1e-9)
     assert np.allclose(normal[0], [0.0, 1.0]) and np.allclose(normal[2], [-np.sin(0.6), np.cos(0.6)])

@@ -162,7 +162,7 @@ class BehaviourEstimator:
         fast = speed > cfg.max_pedestrian_speed_mps
         if fast.any():  # the corridor's prediction at most that fast
             capped = x.copy()
-            capped[np.ix_(fast, (1, 3))] *= (cfg.max_pedestrian_speed_mps / speed[fast])[:, None]
+            capped[:, 1::2] *= np.where(fast, cfg.max_pedestrian_speed_mps / np.maximum(speed, 1e-9), 1.0)[:, None]
             steps, steps_cov = self.predictor(capped, P)[2:]
         conflict = conflict_of(path, steps, steps_cov, cfg.corridor_half_width_m, cfg.corridor_front_m)
         return Behaviour(held[0], held[1], store.available[rows], held[2], held[3], state, speed, speed_std,
