@@ -54,7 +54,7 @@ class EgoPath:
 
 class EgoHistory:
     """The ego's recent poses (timestamp, x, y, yaw), at most ``config.ego_window_s`` old; a
-    gap longer than ``config.max_ego_gap_s`` forgets them. Between consecutive poses it keeps
+    gap longer than ``config.max_ego_gap_s``, or a time that does not increase, forgets them. Between consecutive poses it keeps
     ``pairs``: their mid time (s), signed speed (m/s) and yaw rate (rad/s), each computed once."""
 
     def __init__(self, config: BehaviourConfig) -> None:
@@ -67,8 +67,8 @@ class EgoHistory:
 
     def add(self, timestamp: float, ego: EgoPose) -> None:
         timestamp = float(timestamp)
-        if self.poses and timestamp - self.poses[-1][0] > self.config.max_ego_gap_s:
-            self.reset()
+        if self.poses and not 0.0 < timestamp - self.poses[-1][0] <= self.config.max_ego_gap_s:
+            self.reset()  # a gap, or a time that does not increase: start again
         pose = (timestamp, float(ego.translation[0]), float(ego.translation[1]), float(ego.yaw))
         if self.poses:
             last = self.poses[-1]
@@ -176,9 +176,11 @@ def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s
         xy += (x0, y0)
     else:
         angle = heading + turn
-        xy = np.stack([np.sin(angle), -np.cos(angle)], axis=1)
-        xy -= (math.sin(heading), -math.cos(heading))
-        xy /= curvature
+        xy = np.empty((len(times), 2))
+        np.sin(angle, out=xy[:, 0])
+        np.cos(angle, out=xy[:, 1])
+        xy -= (math.sin(heading), math.cos(heading))
+        xy /= (curvature, -curvature)
         xy += (x0, y0)
     lateral = np.hypot((0.5 * motion.yaw_rate_std) * times * dist,
                        (0.5 * motion.speed_std) * times * np.abs(np.sin(turn)))
