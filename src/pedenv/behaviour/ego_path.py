@@ -54,8 +54,9 @@ class EgoPath:
 
 class EgoHistory:
     """The ego's recent poses (timestamp, x, y, yaw), at most ``config.ego_window_s`` old; a
-    gap longer than ``config.max_ego_gap_s``, or a time that does not increase, forgets them. Between consecutive poses it keeps
-    ``pairs``: their mid time (s), signed speed (m/s) and yaw rate (rad/s), each computed once."""
+    gap longer than ``config.max_ego_gap_s``, or a time that does not increase, forgets them.
+    Between consecutive poses it keeps ``pairs``: their mid time (s), signed speed (m/s) and yaw
+    rate (rad/s), each computed once."""
 
     def __init__(self, config: BehaviourConfig) -> None:
         self.config = config
