@@ -167,7 +167,7 @@ def print_row(label: str, detections: str, name: str, f: dict, breakdown: bool) 
           f"{f['ground_beyond_range_pct']:.1f} % |", flush=True)
     if breakdown:
         print("|  | breakdown: [count, mean %, points of the mean] | " + "; ".join(
-            f"{k} {v}" for k, v in f["breakdown"].items()) + " |||||||", flush=True)
+            f"{k} {v}" for k, v in f["breakdown"].items()) + " ||||||||", flush=True)
 
 
 if __name__ == "__main__":
