@@ -2,7 +2,7 @@
 ``far`` reports does ``stream`` also report, frame by frame, and at what cost?
 
     PYTHONPATH=src python benchmarks/stream_video.py [--video /usr/share/doc/opencv-doc/examples/data/vtest.avi]
-        [--frames 200] [--json out.json]
+        [--frames 200] [--json out.json] [--keep DIR] [--far-from DIR/far/environment.jsonl]
 
 The video (Debian's ``opencv-doc``: ``examples/data/vtest.avi``, 768x576, a pedestrian
 street seen from above; ``apt-get install opencv-doc``) is written as a recording of its first
@@ -70,6 +70,11 @@ def main(argv=None) -> int:
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
     parser.add_argument("--frames", type=int, default=200)
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="Write the recording and the runs here (kept) instead of a temporary folder.")
+    parser.add_argument("--far-from", type=Path, default=None,
+                        help="The environment.jsonl of an earlier far run of the same frames (--keep's far/): "
+                             "far is not run again.")
     args = parser.parse_args(argv)
 
     from pedenv.apps.options import PoseOptions, RecordingSource
@@ -77,10 +82,13 @@ def main(argv=None) -> int:
     from pedenv.boxes import iou_matrix
 
     results: dict = {"video": str(args.video), "load_at_start": os.getloadavg()[0]}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = args.keep or Path(scratch)
         rec, rate = write_recording(args.video, args.frames, Path(tmp) / "recording")
         boxes = {}
-        for mode in ("far", "stream"):
+        if args.far_from:
+            boxes["far"] = reported(args.far_from)[:args.frames]
+        for mode in ("stream",) if args.far_from else ("far", "stream"):
             t0 = time.perf_counter()
             source = RecordingSource(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
                                      images=rec / "images", fps=rate)
