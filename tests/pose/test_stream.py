@@ -1,5 +1,6 @@
 """``stream`` detection with the real network on KITTI tracking 0016's real consecutive frames."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -88,3 +89,19 @@ def test_a_crowd_gets_the_smaller_crops_and_a_few_tracks_the_usual_ones(stream):
     assert plan.mosaics == 1
     for crop, group in zip(crops, groups):  # few: the usual crops
         assert crop.scale == pytest.approx((96.0 / heights[group]).min())
+
+
+def test_persons_no_track_holds_are_searched_again_in_the_next_frame(stream, frames):
+    images, samples = frames
+    stream.detect_frame(images[0], samples[0].geometry, 0.0)  # the cold start: the whole band, no tracks
+    held = len(stream._untracked)
+    stream.detect_frame(images[0], samples[0].geometry, 0.1)  # no tracks given: those persons stand in
+    accounts = stream.describe()["stream"]
+    assert held >= 6  # measured: 7 (of the frame's 8 pedestrians)
+    # those the whole-frame pass misses (all 7) are searched in packed inputs and found there again
+    assert accounts["tracks_at_risk_searched"] >= 6 and accounts["tracks_found_in_crops"] >= 6  # measured: 7, 7
+    off = type(stream)(detection=replace(stream.config, stream=replace(stream.config.stream, search_untracked=False)),
+                       model_path=stream.backend.model_path)
+    off.detect_frame(images[0], samples[0].geometry, 0.0)
+    off.detect_frame(images[0], samples[0].geometry, 0.1)
+    assert len(off._untracked) == 0 and off.describe()["stream"]["tracks_at_risk_searched"] == 0

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pedenv.boxes import iou_matrix
 from pedenv.errors import InputError
 from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
 from pedenv.pose.levels import HeightLine
@@ -87,6 +88,7 @@ class StreamPose:
         self._dt = 0.1
         self.finder = TrackFinder()
         self.bank = CreditBank()
+        self._untracked = np.zeros((0, 4))
 
     def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
         """One image on its own (no stream): as ``far`` (the whole band), the cascade included."""
@@ -135,6 +137,7 @@ class StreamPose:
         tiles, note = band_tiles(width, height, cfg, geometry, line)
         ids, predicted, hits = tracks if tracks is not None else (np.zeros(0, np.int64), np.zeros((0, 4)),
                                                                  np.zeros(0, np.int64))
+        ids, predicted, hits = self._with_untracked(ids, np.asarray(predicted, float).reshape(-1, 4), hits)
         unseen = self.finder.unseen_s(ids, timestamp)
         known, last = self.finder.search_boxes(ids, predicted, cfg.stream.track_max_shift)
         rows = tracks_at_risk(known, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
@@ -157,6 +160,10 @@ class StreamPose:
             dets = merge_detections([(dets, np.zeros(len(dets), bool)), (extra, np.zeros(len(extra), bool))],
                                     max_detections=b.max_detections)
         self.finder.update(ids, known, dets.boxes, timestamp, cfg.stream.missed_iou)
+        tracked = known[ids >= 0]
+        free = iou_matrix(dets.boxes, tracked).max(axis=1) <= cfg.stream.missed_iou if len(tracked) and len(dets) \
+            else np.ones(len(dets), bool)
+        self._untracked = dets.boxes[free] if cfg.stream.search_untracked else np.zeros((0, 4))
         self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= cfg.fit_min_score]])[-FIT_MEMORY:]
         self.last_passes = [first, *steps, *passes]
         self.last_note = ("cold start, whole band; " if cold else "") + note
@@ -171,37 +178,48 @@ class StreamPose:
                      costs: tuple[float, np.ndarray, np.ndarray]) -> tuple[Grouped, FramePlan]:
         """The crops of the tracks to search (``boxes``: their search boxes and last detections,
         (K, 4) px each, most at risk first) and the frame's plan; ``costs``: the whole-frame
-        pass's units, the band tiles' units and ages (s). The usual crops when the plan pays for
-        all of them, else the crowd's smaller ones; neighbours' crops merged
-        (:func:`~pedenv.pose.mosaic.merge_crops`), with per crop the rows of ``boxes`` it holds."""
+        pass's units, the band tiles' units and ages (s). The first of these the plan pays for
+        in full: the usual crops, the usual crops with neighbours joined
+        (:func:`~pedenv.pose.mosaic.merge_crops`), the crowd's smaller crops, those joined; per
+        crop the rows of ``boxes`` it holds."""
         cfg = self.config
         mosaic = cfg.stream.mosaic_size
         searched, last = (np.asarray(b, float).reshape(-1, 4) for b in boxes)
         for person_px, margin, edge_px in cfg.stream.crop_styles:
-            crops = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic, also),
+            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic, also),
                              edge_px=edge_px) for box, also in zip(searched, last)]
-            crops, groups, needed = self._merged(crops)
-            with_cascade = pack_tallest_first(crops + early_crops, mosaic, max_mosaics=needed + cfg.cascade.max_units)
-            wanted = max(needed, len({p.mosaic for p in with_cascade}))
-            plan = plan_frame(costs[0], units(mosaic), wanted, costs[1], costs[2], self._dt, cfg.stream,
-                              self.bank.credit)
-            if plan.mosaics >= needed:
-                break
+            for crops, groups in self._arrangements(apart, crowd=person_px == cfg.stream.crowd_person_px):
+                needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
+                with_cascade = pack_tallest_first(crops + early_crops, mosaic,
+                                                  max_mosaics=needed + cfg.cascade.max_units)
+                wanted = max(needed, len({p.mosaic for p in with_cascade}))
+                plan = plan_frame(costs[0], units(mosaic), wanted, costs[1], costs[2], self._dt, cfg.stream,
+                                  self.bank.credit)
+                if plan.mosaics >= needed:
+                    return (crops, groups), plan
         return (crops, groups), plan
 
-    def _merged(self, crops: list[Crop]) -> tuple[list[Crop], list[list[int]], int]:
-        """The tracks' ``crops`` with neighbours joined (``stream.merge_crops``) unless that needs
-        more packed inputs (a tall joined crop can waste a shelf), per crop the indices of
-        ``crops`` it holds, and the packed inputs they need."""
+    def _arrangements(self, crops: list[Crop], crowd: bool) -> list[Grouped]:
+        """The tracks' ``crops`` apart, or, the crowd's (``stream.merge_crops``), with neighbours
+        joined unless that needs more packed inputs; per crop the indices of ``crops`` it holds."""
+        apart = (crops, [[i] for i in range(len(crops))])
+        if not crowd or not self.config.stream.merge_crops:
+            return [apart]
         mosaic = self.config.stream.mosaic_size
-        groups = [[i] for i in range(len(crops))]
-        needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
-        if self.config.stream.merge_crops:
-            joined, joined_groups = merge_crops(crops, self.config.stream.merge_scale_ratio, mosaic)
-            joined_needed = len({p.mosaic for p in pack_tallest_first(joined, mosaic)})
-            if joined_needed <= needed:
-                return joined, joined_groups, joined_needed
-        return crops, groups, needed
+        joined = merge_crops(crops, self.config.stream.merge_scale_ratio, mosaic)
+        needed = [len({p.mosaic for p in pack_tallest_first(c, mosaic)}) for c in (joined[0], crops)]
+        return [joined if needed[0] <= needed[1] else apart]
+
+    def _with_untracked(self, ids: np.ndarray, predicted: np.ndarray,
+                        hits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tracks and, after them, the persons found last frame that no track held (ids < 0)."""
+        boxes = self._untracked
+        if len(boxes) and len(predicted):
+            boxes = boxes[iou_matrix(boxes, predicted).max(axis=1) <= self.config.stream.missed_iou]
+        if not len(boxes):
+            return ids, predicted, hits
+        return (np.concatenate([ids, -1 - np.arange(len(boxes))]), np.concatenate([predicted, boxes]),
+                np.concatenate([hits, np.ones(len(boxes), np.int64)]))
 
     def _packed(self, image: np.ndarray, dets: Detections, low: list[Detections],
                 boxes: tuple[np.ndarray, np.ndarray], rows: list[np.ndarray],

@@ -38,12 +38,14 @@ class TrackFinder:
         self._last: dict[int, np.ndarray] = {}
 
     def unseen_s(self, ids: np.ndarray, timestamp: float) -> np.ndarray:
-        """(T,) seconds since each track of ``ids`` was last detected (0 for a new one)."""
-        return np.array([timestamp - self._seen.setdefault(int(i), timestamp) for i in ids], float)
+        """(T,) seconds since each track of ``ids`` was last detected (0 for a new one, and for a
+        person no track holds, id < 0)."""
+        return np.array([timestamp - self._seen.setdefault(int(i), timestamp) if i >= 0 else 0.0 for i in ids], float)
 
     def search_boxes(self, ids: np.ndarray, predicted: np.ndarray, max_shift: float) -> tuple[np.ndarray, np.ndarray]:
         """``(search boxes, last detections)``, both (T, 4) px, for the tracks ``ids`` (T,) with
-        their ``predicted`` boxes (T, 4) px; a track never detected here: its predicted box for both.
+        their ``predicted`` boxes (T, 4) px; a track never detected here (or id < 0, a person no
+        track holds): its predicted box for both.
         max_shift: the most centre shift kept, in heights of the last detection (inf: any)."""
         predicted = np.asarray(predicted, float).reshape(-1, 4)
         last = np.array([self._last.get(int(i), p) for i, p in zip(ids, predicted)], float).reshape(-1, 4)
@@ -60,7 +62,7 @@ class TrackFinder:
         if not len(ids) or not len(boxes):
             return
         overlap = iou_matrix(np.asarray(searched, float), np.asarray(boxes, float))
-        for row in np.flatnonzero(overlap.max(axis=1) > iou):
+        for row in np.flatnonzero((overlap.max(axis=1) > iou) & (np.asarray(ids) >= 0)):
             self._seen[int(ids[row])] = timestamp
             self._last[int(ids[row])] = np.asarray(boxes[int(np.argmax(overlap[row]))], float).copy()
 
