@@ -19,13 +19,20 @@ def test_a_track_is_searched_at_its_detected_size_moved_by_the_prediction():
     detected = np.array([[100.0, 200, 130, 290], [400, 200, 430, 290]])  # 90 px tall
     finder.update(ids, detected, detected, 0.0, 0.3)
     # the tracker's edge velocities shrank track 7's box to 60 px and moved it 10 px right; track 8's
-    # motion (300 px in a frame: a wrong association) is ignored
+    # box is 300 px away (another person: ids reused, or a wrong association): searched as predicted
     predicted = np.array([[110.0, 215, 140, 275], [700, 200, 730, 290]])
     searched, last = finder.search_boxes(ids, predicted, 1.0)
-    np.testing.assert_allclose(last, detected)
-    np.testing.assert_allclose(searched, [[110, 200, 140, 290], [400, 200, 430, 290]])
-    searched, _ = finder.search_boxes(ids, predicted, 0.0)  # 0: always around the last detection
-    np.testing.assert_allclose(searched, detected)
+    np.testing.assert_allclose(last, [detected[0], predicted[1]])
+    np.testing.assert_allclose(searched, [[110, 200, 140, 290], predicted[1]])
+    searched, last = finder.search_boxes(ids, predicted, 0.0)  # 0: always the predicted box
+    np.testing.assert_allclose(searched, predicted)
+    np.testing.assert_allclose(last, predicted)
+    # ids reused for other people (evaluate-detections' stand-in tracks: last frame's persons in
+    # another order): each remembered box is the other id's predicted box, so each is searched as predicted
+    swapped = detected[::-1].copy()
+    searched, last = finder.search_boxes(ids, swapped, 100.0)
+    np.testing.assert_allclose(searched, swapped)
+    np.testing.assert_allclose(last, swapped)
 
 
 def test_a_track_never_detected_here_is_searched_at_its_prediction():

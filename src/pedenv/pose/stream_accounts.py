@@ -17,6 +17,8 @@ from pedenv.records import Detections
 #: confidence at least PLAUSIBLE_KEYPOINT_CONF): a person, not a pole.
 SURE_SCORE = 0.5
 PLAUSIBLE_KEYPOINT_CONF = 0.5
+#: A remembered box overlapping another track's predicted box by this IoU (and not its own) is that track's.
+SAME_BOX_IOU = 0.95
 
 
 class TrackFinder:
@@ -24,9 +26,12 @@ class TrackFinder:
 
     A track is searched around its **search box**: the box it was last detected with, moved by
     the prediction's centre shift since (the predicted box's size follows the tracker's edge
-    velocities, which a detector's jitter distorts; the detected size does not), or left in
-    place when that shift exceeds ``max_shift`` of its height (an implausible motion). Its crop
-    covers the last detection too (the crop's ``also``). A person found in a track's crop
+    velocities, which a detector's jitter distorts; the detected size does not); its crop covers
+    the last detection too (the crop's ``also``). A shift over ``max_shift`` of its height, or a
+    remembered box that is another track's predicted box (IoU >= :data:`SAME_BOX_IOU`) and not
+    near its own, means the box is not that track's (stand-in tracks whose ids change between
+    frames, a wrong association):
+    the predicted box is searched as it is. A person found in a track's crop
     re-detects it when whole, sure or plausible, nearest the search box or the last detection
     (within :class:`~pedenv.pose.redetect_config.RedetectConfig`'s ``match_distance`` and
     ``match_height_ratio``) and nearer the search box than any other track's.
@@ -44,14 +49,19 @@ class TrackFinder:
 
     def search_boxes(self, ids: np.ndarray, predicted: np.ndarray, max_shift: float) -> tuple[np.ndarray, np.ndarray]:
         """``(search boxes, last detections)``, both (T, 4) px, for the tracks ``ids`` (T,) with
-        their ``predicted`` boxes (T, 4) px; a track never detected here (or id < 0, a person no
+        their ``predicted`` boxes (T, 4) px; a track never detected here or id < 0 (a person no
         track holds): its predicted box for both.
-        max_shift: the most centre shift kept, in heights of the last detection (inf: any)."""
+        max_shift: the most centre shift from the last detection, in its heights, for it to count."""
         predicted = np.asarray(predicted, float).reshape(-1, 4)
         last = np.array([self._last.get(int(i), p) for i, p in zip(ids, predicted)], float).reshape(-1, 4)
         shift = 0.5 * (predicted[:, :2] + predicted[:, 2:] - last[:, :2] - last[:, 2:])
         heights = np.maximum(last[:, 3] - last[:, 1], 1.0)
-        shift[np.linalg.norm(shift, axis=1) > max_shift * heights] = 0.0
+        other = np.linalg.norm(shift, axis=1) > max_shift * heights
+        if len(predicted):  # or it is another track's predicted box, apart from its own
+            overlap = iou_matrix(last, predicted)
+            other |= (np.diag(overlap) <= 0.0) & (overlap.max(axis=1) >= SAME_BOX_IOU)
+        last[other] = predicted[other]
+        shift[other] = 0.0
         return last + np.tile(shift, 2), last
 
     def update(self, ids: np.ndarray, searched: np.ndarray, boxes: np.ndarray, timestamp: float,
