@@ -18,10 +18,10 @@ from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, loa
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.images import write_image
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import holds_files, prepare_output_dir
+from pedenv.outputs.png import write_png
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
@@ -81,7 +81,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(out / "environment.jsonl")}
     stats, timer = PipelineStats(), _StepTimes()
-    outputs = _Outputs(out, rec, output.video_out, summary, progress)
+    outputs = _Outputs(out, rec, output, summary, progress)
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
         with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
@@ -188,9 +188,10 @@ class _Outputs:
     """The writer stage: each frame's state to the JSON Lines file and the sinks, its overlay
     to a PNG or the overlay video; counts the frames written into ``summary``."""
 
-    def __init__(self, out: Path, rec: Recording | BagRecording, video_out: bool, summary: dict,
+    def __init__(self, out: Path, rec: Recording | BagRecording, output: OutputOptions, summary: dict,
                  progress: Callable[[int, int], None] | None) -> None:
-        self.out, self.rec, self.video_out, self.summary, self.progress = out, rec, video_out, summary, progress
+        self.out, self.rec, self.summary, self.progress = out, rec, summary, progress
+        self.video_out, self.png_compression = output.video_out, output.png_compression
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
         self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
@@ -209,7 +210,7 @@ class _Outputs:
                 self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)
             self.video.write(drawn[..., ::-1].copy())
         else:
-            write_image(self.out / "overlays" / f"{frame.index:06d}.png", drawn)
+            write_png(self.out / "overlays" / f"{frame.index:06d}.png", drawn, self.png_compression)
         self.last = (state, frame)
 
     def done(self, result: tuple[EnvironmentState, Frame]) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
