@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import struct
 import zlib
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -26,7 +27,7 @@ from pedenv.outputs.output_dir import writable_file
 #: The valid values of ``png_compression``.
 PNG_COMPRESSIONS = ("fast", "none")
 _SIGNATURE = b"\x89PNG\r\n\x1a\n"
-_IDAT_BYTES = 2**20  # the stored pixels in chunks of 1 MiB (OpenCV warns above 8 MB a chunk)
+_BAND_BYTES = 2**18  # rows stored a band at a time: an IDAT chunk each, well below the 8 MB where OpenCV warns
 
 
 def check_png_compression(name: str, value: object) -> str:
@@ -38,6 +39,26 @@ def check_png_compression(name: str, value: object) -> str:
 
 def encode_png(image_rgb: np.ndarray, compression: str = "fast") -> bytes:
     """The PNG file of ``image_rgb``: (H, W, 3) uint8 RGB; ``compression`` (module doc)."""
+    return b"".join(_png_parts(image_rgb, compression))
+
+
+def write_png(path: str | Path, image_rgb: np.ndarray, compression: str = "fast") -> Path:
+    """Write ``image_rgb`` ((H, W, 3) uint8 RGB) as the PNG ``path`` (its folder created);
+    one InputError when it cannot be written. ``none`` writes the file piece by piece, so no
+    copy of the whole image is made (each would cost the 1000 page faults of 4 MB here)."""
+    path = writable_file(Path(path), "image")
+    parts = _png_parts(image_rgb, compression)
+    try:
+        with path.open("wb") as f:
+            for part in parts:
+                f.write(part)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write the image: {exc.strerror or exc}") from None
+    return path
+
+
+def _png_parts(image_rgb: np.ndarray, compression: str) -> Iterator[bytes | memoryview]:
+    """The bytes of the PNG file of ``image_rgb`` ((H, W, 3) uint8 RGB), in pieces."""
     check_png_compression("png_compression", compression)
     if image_rgb.ndim != 3 or image_rgb.shape[2] != 3 or image_rgb.dtype != np.uint8:
         raise ValueError(f"image must be (H, W, 3) uint8, got {image_rgb.shape} {image_rgb.dtype}")
@@ -45,37 +66,24 @@ def encode_png(image_rgb: np.ndarray, compression: str = "fast") -> bytes:
         ok, data = cv2.imencode(".png", cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR))
         if not ok:
             raise InputError("cannot encode the image as PNG")
-        return data.tobytes()
-    return _stored_png(image_rgb)
-
-
-def write_png(path: str | Path, image_rgb: np.ndarray, compression: str = "fast") -> Path:
-    """Write ``image_rgb`` ((H, W, 3) uint8 RGB) as the PNG ``path`` (its folder created);
-    one InputError when it cannot be written."""
-    path = writable_file(Path(path), "image")
-    data = encode_png(image_rgb, compression)
-    try:
-        path.write_bytes(data)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot write the image: {exc.strerror or exc}") from None
-    return path
-
-
-def _stored_png(image_rgb: np.ndarray) -> bytes:
-    """An 8-bit RGB PNG of ``image_rgb`` ((H, W, 3) uint8) with filter ``None`` on every row and
-    its pixels in deflate's stored blocks (zlib level 0)."""
+        yield data.data  # the encoded bytes, not copied
+        return
     h, w, _ = image_rgb.shape
-    rows = np.empty((h, 1 + 3 * w), np.uint8)
-    rows[:, 0] = 0  # each row's filter byte: None
-    rows[:, 1:] = image_rgb.reshape(h, 3 * w)
-    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)  # 8 bits, RGB, deflate, adaptive filters, no interlace
-    pixels = memoryview(zlib.compress(rows.data, 0))
-    parts = [_SIGNATURE, *_chunk(b"IHDR", header)]
-    for start in range(0, len(pixels), _IDAT_BYTES):
-        parts += _chunk(b"IDAT", pixels[start:start + _IDAT_BYTES])
-    return b"".join(parts + _chunk(b"IEND", b""))
+    yield _SIGNATURE
+    yield from _chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))  # 8-bit RGB, deflate, no interlace
+    deflate = zlib.compressobj(0)  # stored blocks
+    band = max(1, _BAND_BYTES // (3 * w + 1))
+    rows = np.zeros((min(band, h), 3 * w + 1), np.uint8)  # column 0: each row's filter byte, 0 (None)
+    for top in range(0, h, band):
+        n = min(band, h - top)
+        rows[:n, 1:] = image_rgb[top:top + n].reshape(n, 3 * w)
+        yield from _chunk(b"IDAT", deflate.compress(rows[:n].data))
+    yield from _chunk(b"IDAT", deflate.flush())
+    yield from _chunk(b"IEND", b"")
 
 
 def _chunk(kind: bytes, data: bytes | memoryview) -> list[bytes | memoryview]:
-    """One PNG chunk's parts: length, type, data, CRC-32 of type and data."""
+    """One PNG chunk's parts: length, type, data, CRC-32 of type and data (none for empty IDAT data)."""
+    if kind == b"IDAT" and not len(data):
+        return []
     return [struct.pack(">I", len(data)), kind, data, struct.pack(">I", zlib.crc32(data, zlib.crc32(kind)))]
