@@ -144,7 +144,7 @@ def _niceness() -> int:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a thread's own niceness is Linux's")
-@pytest.mark.parametrize("nice", [0, 10, 19])
+@pytest.mark.parametrize("nice", [None, 0, 10, 19])
 def test_reading_and_writing_run_nicer_than_the_network(nice):
     seen: dict[str, set[int]] = {"read": set(), "step": set(), "write": set()}
 
@@ -160,4 +160,4 @@ def test_reading_and_writing_run_nicer_than_the_network(nice):
     run_frames(frames(), step, lambda _: seen["write"].add(_niceness()), config=PipelineConfig(nice=nice))
     (network,) = seen["step"]
     assert network == _niceness()  # the calling thread keeps its own
-    assert seen["read"] == seen["write"] == {min(19, network + nice)}
+    assert seen["read"] == seen["write"] == {min(19, network + (nice or 0))}

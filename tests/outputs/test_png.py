@@ -50,6 +50,6 @@ def test_write_png_creates_the_folder_and_refuses_bad_settings(tmp_path):
 def test_output_options_check_png_compression():
     from pedenv.apps.options import OutputOptions
 
-    assert OutputOptions("out").png_compression == "fast"
+    assert OutputOptions("out").png_compression == "none"
     with pytest.raises(InputError, match=r"output\.png_compression must be one of fast, none, got 9"):
         OutputOptions("out", png_compression=9)  # type: ignore[arg-type]

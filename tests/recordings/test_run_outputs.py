@@ -39,7 +39,10 @@ def test_run_writes_every_output_of_the_bus_recording(tmp_path, pose_env, monkey
     # written beside the network by the pipeline, in frame order
     assert [line["frame"] for line in lines] == list(range(6))
     assert sorted(p.name for p in (out / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(6)]
+    overlay = cv2.imread(str(out / "overlays" / "000005.png"))  # stored: the pixels' bytes plus 0.1 % at most
+    assert overlay.nbytes < (out / "overlays" / "000005.png").stat().st_size < 1.001 * overlay.nbytes
     run = json.loads((out / "run.json").read_text())
+    assert run["speed"]["pipeline"]["nice"] == 10  # the light outputs' writer runs after the network
     assert run["pose_backend"]["device"] == "auto" and run["pose_backend"]["provider"] == "CPUExecutionProvider"
     speed = run["speed"]
     assert speed["frames_dropped"] == run["frames_dropped"] == 0 and speed["frames_per_second"] > 0

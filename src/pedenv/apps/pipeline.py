@@ -62,19 +62,23 @@ class PipelineConfig:
     realtime: take frames at the recording's own rate and drop those that arrive while the
         model is busy (module doc); False runs every frame as fast as it can.
     nice: how much lower the reader and writer threads run than the network (0..19, added to
-        the process's niceness; Linux only, elsewhere ignored; 10). With 0 they take the cores
-        from the network's threads on a machine with few cores (docs/speed.md); higher lets the
-        network go first and the reading and writing fill the time it leaves.
+        the process's niceness; Linux only, elsewhere ignored). Higher lets the network's threads
+        go first and the reading and writing fill the time they leave, which pays while the
+        writer needs less time than the network; a writer slower than the network must not wait
+        for it (0). None (the default): 0 here, and ``pedenv run`` chooses by its outputs
+        (:func:`pedenv.apps.run.run_recording`; docs/speed.md).
     """
 
     read_ahead: int = 4
     write_behind: int = 8
     realtime: bool = False
-    nice: int = 10
+    nice: int | None = None
 
     def __post_init__(self) -> None:
         for name, low, top in (("read_ahead", 1, 64), ("write_behind", 1, 256), ("nice", 0, 19)):
             value = getattr(self, name)
+            if name == "nice" and value is None:
+                continue
             if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= top:
                 raise InputError(f"pipeline.{name} must be an integer in [{low}, {top}], got {value!r}")
         if not isinstance(self.realtime, bool):
@@ -120,10 +124,10 @@ def _put(q: queue.Queue, item: object, stop: threading.Event) -> bool:
     return False
 
 
-def lower_priority(nice: int) -> None:
+def lower_priority(nice: int | None) -> None:
     """Run the calling thread ``nice`` steps nicer than it runs now (Linux: a thread's niceness is
     its own; elsewhere nothing is done). A niceness that cannot be set is left as it is."""
-    if nice <= 0 or not sys.platform.startswith("linux"):
+    if not nice or not sys.platform.startswith("linux"):
         return
     tid = threading.get_native_id()
     try:
@@ -133,7 +137,7 @@ def lower_priority(nice: int) -> None:
 
 
 def _read(frames: Iterable[Frame], out: queue.Queue[Frame | _Failure | _End], stop: threading.Event,
-          nice: int = 0) -> None:
+          nice: int | None = None) -> None:
     lower_priority(nice)
     iterator = iter(frames)
     try:

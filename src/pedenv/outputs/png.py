@@ -4,9 +4,10 @@ A PNG's cost is its deflate compression: OpenCV's fastest setting (filter ``Sub`
 run-length strategy) takes about 40 ms of one core per 1600x900 frame on this project's 2-core
 machine, more than a 384x640 pass of the pose network (docs/speed.md). ``png_compression``:
 
-- ``"fast"``: OpenCV's fastest deflate: about 1.3-1.5 MB per 1600x900 overlay;
-- ``"none"``: deflate's stored blocks (no compression, written here with numpy and zlib):
-  about 4 ms per 1600x900 frame, 4.3 MB per overlay (width x height x 3 bytes, plus 0.03 %).
+- ``"none"`` (the default of ``pedenv run``): deflate's stored blocks (no compression, written
+  here with numpy and zlib, a band of rows at a time): about 5 ms per 1600x900 frame, 4.3 MB per
+  overlay (width x height x 3 bytes, plus 0.04 %);
+- ``"fast"``: OpenCV's fastest deflate: about 1.5 MB per 1600x900 overlay of a street video.
 
 Both are ordinary 8-bit RGB PNGs that every viewer reads, pixel for pixel the same image.
 """
@@ -37,12 +38,12 @@ def check_png_compression(name: str, value: object) -> str:
     return value
 
 
-def encode_png(image_rgb: np.ndarray, compression: str = "fast") -> bytes:
+def encode_png(image_rgb: np.ndarray, compression: str = "none") -> bytes:
     """The PNG file of ``image_rgb``: (H, W, 3) uint8 RGB; ``compression`` (module doc)."""
     return b"".join(_png_parts(image_rgb, compression))
 
 
-def write_png(path: str | Path, image_rgb: np.ndarray, compression: str = "fast") -> Path:
+def write_png(path: str | Path, image_rgb: np.ndarray, compression: str = "none") -> Path:
     """Write ``image_rgb`` ((H, W, 3) uint8 RGB) as the PNG ``path`` (its folder created);
     one InputError when it cannot be written. ``none`` writes the file piece by piece, so no
     copy of the whole image is made (each would cost the 1000 page faults of 4 MB here)."""
