@@ -12,6 +12,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import cv2
 import numpy as np
 
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
@@ -223,7 +224,7 @@ class _Outputs:
         if self.video_out:
             if self.video is None:
                 self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)
-            self.video.write(drawn[..., ::-1].copy())
+            self.video.write(cv2.cvtColor(drawn, cv2.COLOR_RGB2BGR))  # 0.2 ms; drawn[..., ::-1].copy() took 8
         else:
             write_png(self.out / "overlays" / f"{frame.index:06d}.png", drawn, self.png_compression)
         self.last = (state, frame)
@@ -240,8 +241,6 @@ class _Outputs:
 
 
 def _open_video(path: Path, rec: Recording | BagRecording, shape: tuple[int, ...]) -> VideoOut:
-    import cv2
-
     stamps = np.array([t for _, t in rec.images]) if rec.images else None
     rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
     if rec.video is not None and not rec.fps:
