@@ -29,8 +29,10 @@ the annotated 3D box, in the camera frame (y down) at the box's depth ``z``,
 ``y_bottom - (v_ankle - c_y) z / f_y``. Per person the median over their frames, then the
 median and quartiles across persons, for KITTI (tracking and object samples) and nuScenes
 apart; the ground cue's ``fused.ankle_keypoint_offset_m`` is the KITTI median minus the
-anatomical ankle height (0.046 x 1.72 m). The detections are the cache of
-``real_detections.py``::
+anatomical ankle height (0.046 x 1.72 m). The spread across persons (``robust_std_m``, 1.4826
+MAD) of KITTI and nuScenes together, people and cameras apart, is the static ground cue's
+``fused.ankle_keypoint_offset_std_m``: how far one person's ankle keypoint may sit off that offset.
+The detections are the cache of ``real_detections.py``::
 
     PYTHONPATH=src python benchmarks/real_detections.py --mode far --min-score 0.25 \\
         --only kitti,nuscenes --out /tmp/det-far.npz
@@ -165,6 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     from fit_detector_model import load
 
     from pedenv.localization.fused.height import ANKLE_FRACTION
+    from pedenv.synthetic.detector_fit import robust_std
 
     dets = load(args.detections)
     dets.pop("_meta", None)
@@ -178,6 +181,7 @@ def main(argv: list[str] | None = None) -> int:
             q1, med, q3 = np.percentile(h, [25, 50, 75])
             summary[name] = {"persons": len(h), "median_m": round(float(med), 4),
                              "iqr_m": [round(float(q1), 4), round(float(q3), 4)],
+                             "robust_std_m": round(robust_std(h), 4),
                              "offset_over_anatomical_m": round(float(med - anatomical), 4)}
     print(json.dumps(summary, indent=2))
     return 0

@@ -28,6 +28,7 @@ def test_on_in_fused_off_in_paper_and_round_trips():
     ("max_ego_gap_s", float("nan"), "behaviour.max_ego_gap_s"),
     ("ego_trend_s", -0.5, "behaviour.ego_trend_s"),
     ("max_ego_jerk_mps3", 100.0, "behaviour.max_ego_jerk_mps3"),
+    ("max_pedestrian_speed_mps", 0.1, "behaviour.max_pedestrian_speed_mps"),
 ])
 def test_bad_values_name_the_field(field, value, message):
     kwargs = {field: value}

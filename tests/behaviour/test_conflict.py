@@ -55,3 +55,23 @@ def test_wide_uncertainty_lowers_the_probability():
     sure = _conflict(EgoMotion(8.0, 0.0, 0.5, 0.05, True), [[12.0, 0.0, 3.5, 0.0]], std=0.2)
     unsure = _conflict(EgoMotion(8.0, 0.0, 0.5, 0.05, True), [[12.0, 0.0, 3.5, 0.0]], std=5.0)
     assert sure.probability[0] < 0.1 and 0.15 < unsure.probability[0] < 0.6
+
+
+@pytest.mark.parametrize("beyond, across, inside", [
+    (1.0, 0.0, True),    # 1 m past the corridor's straight end, on the path: within its round end
+    (1.4, 1.4, False),   # past the end and to the side: 2 m from the end point
+    (-1.0, 1.2, True),   # before the end, 1.2 m to the side
+])
+def test_the_corridor_ends_in_a_half_disc(beyond, across, inside):
+    # a standing ego at 0 covers nothing: the corridor is its front, 2.5 m, then the round end of 1.5 m
+    c = _conflict(EgoMotion(0.0, 0.0, 0.0, 0.0, True), [[2.5 + beyond, 0.0, across, 0.0]], std=0.05)
+    assert c.probability[0] > 0.9 if inside else c.probability[0] < 0.5  # (the position spreads over 2 s)
+
+
+def test_the_coordinates_and_normal_of_a_turning_path():
+    motion = EgoMotion(8.0, 0.4, 0.5, 0.05, True)  # radius 20 m, turning left: the normal points inwards
+    path = predict_ego_path(EgoPose.from_xy_yaw(0, 0, 0), motion, TIMES)
+    points = np.array([[0.0, 1.0], [0.0, -1.0], [20 * np.sin(0.6), 20 * (1 - np.cos(0.6))]])
+    s, d, normal = path_coordinates(path, points)
+    assert s[:2] == pytest.approx([0.0, 0.0], abs=1e-9) and d[:2] == pytest.approx([1.0, -1.0], abs=1e-9)
+    assert np.allclose(normal[0], [0.0, 1.0]) and np.allclose(normal[2], [-np.sin(0.6), np.cos(0.6)])

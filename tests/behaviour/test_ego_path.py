@@ -98,3 +98,10 @@ def test_an_ego_starting_a_turn_is_followed_by_its_yaw_rate_now(now, rate, end_e
     m, path, truth = _scripted(lambda t: 5.0 + 0.0 * t, lambda t: 0.35 * smooth_step(t, 6.0, 0.5), now)
     assert m.yaw_rate == pytest.approx(rate, abs=0.005)
     assert np.linalg.norm(path.xy[-1] - truth[-1]) == pytest.approx(end_error, abs=0.03)
+
+
+def test_a_time_that_does_not_increase_starts_the_history_again():
+    h = _history([(k, 0.0, 0.0) for k in range(6)])
+    h.add(0.5, EgoPose.from_xy_yaw(5.0, 0.0, 0.0))  # the same time as the last pose
+    m = h.motion()
+    assert not m.known and m.speed == 0.0 and len(h.poses) == 1 and h.pairs == []

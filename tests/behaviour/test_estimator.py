@@ -11,6 +11,7 @@ from pedenv.behaviour import heading_filter as hf
 from pedenv.config import Config
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import environment_line
+from pedenv.records import EgoPose
 from pedenv.synthetic import generate_scenes
 from pedenv.synthetic.detector import DetectorModel
 
@@ -67,6 +68,27 @@ def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
     assert all(np.isfinite(np.asarray(getattr(b, f), float)).all() for f in b.__dataclass_fields__)
     assert np.allclose(b.predicted_positions[:, 0], state.pedestrians.positions[:, :2])  # standing where reported
 
+
+def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames):
+    # an ego driving along +x at 8 m/s; a pedestrian 12 m ahead and 14 m to its left: a filter saying
+    # 10 m/s towards the path has it cross within 1.5 s, at the 4 m/s cap it is still 6 m away at 2 s
+    state = PedestrianEnvironmentModel(Config()).update(frames[0])
+    peds, n = dataclasses.replace(state.pedestrians, behaviour=None), len(state.pedestrians)
+    t = frames[0].timestamp
+    now = dataclasses.replace(frames[0], ego=EgoPose.from_xy_yaw(0.0, 0.0, 0.0))
+    x = np.tile([-50.0, 0.0, 0.0, 0.0], (n, 1))  # the others stand behind the ego
+    x[0] = [12.0, 0.0, 14.0, -10.0]
+    P = np.repeat(np.diag([0.01, 0.01, 0.01, 0.01])[None], n, axis=0)
+    answers = []
+    for cap in (15.0, 4.0):
+        est = PedestrianEnvironmentModel(Config().replace(behaviour={"max_pedestrian_speed_mps": cap})).behaviour
+        for k in range(5, 0, -1):
+            est.ego.add(t - 0.1 * k, EgoPose.from_xy_yaw(-0.8 * k, 0.0, 0.0))
+        b = est.update(now, peds, x, P, np.ones(n, bool), peds.track_ids).behaviour
+        answers.append(b.conflict_probability[0])
+        assert np.allclose(b.predicted_positions[0, -1], [12.0, 14.0 - 30.0])  # the reported path: not capped
+    assert b.ego_speed == pytest.approx(8.0)
+    assert answers[0] > 0.8 and answers[1] < 0.05, answers  # measured 0.84 and 0.02
 
 
 def test_the_orientation_interval_holds_the_orientation_between_updates(frames):

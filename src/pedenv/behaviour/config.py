@@ -69,6 +69,9 @@ class BehaviourConfig:
     corridor_front_m: the corridor reaches this far beyond the path's end (the vehicle's front).
     conflict_horizon_s: how far ahead the ego's path and the corridor entry are predicted.
     conflict_step_s: time step of that prediction.
+    max_pedestrian_speed_mps: the corridor's prediction takes a filtered velocity faster than this
+        at this speed, in its direction (a track whose range jumps can show 5-10 m/s; people
+        rarely run faster). Raising it follows such tracks; the reported path is not changed.
     conflict_probability: a pedestrian whose probability of entering the corridor within the
         horizon is at least this is flagged ``conflict``.
     """
@@ -105,7 +108,8 @@ class BehaviourConfig:
     corridor_front_m: float = number(2.5, 0.0, 20.0)
     conflict_horizon_s: float = number(2.0, 0.1, 10.0)
     conflict_step_s: float = number(0.1, 0.01, 1.0)
-    conflict_probability: float = number(0.5, 0.01, 0.99)
+    max_pedestrian_speed_mps: float = number(4.0, 0.5, 15.0)
+    conflict_probability: float = number(0.3, 0.01, 0.99)
 
     def __post_init__(self) -> None:
         check_fields("behaviour", self)

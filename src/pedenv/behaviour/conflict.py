@@ -3,18 +3,22 @@
 The ego's path (:mod:`pedenv.behaviour.ego_path`) is a circular arc (or a straight line), so
 each point has a closed-form arc length ``s`` along it and offset ``d`` across it. The corridor
 is the band ``|d| < corridor_half_width_m`` for ``0 <= s <= L + corridor_front_m`` (L: the
-distance the ego covers within the horizon, accelerating or braking; the extension is its front). At each time step
+distance the ego covers within the horizon, accelerating or braking; the extension is its front),
+closed by a half disc of that radius (every point within the half width of the path's end, as
+``benchmarks/behaviour_synthetic.py``'s truth). At each time step
 the pedestrian's predicted position (a Gaussian) lies inside with probability
 ``P(|d| < w)`` (its spread across the path plus the path's own). The probability of entering
 within the horizon is the largest of these (a lower bound of the union); the entry time's
 distribution is the rise of their running maximum.
+
+All pedestrians and time steps are computed together, the x and y components stacked on one
+axis, so that a frame costs a few dozen numpy calls whatever the number of pedestrians.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy.special import ndtr
@@ -37,30 +41,68 @@ class Conflict:
     closest_time_s: np.ndarray
 
 
+#: Pedestrians farther than this many standard deviations beyond the corridor's reach are not in conflict.
+GATE_SIGMAS = 6.0
+#: The gate is checked only from this many pedestrians on (below, checking costs more than it saves;
+#: a gated pedestrian's probability is below ``ndtr(-GATE_SIGMAS)`` = 1e-9 either way).
+GATE_MIN_PEDESTRIANS = 32
+#: Weights of the stacked covariance components ``xx, xy, yy`` in a quadratic form ``u^T C u``.
+_QUADRATIC = np.array([1.0, 2.0, 1.0])
+_FIRST, _SECOND = [0, 0, 1], [0, 1, 1]  # the products ``ux ux, ux uy, uy uy``
+
+
 def path_coordinates(path: EgoPath, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Arc length ``s`` (...) metres along the path from the ego now (in its direction of travel),
-    offset ``d`` (...) metres across it (left positive) and the unit normal (..., 2) there, of
-    points (..., 2) world x-y."""
-    s, d, nx, ny = _coordinates(path, points[..., 0], points[..., 1])
-    return s, d, np.stack(np.broadcast_arrays(nx, ny, s)[:2], axis=-1)
+    """Arc length ``s`` (M,) metres along the path from the ego now (in its direction of travel),
+    offset ``d`` (M,) metres across it (left positive) and the unit normal (M, 2) there, of
+    points (M, 2) world x-y."""
+    frame = PathFrame(path)
+    s, d, rel, dist2 = frame.coordinates(np.asarray(points, float).T[None])
+    return s[0], d[0], np.broadcast_to(frame.normal(rel, dist2)[0].T, (len(points), 2)).copy()
 
 
-def _coordinates(path: EgoPath, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
-    """:func:`path_coordinates` of points given by their world coordinates px, py (...): ``s``,
-    ``d`` and the normal's components (... or scalars)."""
-    hx, hy = math.cos(path.yaw[0]) * path.direction, math.sin(path.yaw[0]) * path.direction
-    rx, ry = px - path.xy[0, 0], py - path.xy[0, 1]
-    curvature = path.curvature
-    if abs(curvature) < 1e-4:
-        return rx * hx + ry * hy, ry * hx - rx * hy, -hy, hx
-    r = 1.0 / curvature  # signed: positive turning left
-    tx, ty = rx + r * hy, ry - r * hx  # from the turn's centre
-    dist = np.hypot(tx, ty)
-    sx, sy = -r * -hy, -r * hx  # from the centre to the ego now
-    angle = np.arctan2(sx * ty - sy * tx, tx * sx + ty * sy)  # swept angle, signed like r
-    sign = math.copysign(1.0, r)
-    scale = -sign / np.maximum(dist, 1e-9)  # the normal: the inward unit vector for a left turn
-    return (abs(r) * sign) * angle, sign * (abs(r) - dist), tx * scale, ty * scale
+class PathFrame:
+    """The path's closed-form coordinates: for an arc its centre and the rotation that measures
+    the swept angle from the ego now; for a line its start and the rotation into along and across."""
+
+    def __init__(self, path: EgoPath) -> None:
+        hx, hy = math.cos(path.yaw[0]) * path.direction, math.sin(path.yaw[0]) * path.direction
+        self.straight = abs(path.curvature) < 1e-4
+        self.radius, self.sign = 0.0, 1.0
+        if self.straight:
+            self.origin = path.xy[0][None, :, None]
+            self.rotation = np.array([[hx, hy], [-hy, hx]])  # -> along, across (left)
+            self.weights = np.array([hy * hy, -2.0 * hx * hy, hx * hx])  # the normal's quadratic form
+            return
+        r = 1.0 / path.curvature  # signed: positive turning left
+        self.radius, self.sign = abs(r), math.copysign(1.0, r)
+        self.origin = np.array([path.xy[0, 0] - r * hy, path.xy[0, 1] + r * hx])[None, :, None]  # the centre
+        sx, sy = r * hy, -r * hx  # from the centre to the ego now
+        self.rotation = np.array([[sx, sy], [-sy, sx]])  # -> the swept angle's cosine and sine, times radii
+
+    def coordinates(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+        """``s``, ``d`` (N, K) metres of points (N, 2, K) world x, y; the points from the origin
+        (N, 2, K) and, for an arc, their squared distances from the centre (N, K) (None for a line)."""
+        rel = points - self.origin
+        turned = np.matmul(self.rotation, rel)
+        if self.straight:
+            return turned[:, 0], turned[:, 1], rel, None
+        dist2 = (rel * rel).sum(axis=1)
+        angle = np.arctan2(turned[:, 1], turned[:, 0])  # swept angle, signed like r
+        return (self.radius * self.sign) * angle, self.sign * (self.radius - np.sqrt(dist2)), rel, dist2
+
+    def across_variance(self, rel: np.ndarray, dist2: np.ndarray | None, cov: np.ndarray) -> np.ndarray:
+        """(N, K) m^2: the variance across the path of positions with covariances ``cov`` (N, 3, K)
+        (xx, xy, yy), given :meth:`coordinates`' ``rel`` and ``dist2``."""
+        if dist2 is None:
+            return np.matmul(self.weights, cov)
+        return np.matmul(_QUADRATIC, rel[:, _FIRST] * rel[:, _SECOND] * cov) / np.maximum(dist2, 1e-18)
+
+    def normal(self, rel: np.ndarray, dist2: np.ndarray | None) -> np.ndarray:
+        """(N, 2, K) (a line: (1, 2, 1)) the unit normal, left of the path, given :meth:`coordinates`'
+        ``rel`` and ``dist2``."""
+        if dist2 is None:
+            return self.rotation[1][None, :, None]
+        return rel * (-self.sign / np.maximum(np.sqrt(dist2), 1e-9))[:, None]  # inward for a left turn
 
 
 def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
@@ -72,51 +114,62 @@ def corridor_conflict(path: EgoPath, positions: np.ndarray, covariances: np.ndar
     more than :data:`GATE_SIGMAS` standard deviations beyond the corridor's reach (its length
     plus half width, from the ego now) gets probability 0 without the per-step computation.
     """
-    parts = (positions[..., 0], positions[..., 1], covariances[..., 0, 0], covariances[..., 0, 1],
-             covariances[..., 1, 1])
-    return conflict_of(path, tuple(np.ascontiguousarray(a, float) for a in parts), half_width_m, front_m)
+    positions, covariances = np.asarray(positions, float), np.asarray(covariances, float)
+    stacked = np.stack([covariances[..., 0, 0], covariances[..., 0, 1], covariances[..., 1, 1]], axis=1)
+    return conflict_of(path, np.ascontiguousarray(positions.transpose(0, 2, 1)), stacked, half_width_m, front_m)
 
 
-def conflict_of(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, front_m: float) -> Conflict:
-    """:func:`corridor_conflict` from the predicted positions and covariances by component:
-    ``parts`` = x, y (N, K) metres and the covariances' xx, xy, yy (N, K) m^2
-    (:meth:`pedenv.behaviour.prediction.PathPredictor.components`)."""
-    px, py, cxx, cxy, cyy = parts
-    n, k = px.shape
-    sx, sy = px - path.xy[:, 0], py - path.xy[:, 1]
-    sep = np.hypot(sx, sy)
-    j = sep.argmin(axis=1)  # the closest step
-    at = np.arange(n) * k + j
-    closest, ux, uy = sep.ravel()[at], sx.ravel()[at], sy.ravel()[at]
-    across = ux * ux * cxx.ravel()[at] + 2.0 * ux * uy * cxy.ravel()[at] + uy * uy * cyy.ravel()[at]
-    closest_var = across / np.maximum(closest, 1e-9) ** 2 + path.lateral_std[j] ** 2  # along the separation
-    horizon = path.times[-1]
-    prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
-    reach = path.length + front_m + half_width_m
-    spread_max = np.sqrt(np.maximum((cxx + cyy).max(axis=1), 0.0) + path.lateral_std[-1] ** 2)
-    near = np.hypot(px - path.xy[0, 0], py - path.xy[0, 1]).min(axis=1) < reach + GATE_SIGMAS * spread_max
-    if near.all():
-        prob, mean, spread = _entry(path, parts, half_width_m, path.length + front_m)
-    elif near.any():
-        prob[near], mean[near], spread[near] = _entry(path, tuple(a[near] for a in parts), half_width_m,
-                                                      path.length + front_m)
-    return Conflict(prob, mean, spread, closest, np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
+def conflict_of(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float,
+                front_m: float) -> Conflict:
+    """:func:`corridor_conflict` from the predicted positions (N, 2, K) world x, y metres and their
+    covariances (N, 3, K) m^2, the components xx, xy, yy
+    (:meth:`pedenv.behaviour.prediction.PathPredictor.stacked`)."""
+    n, _, k = positions.shape
+    lateral_var = path.lateral_std**2
+    sep = positions - path.xy.T  # from the ego at the same time
+    sep2 = (sep * sep).sum(axis=1)
+    j = sep2.argmin(axis=1)  # the closest step
+    people = np.arange(n)
+    u, c = sep[people, :, j], covariances[people, :, j]  # (N, 2), (N, 3)
+    closest2 = sep2[people, j]
+    across = (u[:, _FIRST] * u[:, _SECOND] * c) @ _QUADRATIC
+    closest_var = across / np.maximum(closest2, 1e-18) + lateral_var[j]  # along the separation
+    horizon, length = path.times[-1], path.length + front_m
+    near = _near(path, positions, covariances, length + half_width_m) if n >= GATE_MIN_PEDESTRIANS else None
+    if near is None or near.all():
+        prob, mean, spread = _entry(path, positions, covariances, half_width_m, length)
+    else:
+        prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
+        if near.any():
+            prob[near], mean[near], spread[near] = _entry(path, positions[near], covariances[near], half_width_m,
+                                                          length)
+    return Conflict(prob, mean, spread, np.sqrt(closest2), np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
 
 
-#: Pedestrians farther than this many standard deviations beyond the corridor's reach are not in conflict.
-GATE_SIGMAS = 6.0
+def _near(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, reach: float) -> np.ndarray:
+    """(N,) bool: the pedestrians that come within ``reach`` metres plus :data:`GATE_SIGMAS` of their
+    largest spread of the ego's position now."""
+    spread_max = np.sqrt(np.maximum((covariances[:, 0] + covariances[:, 2]).max(axis=1), 0.0)
+                         + path.lateral_std[-1] ** 2)
+    rel = positions - path.xy[0][None, :, None]
+    return np.sqrt((rel * rel).sum(axis=1).min(axis=1)) < reach + GATE_SIGMAS * spread_max
 
 
-def _entry(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, length: float
+#: The corridor's two edges, as multiples of its half width.
+_EDGES = np.array([1.0, -1.0])[:, None, None]
+
+
+def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float, length: float
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s, from
-    the positions and covariances by component (M, K) (see :func:`conflict_of`)."""
-    px, py, cxx, cxy, cyy = parts
-    s, d, nx, ny = _coordinates(path, px, py)
-    var = nx * nx * cxx + 2.0 * nx * ny * cxy + ny * ny * cyy + path.lateral_std**2
-    sd = np.sqrt(np.maximum(var, 1e-8))
-    inside = ndtr((half_width_m - d) / sd) - ndtr((-half_width_m - d) / sd)
-    inside *= (s >= 0.0) & (s <= length)  # behind the ego or beyond the corridor: 0
+    the positions (M, 2, K) and covariances (M, 3, K) (see :func:`conflict_of`)."""
+    frame = PathFrame(path)
+    s, d, rel, dist2 = frame.coordinates(positions)
+    sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + path.lateral_std**2, 1e-8))
+    beyond = np.maximum(s - length, 0.0)  # past the corridor's straight part: its round end's half chord
+    half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0))
+    edges = ndtr((half * _EDGES - d) / sd)
+    inside = (edges[0] - edges[1]) * (s >= 0.0)  # behind the ego: 0
     running = np.maximum.accumulate(inside, axis=1)
     prob = np.minimum(np.maximum(running[:, -1], 0.0), 1.0)
     some = prob > 1e-3
@@ -125,6 +178,8 @@ def _entry(path: EgoPath, parts: tuple[np.ndarray, ...], half_width_m: float, le
         return prob, np.full(len(prob), t[-1]), np.zeros(len(prob))
     rise = running.copy()
     rise[:, 1:] -= running[:, :-1]
-    mean = np.where(some, (rise @ t) / np.maximum(prob, 1e-12), t[-1])
-    spread = np.sqrt(np.maximum((rise * (t - mean[:, None]) ** 2).sum(1) / np.maximum(prob, 1e-12), 0.0))
+    weight = np.maximum(prob, 1e-12)
+    mean = np.where(some, (rise @ t) / weight, t[-1])
+    dev = t - mean[:, None]
+    spread = np.sqrt(np.maximum((rise * dev * dev).sum(axis=1) / weight, 0.0))
     return prob, mean, np.where(some, spread, 0.0)

@@ -54,21 +54,30 @@ class EgoPath:
 
 class EgoHistory:
     """The ego's recent poses (timestamp, x, y, yaw), at most ``config.ego_window_s`` old; a
-    gap longer than ``config.max_ego_gap_s`` forgets them."""
+    gap longer than ``config.max_ego_gap_s``, or a time that does not increase, forgets them.
+    Between consecutive poses it keeps ``pairs``: their mid time (s), signed speed (m/s) and yaw
+    rate (rad/s), each computed once."""
 
     def __init__(self, config: BehaviourConfig) -> None:
         self.config = config
         self.poses: list[tuple[float, float, float, float]] = []
+        self.pairs: list[tuple[float, float, float]] = []
 
     def reset(self) -> None:
-        self.poses = []
+        self.poses, self.pairs = [], []
 
     def add(self, timestamp: float, ego: EgoPose) -> None:
-        if self.poses and timestamp - self.poses[-1][0] > self.config.max_ego_gap_s:
-            self.poses = []
-        self.poses.append((float(timestamp), float(ego.translation[0]), float(ego.translation[1]), ego.yaw))
+        timestamp = float(timestamp)
+        if self.poses and not 0.0 < timestamp - self.poses[-1][0] <= self.config.max_ego_gap_s:
+            self.reset()  # a gap, or a time that does not increase: start again
+        pose = (timestamp, float(ego.translation[0]), float(ego.translation[1]), float(ego.yaw))
+        if self.poses:
+            last = self.poses[-1]
+            self.pairs.append((0.5 * (last[0] + timestamp), _speed(last, pose), _turn(last, pose)))
+        self.poses.append(pose)
         while len(self.poses) > 2 and timestamp - self.poses[1][0] >= self.config.ego_window_s:
             self.poses.pop(0)
+            self.pairs.pop(0)
 
     def motion(self) -> EgoMotion:
         """Speed, acceleration and jerk, and the yaw rate now, from the window's poses: quadratic
@@ -80,24 +89,18 @@ class EgoHistory:
         if len(poses) < 2 or poses[-1][0] - poses[0][0] <= 1e-6:
             return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * cfg.ego_speed_std_mps,
                              UNKNOWN_MOTION_FACTOR * cfg.ego_yaw_rate_std_radps, False)
-        pairs = [(0.5 * (a[0] + b[0]) - poses[-1][0], _speed(a, b), _turn(a, b)) for a, b in zip(poses, poses[1:])]
-        fit = _trend([p[0] for p in pairs], [(p[1], p[2]) for p in pairs])  # (3, 2): value, slope, curvature
-        speed, rate = float(fit[0, 0]), float(fit[0, 1])
-        acceleration = _clip(float(fit[1, 0]), cfg.max_ego_acceleration_mps2)
+        now = poses[-1][0]
+        fit = (_fit_map(tuple([round(p[0] - now, 6) for p in self.pairs]))
+               @ np.array([p[1:] for p in self.pairs])).tolist()  # (3, 2): value, slope, curvature
+        speed, rate = fit[0]
+        acceleration = _clip(fit[1][0], cfg.max_ego_acceleration_mps2)
         clipped = _clip(rate, cfg.max_yaw_rate_radps)
         return EgoMotion(speed, clipped, cfg.ego_speed_std_mps, cfg.ego_yaw_rate_std_radps + abs(rate - clipped),
-                         True, acceleration, _clip(2.0 * float(fit[2, 0]), cfg.max_ego_jerk_mps3))
+                         True, acceleration, _clip(2.0 * fit[2][0], cfg.max_ego_jerk_mps3))
 
 
 def _clip(value: float, limit: float) -> float:
     return min(max(value, -limit), limit)
-
-
-def _trend(times: list[float], values: list[tuple[float, float]]) -> np.ndarray:
-    """(3, 2) coefficients ``c0 + c1 t + c2 t^2`` of the least-squares polynomials through the two
-    columns of ``values`` (P, 2) at ``times`` (P,) s (t = 0: now): degree 2 with 3 or more points,
-    1 with 2, 0 with 1."""
-    return _fit_map(tuple(round(t, 6) for t in times)) @ np.asarray(values)
 
 
 @lru_cache(maxsize=32)
@@ -122,13 +125,15 @@ def _turn(a: tuple, b: tuple) -> float:
 
 
 @lru_cache(maxsize=8)
-def _bases(times: tuple[float, ...], trend_s: float) -> np.ndarray:
+def _bases(times: tuple[float, ...], trend_s: float) -> tuple[np.ndarray, float, float]:
     """(4, K) at ``times`` (K,) s: ``t``, ``t^2 / 2``, and the first and second integrals of a rate
-    rising at 1 per second for ``trend_s`` seconds, then holding."""
+    rising at 1 per second for ``trend_s`` seconds, then holding; and the first and third at the
+    last time."""
     t = np.asarray(times, float)
     r = np.minimum(t, trend_s)
     e = t - r
-    return np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
+    b = np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
+    return b, float(b[0, -1]), float(b[2, -1])
 
 
 def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_acceleration: float = math.inf
@@ -142,11 +147,13 @@ def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_ac
         jerk = (_clip(a + motion.jerk * trend_s, max(max_acceleration, abs(a))) - a) / trend_s
     else:
         trend_s, jerk = 0.0, 0.0
-    b = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
+    b, end_t, end_rate = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
     s = v * b[0] + a * b[1] + jerk * b[3]
-    gain = a * b[0, -1] + jerk * b[2, -1]  # the speed's change by the end
+    gain = a * end_t + jerk * end_rate  # the speed's change by the end
     sign = math.copysign(1.0, v if abs(v) > 1e-9 else (gain or 1.0))  # standing: the way the speed goes
-    return sign * np.maximum.accumulate(sign * s)  # past a stop: held
+    if sign > 0:
+        return np.maximum.accumulate(s)  # past a stop: held
+    return -np.maximum.accumulate(-s)
 
 
 def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0,
@@ -164,13 +171,18 @@ def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s
     yaw = ego.yaw
     heading = yaw + (0.0 if direction > 0 else math.pi)
     turn = curvature * dist
-    xy = np.empty((len(times), 2))
+    x0, y0 = float(ego.translation[0]), float(ego.translation[1])
     if abs(curvature) < 1e-6:
-        xy[:, 0] = ego.translation[0] + dist * math.cos(heading)
-        xy[:, 1] = ego.translation[1] + dist * math.sin(heading)
+        xy = np.multiply.outer(dist, (math.cos(heading), math.sin(heading)))
+        xy += (x0, y0)
     else:
-        xy[:, 0] = ego.translation[0] + (np.sin(heading + turn) - math.sin(heading)) / curvature
-        xy[:, 1] = ego.translation[1] + (math.cos(heading) - np.cos(heading + turn)) / curvature
+        angle = heading + turn
+        xy = np.empty((len(times), 2))
+        np.sin(angle, out=xy[:, 0])
+        np.cos(angle, out=xy[:, 1])
+        xy -= (math.sin(heading), math.cos(heading))
+        xy /= (curvature, -curvature)
+        xy += (x0, y0)
     lateral = np.hypot((0.5 * motion.yaw_rate_std) * times * dist,
                        (0.5 * motion.speed_std) * times * np.abs(np.sin(turn)))
     return EgoPath(times, xy, yaw + turn, lateral, motion, curvature, float(dist[-1]), direction)

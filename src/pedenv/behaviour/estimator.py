@@ -18,7 +18,7 @@ from pedenv.behaviour.conflict import conflict_of
 from pedenv.behaviour.ego_path import EgoHistory, EgoPath, predict_ego_path
 from pedenv.behaviour.motion_state import VelocityStats, velocity_stats
 from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
-from pedenv.behaviour.prediction import PathPredictor
+from pedenv.behaviour.prediction import JointPredictor, PathPredictor
 from pedenv.geometry import inverse_intrinsics
 from pedenv.records import Frame
 from pedenv.state import Behaviour, Pedestrians
@@ -44,12 +44,17 @@ class TrackStore:
         self.time = np.zeros(0)
         self.held = np.zeros((4, 0))
         self.available = np.zeros(0, np.int8)
+        self._last = (np.zeros(0, np.int64), np.zeros(0, np.intp))  # the last ids asked for and their rows
 
     def rows(self, ids: np.ndarray, now: float) -> np.ndarray:
         """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now`` (s)."""
+        last_ids, last_index = self._last
+        if len(ids) == len(last_ids) and (ids == last_ids).all():
+            return last_index  # the usual frame: the same tracks as the last, the rows unchanged
         index = np.searchsorted(self.ids, ids)
         if len(self.ids) and (self.ids[np.minimum(index, len(self.ids) - 1)] == ids).all():
-            return index  # the usual frame: every track known
+            self._last = (ids.copy(), index)
+            return index  # every track known
         found = index < len(self.ids)
         found[found] = self.ids[index[found]] == ids[found]
         if not found.all():
@@ -62,6 +67,7 @@ class TrackStore:
             self.available = np.concatenate([self.available, np.full(len(new), heading_filter.UNAVAILABLE, np.int8)])
             self._take(np.argsort(self.ids, kind="stable"))
             index = np.searchsorted(self.ids, ids)
+        self._last = (ids.copy(), index)
         return index
 
     def keep(self, live_ids: np.ndarray) -> None:
@@ -75,6 +81,7 @@ class TrackStore:
             self._take(mask)
 
     def _take(self, index: np.ndarray) -> None:
+        self._last = (np.zeros(0, np.int64), np.zeros(0, np.intp))
         self.ids, self.p, self.state, self.time = self.ids[index], self.p[index], self.state[index], self.time[index]
         self.held, self.available = self.held[:, index], self.available[index]
 
@@ -98,8 +105,8 @@ class BehaviourEstimator:
         self.horizons = np.asarray(config.horizons_s, float)
         k = int(round(config.conflict_horizon_s / config.conflict_step_s))
         self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
-        self.predictor = PathPredictor(self.horizons, acceleration_std)  # the predicted path reported
-        self.conflict_predictor = PathPredictor(self.conflict_times, acceleration_std)  # the corridor's steps
+        self.predictor = JointPredictor(PathPredictor(self.horizons, acceleration_std),  # the path reported
+                                        PathPredictor(self.conflict_times, acceleration_std))  # the corridor's steps
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
         self._intrinsics: tuple[bytes, np.ndarray] = (b"", np.eye(3))  # the last camera's and their inverse
 
@@ -151,9 +158,13 @@ class BehaviourEstimator:
         speed, speed_std = motion_state.speed_from(velocity)
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
-        ahead, ahead_cov = self.predictor(x, P)
-        conflict = conflict_of(path, self.conflict_predictor.components(x, P), cfg.corridor_half_width_m,
-                               cfg.corridor_front_m)
+        ahead, ahead_cov, steps, steps_cov = self.predictor(x, P)
+        fast = speed > cfg.max_pedestrian_speed_mps
+        if fast.any():  # the corridor's prediction at most that fast
+            capped = x.copy()
+            capped[:, 1::2] *= np.where(fast, cfg.max_pedestrian_speed_mps / np.maximum(speed, 1e-9), 1.0)[:, None]
+            steps, steps_cov = self.predictor(capped, P)[2:]
+        conflict = conflict_of(path, steps, steps_cov, cfg.corridor_half_width_m, cfg.corridor_front_m)
         return Behaviour(held[0], held[1], store.available[rows], held[2], held[3], state, speed, speed_std,
                          self.horizons, ahead, ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,
                          conflict.closest_m, conflict.closest_std_m, conflict.closest_time_s,

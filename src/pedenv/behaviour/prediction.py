@@ -31,7 +31,7 @@ class PathPredictor:
                 self.covariance_map[4 * _POS[i] + _VEL[j], :, i, j] += t
                 self.covariance_map[4 * _VEL[i] + _POS[j], :, i, j] += t
                 self.covariance_map[4 * _VEL[i] + _VEL[j], :, i, j] += t * t
-        # the same by component, each (N, H) contiguous: x, y; xx, xy, yy
+        # the same by component (:meth:`stacked`): x, y; xx, xy, yy
         self.component_maps = (np.ascontiguousarray(self.position_map.transpose(0, 2, 1).reshape(4, 2 * h)),
                                np.ascontiguousarray(self.covariance_map[:, :, [0, 0, 1], [0, 1, 1]]
                                                     .transpose(0, 2, 1).reshape(16, 3 * h)),
@@ -48,14 +48,33 @@ class PathPredictor:
         cov = (P.reshape(n, 16) @ self.covariance_map + self.noise).reshape(n, h, 2, 2)
         return positions, cov
 
+    def stacked(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The same as :meth:`__call__`, the components stacked: positions (N, 2, H) world x, y
+        metres and covariances (N, 3, H) m^2, the components xx, xy, yy."""
+        n, h = len(x), len(self.horizons)
+        positions = (x @ self.component_maps[0]).reshape(n, 2, h)
+        cov = (P.reshape(n, 16) @ self.component_maps[1] + self.component_maps[2]).reshape(n, 3, h)
+        return positions, cov
 
-    def components(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
-        """The same as :meth:`__call__`, by component: positions ``x, y`` (N, H) metres and the
-        covariances' ``xx, xy, yy`` (N, H) m^2."""
-        h = len(self.horizons)
-        positions = x @ self.component_maps[0]
-        cov = P.reshape(len(P), 16) @ self.component_maps[1] + self.component_maps[2]
-        return positions[:, :h], positions[:, h:], cov[:, :h], cov[:, h:2 * h], cov[:, 2 * h:]
+
+class JointPredictor:
+    """Two :class:`PathPredictor` at once (the reported path's horizons H and the corridor's steps K),
+    their maps side by side, so that a frame's predictions are still two matrix products."""
+
+    def __init__(self, reported: PathPredictor, stacked: PathPredictor) -> None:
+        self.sizes = (len(reported.horizons), len(stacked.horizons))
+        self.position_map = np.concatenate([reported.position_map, stacked.component_maps[0]], axis=1)
+        self.covariance_map = np.concatenate([reported.covariance_map, stacked.component_maps[1]], axis=1)
+        self.noise = np.concatenate([reported.noise, stacked.component_maps[2]])
+
+    def __call__(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
+        """The reported path's positions (N, H, 2) and covariances (N, H, 2, 2) (:meth:`PathPredictor.__call__`)
+        and the corridor's positions (N, 2, K) and covariances (N, 3, K) (:meth:`PathPredictor.stacked`)."""
+        n, (h, k) = len(x), self.sizes
+        positions = x @ self.position_map
+        cov = P.reshape(n, 16) @ self.covariance_map + self.noise
+        return (positions[:, :2 * h].reshape(n, h, 2), cov[:, :4 * h].reshape(n, h, 2, 2),
+                positions[:, 2 * h:].reshape(n, 2, k), cov[:, 4 * h:].reshape(n, 3, k))
 
 
 def predict_path(x: np.ndarray, P: np.ndarray, horizons: np.ndarray, acceleration_std: float

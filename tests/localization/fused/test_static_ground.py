@@ -19,7 +19,8 @@ from fused_frames import skeletons_of, upright_skeletons
 #: People straight ahead of a camera 6 m up, 20 deg down, at these ranges (metres).
 RANGES = np.array([10.0, 30.0, 60.0, 120.0])
 #: An exactly known camera seeing exact skeletons: no calibration error, ankles at the anatomical height.
-EXACT = FusedConfig(static_camera_tilt_std_deg=0.0, static_camera_height_std_m=0.0, ankle_keypoint_offset_m=0.0)
+EXACT = FusedConfig(static_camera_tilt_std_deg=0.0, static_camera_height_std_m=0.0, ankle_keypoint_offset_m=0.0,
+                    ankle_keypoint_offset_std_m=0.0)
 
 
 def static_frame(mount: str, ranges=RANGES) -> Frame:
@@ -94,7 +95,7 @@ def test_box_bottom_bounds_the_range():
 
 def test_static_ground_variance_adds_the_calibrations_error():
     config = FusedConfig(static_ground_height_std_m=0.02, static_camera_tilt_std_deg=0.2,
-                         static_camera_height_std_m=0.04)
+                         static_camera_height_std_m=0.04, ankle_keypoint_offset_std_m=0.0)
     # 0.02^2 + 0.04^2 = 0.002 m^2, plus (0.2 deg in rad * r)^2: 0.0034907^2 * 100 = 0.0012185 at 10 m
     np.testing.assert_allclose(static_ground_variance(np.array([0.0, 10.0, 50.0]), config),
                                [0.002, 0.0032185, 0.0324617], rtol=1e-4)
@@ -127,6 +128,22 @@ def test_camera_height_error_scales_the_range():
 
 
 @pytest.mark.parametrize("mount", ["static", "vehicle"])
+def test_ankle_offset_spread_widens_only_the_static_ground(mount):
+    frame = static_frame(mount, RANGES[:2]) if mount == "static" else static_frame(mount, np.array([8.0, 12.0]))
+    flat = run(frame, EXACT)
+    spread = run(frame, dataclasses.replace(EXACT, ankle_keypoint_offset_std_m=0.042))
+    added = np.trace(spread.bias_covariances - flat.bias_covariances, axis1=1, axis2=2)
+    np.testing.assert_allclose(spread.positions, flat.positions)
+    if mount == "vehicle":  # the road's height under the person (road_height_std_m) holds it there
+        np.testing.assert_allclose(added, 0.0, atol=1e-12)
+        return
+    # a person's ankle keypoint 0.042 m off the offset moves the cut by 0.042 r / (h - ankle) along the ray
+    r = np.linalg.norm(flat.positions, axis=1)
+    np.testing.assert_allclose(np.sqrt(added) / r, 0.042 / (6.0 - ankle_height(EXACT)), rtol=1e-3)
+    assert static_ground_variance(np.array([0.0]), FusedConfig())[0] == pytest.approx(0.02**2 + 0.04**2 + 0.042**2)
+
+
+@pytest.mark.parametrize("mount", ["static", "vehicle"])
 def test_ankle_offset_cuts_the_ray_with_a_higher_ground(mount):
     frame = static_frame(mount, RANGES[:1]) if mount == "static" else static_frame(mount, np.array([12.0]))
     exact = run(frame, EXACT)
@@ -144,6 +161,7 @@ def test_ankle_offset_cuts_the_ray_with_a_higher_ground(mount):
 @pytest.mark.parametrize("field, value", [
     ("static_camera_tilt_std_deg", -0.1), ("static_camera_tilt_std_deg", 10.5),
     ("static_camera_height_std_m", 5.5), ("ankle_keypoint_offset_m", 0.6), ("ankle_keypoint_offset_m", float("nan")),
+    ("ankle_keypoint_offset_std_m", -0.01), ("ankle_keypoint_offset_std_m", 0.6),
 ])
 def test_calibration_and_ankle_settings_are_checked(field, value):
     with pytest.raises(InputError, match=f"fused.{field} must be"):

@@ -118,15 +118,17 @@ def ankle_height(config: FusedConfig) -> float:
 
 def static_ground_variance(ranges: np.ndarray, config: FusedConfig) -> np.ndarray:
     """(N,) m^2, the variance of the calibrated ground's height under a static camera's
-    pedestrians ``ranges`` (N,) metres away (horizontal): its unevenness
-    (``static_ground_height_std_m``), the camera's height error (``static_camera_height_std_m``)
-    and its pitch and roll error (``static_camera_tilt_std_deg`` each), which tilts the ground
-    about the camera by ``r`` times the angle at range ``r`` (in any direction: pitch in front,
-    roll to the side). Carried along the ray by ``1 / sine`` like any height error, so the
-    range's spread grows like ``r^2 / h`` times the tilt.
+    pedestrians ``ranges`` (N,) metres away (horizontal), against the ankle ray's cut: its
+    unevenness (``static_ground_height_std_m``), the camera's height error
+    (``static_camera_height_std_m``), its pitch and roll error (``static_camera_tilt_std_deg``
+    each), which tilts the ground about the camera by ``r`` times the angle at range ``r`` (in
+    any direction: pitch in front, roll to the side), and how far this person's ankle keypoint
+    sits off the plane's lift (``ankle_keypoint_offset_std_m``). Carried along the ray by
+    ``1 / sine`` like any height error, so the range's spread grows like ``r^2 / h`` times the tilt.
     """
     tilt = np.radians(config.static_camera_tilt_std_deg) * np.asarray(ranges, float)
-    return config.static_ground_height_std_m**2 + config.static_camera_height_std_m**2 + tilt**2
+    return (config.static_ground_height_std_m**2 + config.static_camera_height_std_m**2 + tilt**2
+            + config.ankle_keypoint_offset_std_m**2)
 
 
 @dataclass(frozen=True)
