@@ -1,7 +1,8 @@
 """``pedenv run`` end to end against the network's own time, on a real video.
 
-    PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 1600x900]
-        [--detection fast] [--video-out] [--realtime] [--output-json FILE]
+    PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 900x1600]
+        [--detection fast] [--video-out] [--png-compression fast,none] [--nice 0,10] [--rounds 3]
+        [--threads 2] [--realtime] [--output-json FILE]
 
 The video (default: ``vtest.avi``, the 768x576 street video of Debian's ``opencv-doc``,
 ``/usr/share/doc/opencv-doc/examples/data/vtest.avi``) is cut to its first ``--frames`` frames,
@@ -13,8 +14,13 @@ before the clock starts):
 1. ``network alone``: every frame read, detected and given to the model (the default, fused
    preset, whose re-detection crops run the network too), nothing written;
 2. ``run``: :func:`pedenv.apps.run.run_recording` (what ``pedenv run`` calls, overlays on: a
-   PNG per frame, or ``--video-out``), wall time from the call to its return;
+   PNG per frame, or ``--video-out``), wall time from the call to its return; once per
+   ``--png-compression`` and ``--nice`` value given (comma-separated: the variants run one after
+   the other, so that they see the same load);
 3. with ``--realtime``: the run once more at the recording's own rate: frames done and dropped.
+
+``--rounds`` repeats 1 and 2 and prints each variant's median run; the ratios of a round use
+that round's network alone. On a shared machine compare variants within one invocation.
 
 The network's time is the backend's session runs (``infer`` wrapped here, so the same
 script times main's serial loop: ``PYTHONPATH=/path/to/main/src``); ``ratio`` is run ms per
