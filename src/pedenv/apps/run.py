@@ -47,13 +47,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
     ``run.json`` (pose backend and the provider that ran it, recording, frames done, speed),
     ``overlays/<index>.png`` (``output.png_compression``: stored by default, :mod:`pedenv.outputs.png`)
-    or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and distances, and ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the
-    ``output.extra`` outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra
-    is missing). Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`,
-    ``pipeline``; its ``nice`` None: chosen by the outputs, :func:`_pipeline`); every output holds
-    the frames in order. A bad frame stops the run with an
-    InputError; what was computed before it stays on disk. ``progress(done, total)`` is called
-    per frame written.
+    or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and distances, and
+    ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the ``output.extra``
+    outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra is missing).
+    Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`, ``pipeline``; its
+    ``nice`` None: chosen by the outputs, :func:`_pipeline`); every output holds the frames in
+    order. A bad frame stops the run with an InputError; what was computed before it stays on
+    disk. ``progress(done, total)`` is called per frame written.
     ``output.folder`` must be empty or new, unless ``output.overwrite`` (then an earlier pedenv run there is
     deleted once every frame's size and ego pose are checked:
     :func:`pedenv.outputs.output_dir.prepare_output_dir`).
