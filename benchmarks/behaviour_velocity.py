@@ -18,7 +18,10 @@ measurements up to now:
 - ``floor W s``: the Cramer-Rao bound of any unbiased estimate from the last W seconds
   ("track": all of it) for a walker at constant velocity, were the noise white with the
   covariances ``r`` pedenv reports: the expected ``|2 s * error|`` (200 draws per row; rows with
-  a single measurement in the window have none and are left out).
+  a single measurement in the window have none and are left out);
+- ``oracle direction, filter speed`` and ``filter direction, true speed``: half an oracle each,
+  the filter's speed along the walker's true direction of the next 2 s, and the filter's
+  direction at the true speed: what a perfect heading cue (or a perfect speed cue) would leave.
 """
 
 from __future__ import annotations
@@ -167,6 +170,21 @@ def scored_rows(track: dict) -> list[tuple[int, float, np.ndarray, float]]:
     return out
 
 
+def half_oracles(rows: list, scored: list) -> dict[str, list[tuple[float, float]]]:
+    """Per half oracle: (distance m, FDE at 2 s m) of each scored row (see the module's docstring)."""
+    out: dict[str, list[tuple[float, float]]] = {"oracle direction, filter speed": [],
+                                                 "filter direction, true speed": []}
+    for i, d, moved, _ in scored:
+        v = np.asarray(rows[i][3], float)
+        true_direction = moved / max(float(np.linalg.norm(moved)), 1e-9)
+        own_direction = v / max(float(np.linalg.norm(v)), 1e-9)
+        out["oracle direction, filter speed"].append(
+            (d, float(np.linalg.norm(2.0 * np.linalg.norm(v) * true_direction - moved))))
+        out["filter direction, true speed"].append(
+            (d, float(np.linalg.norm(np.linalg.norm(moved) * own_direction - moved))))
+    return out
+
+
 def table(tracks: list[dict]) -> dict[str, np.ndarray]:
     """Per estimate: (R, 2) distance and error (m) of every scored row."""
     rng, results = np.random.default_rng(0), defaultdict(list)
@@ -179,6 +197,8 @@ def table(tracks: list[dict]) -> dict[str, np.ndarray]:
             continue
         rows = track["rows"]
         results["CV from the true state"] += [(d, cv) for _, d, _, cv in scored]
+        for name, pairs in half_oracles(rows, scored).items():
+            results[name] += pairs
         for name, estimate in estimates.items():
             v = estimate(rows)
             results[name] += [(d, float(np.linalg.norm(2.0 * v[i] - moved))) for i, d, moved, _ in scored]

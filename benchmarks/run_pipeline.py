@@ -1,7 +1,8 @@
 """``pedenv run`` end to end against the network's own time, on a real video.
 
-    PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 1600x900]
-        [--detection fast] [--video-out] [--realtime] [--output-json FILE]
+    PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 900x1600]
+        [--detection fast] [--video-out] [--png-compression fast,none] [--nice 0,10] [--rounds 3]
+        [--threads 2] [--realtime] [--output-json FILE]
 
 The video (default: ``vtest.avi``, the 768x576 street video of Debian's ``opencv-doc``,
 ``/usr/share/doc/opencv-doc/examples/data/vtest.avi``) is cut to its first ``--frames`` frames,
@@ -13,8 +14,13 @@ before the clock starts):
 1. ``network alone``: every frame read, detected and given to the model (the default, fused
    preset, whose re-detection crops run the network too), nothing written;
 2. ``run``: :func:`pedenv.apps.run.run_recording` (what ``pedenv run`` calls, overlays on: a
-   PNG per frame, or ``--video-out``), wall time from the call to its return;
+   PNG per frame, or ``--video-out``), wall time from the call to its return; once per
+   ``--png-compression`` and ``--nice`` value given (comma-separated: the variants run one after
+   the other, so that they see the same load);
 3. with ``--realtime``: the run once more at the recording's own rate: frames done and dropped.
+
+``--rounds`` repeats 1 and 2 and prints each variant's median run; the ratios of a round use
+that round's network alone. On a shared machine compare variants within one invocation.
 
 The network's time is the backend's session runs (``infer`` wrapped here, so the same
 script times main's serial loop: ``PYTHONPATH=/path/to/main/src``); ``ratio`` is run ms per
@@ -97,55 +103,101 @@ class NetworkClock:
         self.seconds, self.runs = 0.0, 0
 
 
-def measure(rec: dict, detection: str, video_out: bool, work: Path, realtime: bool = False) -> dict:
-    """The network alone and the run on the recording ``rec`` (module doc); with ``realtime``
-    also a ``--realtime`` run (this checkout's pedenv only)."""
+def network_alone(rec: dict, backend, clock: NetworkClock) -> dict:
+    """Every frame of ``rec`` read, detected and given to the model (the fused preset's
+    re-detection crops included, as :func:`~pedenv.apps.run.run_recording` wraps the backend),
+    nothing written: ms per frame, the network's ms per frame, CPU ms per frame (all threads)."""
     from dataclasses import replace
 
-    from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
-    from pedenv.apps.run import run_recording
     from pedenv.config import Config
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose.base import create_pose_backend
     from pedenv.pose.redetect import with_redetection
     from pedenv.recordings.footage import load_recording
 
     cfg = Config()
-    backend = create_pose_backend("onnx", detection=detection, score_threshold=cfg.tracking.pose_score_threshold)
-    clock = NetworkClock(backend)
-    load = [os.getloadavg()[0]]
-    frames = 0
-    model = PedestrianEnvironmentModel(cfg)
-    middle = with_redetection(backend, model, cfg.redetect)  # as run_recording wraps it
+    clock.reset()
+    frames, model = 0, PedestrianEnvironmentModel(cfg)
+    middle = with_redetection(backend, model, cfg.redetect)
     start, cpu = time.perf_counter(), time.process_time()
     for frame in load_recording(**rec).frames():
         model.update(replace(frame, detections=middle(frame)))
         frames += 1
-    alone_s = time.perf_counter() - start
-    alone = {"ms_per_frame": 1e3 * alone_s / frames, "network_ms_per_frame": 1e3 * clock.seconds / frames,
-             "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / frames}
-    clock.reset()
-    start, cpu = time.perf_counter(), time.process_time()
-    summary = run_recording(RecordingSource(**rec), OutputOptions(work / "run", video_out=video_out),
-                            PoseOptions(detection=detection), backend=backend)
-    run_s = time.perf_counter() - start
-    load.append(os.getloadavg()[0])
-    done = summary["frames_done"]
-    run = {"ms_per_frame": 1e3 * run_s / done, "frames_per_second": done / run_s,
-           "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / done,
-           "network_ms_per_frame": 1e3 * clock.seconds / done, "passes_per_frame": clock.runs / done,
-           "frames": done, "speed": summary.get("speed")}
-    if realtime:  # the same recording once more, taken at its own rate (10 Hz for vtest.avi)
-        from pedenv.apps.pipeline import PipelineConfig
+    return {"frames": frames, "ms_per_frame": 1e3 * (time.perf_counter() - start) / frames,
+            "network_ms_per_frame": 1e3 * clock.seconds / frames,
+            "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / frames}
 
-        live = run_recording(RecordingSource(**rec), OutputOptions(work / "live", video_out=video_out),
-                             PoseOptions(detection=detection), backend=backend, pipeline=PipelineConfig(realtime=True))
-        run["realtime"] = {"frames_done": live["frames_done"], "frames_dropped": live["frames_dropped"],
-                           "latency_ms": live["speed"]["latency_ms"]}
-    return {"frames": frames, "load": load, "alone": alone, "run": run,
-            "ratio_same_run": run["ms_per_frame"] / run["network_ms_per_frame"],
-            "ratio_network_alone": run["ms_per_frame"] / alone["network_ms_per_frame"],
-            "provider": summary["pose_backend"].get("provider", "CPUExecutionProvider (main: CPU only)")}
+
+def run_once(rec: dict, backend, clock: NetworkClock, folder: Path, variant: dict) -> dict:
+    """:func:`~pedenv.apps.run.run_recording` on ``rec`` into ``folder`` (deleted first) with
+    ``variant``: ``detection``, ``video_out``, ``realtime`` and, this checkout's pedenv only,
+    ``png_compression`` and ``nice`` (None: the defaults)."""
+    import shutil
+
+    from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
+    from pedenv.apps.pipeline import PipelineConfig
+    from pedenv.apps.run import run_recording
+
+    shutil.rmtree(folder, ignore_errors=True)
+    output = {"video_out": variant["video_out"]}
+    if variant.get("png_compression"):
+        output["png_compression"] = variant["png_compression"]
+    pipe = {"realtime": True} if variant.get("realtime") else {}
+    if variant.get("nice") is not None:
+        pipe["nice"] = variant["nice"]
+    clock.reset()
+    load, start, cpu = os.getloadavg()[0], time.perf_counter(), time.process_time()
+    summary = run_recording(RecordingSource(**rec), OutputOptions(folder, **output),
+                            PoseOptions(detection=variant["detection"]), backend=backend,
+                            pipeline=PipelineConfig(**pipe) if pipe else None)
+    run_s, done = time.perf_counter() - start, summary["frames_done"]
+    pngs = sorted((folder / "overlays").glob("*.png"))
+    return {"ms_per_frame": 1e3 * run_s / done, "frames_per_second": done / run_s,
+            "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / done,
+            "network_ms_per_frame": 1e3 * clock.seconds / done, "passes_per_frame": clock.runs / done,
+            "frames": done, "frames_dropped": summary.get("frames_dropped", 0), "load": [load, os.getloadavg()[0]],
+            "png_mb_per_frame": sum(p.stat().st_size for p in pngs) / len(pngs) / 1e6 if pngs else None,
+            "speed": summary.get("speed"), "provider": summary["pose_backend"].get("provider", "CPUExecutionProvider")}
+
+
+def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, threads: int = 2) -> dict:
+    """``rounds`` times: the network alone, then a run of each of ``variants`` (module doc), one
+    after the other on one pose backend (``threads`` intra-op threads, made before any clock starts)."""
+    from pedenv.config import Config
+    from pedenv.pose.base import create_pose_backend
+
+    detection = variants[0]["detection"]
+    backend = create_pose_backend("onnx", detection=detection, score_threshold=Config().tracking.pose_score_threshold,
+                                  threads=threads)
+    clock = NetworkClock(backend)
+    alone, runs = [], []
+    for r in range(rounds):
+        alone.append(network_alone(rec, backend, clock))
+        print(f"round {r + 1}: network alone {alone[-1]['ms_per_frame']:.1f} ms/frame, network "
+              f"{alone[-1]['network_ms_per_frame']:.1f}, CPU {alone[-1]['cpu_ms_per_frame']:.1f} ms/frame", flush=True)
+        for variant in variants:
+            run = {**run_once(rec, backend, clock, work / "run", variant), "variant": variant, "round": r + 1}
+            run["ratio_same_run"] = run["ms_per_frame"] / run["network_ms_per_frame"]
+            run["ratio_network_alone"] = run["ms_per_frame"] / alone[-1]["network_ms_per_frame"]
+            runs.append(run)
+            print(_run_line(run), flush=True)
+    return {"alone": alone, "runs": runs}
+
+
+def _run_line(run: dict) -> str:
+    v = run["variant"]
+    name = "mp4" if v["video_out"] else f"png {v.get('png_compression') or 'default'}"
+    name += f", nice {v['nice']}" if v.get("nice") is not None else ""
+    png = f", {run['png_mb_per_frame']:.2f} MB/png" if run["png_mb_per_frame"] else ""
+    dropped = f", {run['frames_dropped']} dropped" if v.get("realtime") else ""
+    return (f"  run ({name}{', realtime' if v.get('realtime') else ''}): {run['ms_per_frame']:.1f} ms/frame "
+            f"({run['frames_per_second']:.2f} fps), network {run['network_ms_per_frame']:.1f} in the run, "
+            f"{run['passes_per_frame']:.2f} passes/frame, CPU {run['cpu_ms_per_frame']:.1f} ms/frame{png}{dropped}; "
+            f"ratio run / network in the run {run['ratio_same_run']:.2f}, run / network alone "
+            f"{run['ratio_network_alone']:.2f}; load {run['load'][0]:.1f} -> {run['load'][1]:.1f}")
+
+
+def _choices(text: str | None) -> list:
+    return [None] if text is None else text.split(",")
 
 
 def main() -> None:
@@ -155,40 +207,39 @@ def main() -> None:
     parser.add_argument("--size", default=None, help="HEIGHTxWIDTH to scale and crop to, e.g. 900x1600")
     parser.add_argument("--detection", default="fast")
     parser.add_argument("--video-out", action="store_true", help="overlay.mp4 instead of a PNG per frame")
+    parser.add_argument("--png-compression", default=None, help="fast, none, or both: fast,none (runs each)")
+    parser.add_argument("--nice", default=None, help="pipeline.nice of the runs, or several: 0,10 (runs each)")
+    parser.add_argument("--rounds", type=int, default=1, help="repeat the network alone and the runs")
+    parser.add_argument("--threads", type=int, default=2, help="onnxruntime's intra-op threads (pedenv's default: 2)")
     parser.add_argument("--realtime", action="store_true", help="also a --realtime run: frames done and dropped")
     parser.add_argument("--output-json", type=Path, default=None)
     args = parser.parse_args()
     size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+    base = {"detection": args.detection, "video_out": args.video_out}
+    variants = [{**base, "png_compression": png, "nice": None if nice is None else int(nice)}
+                for png in _choices(None if args.video_out else args.png_compression) for nice in _choices(args.nice)]
+    if args.realtime:
+        variants.append({**variants[0], "realtime": True})
     import pedenv
 
+    print(f"pedenv from {Path(pedenv.__file__).parent}; {args.frames} frames of {args.video.name}"
+          f"{' at ' + args.size if args.size else ''}, --detection {args.detection}; load {os.getloadavg()[0]:.1f}")
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         rec = write_recording(args.video, work, args.frames, size)  # type: ignore[arg-type]
-        result = measure(rec, args.detection, args.video_out, work, args.realtime)
+        result = measure(rec, variants, work, args.rounds, args.threads)
     result.update(pedenv=str(Path(pedenv.__file__).parent), video=str(args.video), size=args.size,
-                  detection=args.detection, overlays="mp4" if args.video_out else "png")
-    r, a = result["run"], result["alone"]
-    print(f"pedenv from {result['pedenv']}; {result['frames']} frames of {args.video.name}"
-          f"{' at ' + args.size if args.size else ''}, --detection {args.detection}, overlays {result['overlays']}, "
-          f"{result['provider']}; load {result['load'][0]:.1f} -> {result['load'][1]:.1f}")
-    print(f"network alone: {a['ms_per_frame']:.1f} ms/frame read + detect + model, network "
-          f"{a['network_ms_per_frame']:.1f}, "
-          f"CPU {a['cpu_ms_per_frame']:.1f} ms/frame (all threads)")
-    print(f"pedenv run:    {r['ms_per_frame']:.1f} ms/frame ({r['frames_per_second']:.2f} fps), network "
-          f"{r['network_ms_per_frame']:.1f} ms/frame in the run, {r['passes_per_frame']:.2f} passes/frame, "
-          f"CPU {r['cpu_ms_per_frame']:.1f} ms/frame")
-    print(f"ratio run / network in the same run: {result['ratio_same_run']:.2f}; "
-          f"run / network alone: {result['ratio_network_alone']:.2f}")
-    if r["speed"]:
-        lat = r["speed"]["latency_ms"]
-        print(f"run.json: {r['speed']['frames_per_second']:.2f} fps, latency median {lat['median']:.0f} ms, "
-              f"p95 {lat['p95']:.0f} ms")
-    if "realtime" in r:
-        live = r["realtime"]
-        print(f"--realtime: {live['frames_done']} frames done, {live['frames_dropped']} dropped (the model was busy), "
-              f"latency median {live['latency_ms']['median']:.0f} ms")
+                  detection=args.detection, threads=args.threads)
+    for variant in variants:
+        runs = [r for r in result["runs"] if r["variant"] == variant]
+        print(f"median over {len(runs)} round(s): {_run_line(_median_run(runs))[2:]}")
     if args.output_json:
         args.output_json.write_text(json.dumps(result, indent=2) + "\n")
+
+
+def _median_run(runs: list[dict]) -> dict:
+    """The run of median ms per frame of ``runs``."""
+    return sorted(runs, key=lambda r: r["ms_per_frame"])[len(runs) // 2]
 
 
 if __name__ == "__main__":

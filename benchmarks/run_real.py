@@ -177,6 +177,8 @@ def main(argv=None) -> int:
     parser.add_argument("--configs", default="paper,fused,fused-image",
                         help="Comma-separated configs to run (paper, fused, fused-image).")
     parser.add_argument("--json", type=Path, default=None, help="Also write the figures here.")
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="Write the recordings and runs here (kept) instead of a temporary folder.")
     args = parser.parse_args(argv)
 
     from pedenv.apps.options import PoseOptions, RecordingSource
@@ -190,7 +192,8 @@ def main(argv=None) -> int:
     configs = {"paper": Config(method="paper"), "fused": fused, "fused-image": image_only}
     configs = {k: v for k, v in configs.items() if k in args.configs.split(",")}
     totals: dict = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = str(args.keep) if args.keep else scratch
         for name, write, gt in sequences(args.samples, args.only):
             rec = write(Path(tmp) / name / "recording")
             for cname, config in configs.items():

@@ -2,7 +2,8 @@
 ``far`` reports does ``stream`` also report, frame by frame, and at what cost?
 
     PYTHONPATH=src python benchmarks/stream_video.py [--video /usr/share/doc/opencv-doc/examples/data/vtest.avi]
-        [--frames 200] [--json out.json]
+        [--frames 200] [--json out.json] [--keep DIR] [--far-from DIR/far/environment.jsonl]
+        [--stream-set FIELD=VALUE ...]
 
 The video (Debian's ``opencv-doc``: ``examples/data/vtest.avi``, 768x576, a pedestrian
 street seen from above; ``apt-get install opencv-doc``) is written as a recording of its first
@@ -65,11 +66,37 @@ def reported(environment: Path) -> list[np.ndarray]:
             for line in read_environment(environment)]
 
 
+def stream_backend(settings: list[str]):
+    """A stream backend with the ``--stream-set`` fields (JSON values), or None: ``run_recording``'s own."""
+    if not settings:
+        return None
+    from dataclasses import replace
+
+    from pedenv.config import Config
+    from pedenv.localization import configure
+    from pedenv.pose.base import create_pose_backend
+    from pedenv.pose.models import backend_options
+    from pedenv.pose.tiling import DetectionConfig
+
+    fields = {name.strip(): json.loads(value) for name, _, value in (s.partition("=") for s in settings)}
+    detection = DetectionConfig.named("stream")
+    detection = replace(detection, stream=replace(detection.stream, **fields))
+    threshold = configure(Config(), "fused").tracking.pose_score_threshold
+    return create_pose_backend("onnx", **backend_options("onnx", None, None, detection, threshold))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
     parser.add_argument("--frames", type=int, default=200)
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="Write the recording and the runs here (kept) instead of a temporary folder.")
+    parser.add_argument("--far-from", type=Path, default=None,
+                        help="The environment.jsonl of an earlier far run of the same frames (--keep's far/): "
+                             "far is not run again.")
+    parser.add_argument("--stream-set", action="append", default=[], metavar="FIELD=VALUE",
+                        help="stream: a StreamConfig field (repeatable), e.g. merge_crops=false.")
     args = parser.parse_args(argv)
 
     from pedenv.apps.options import PoseOptions, RecordingSource
@@ -77,14 +104,18 @@ def main(argv=None) -> int:
     from pedenv.boxes import iou_matrix
 
     results: dict = {"video": str(args.video), "load_at_start": os.getloadavg()[0]}
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = args.keep or Path(scratch)
         rec, rate = write_recording(args.video, args.frames, Path(tmp) / "recording")
         boxes = {}
-        for mode in ("far", "stream"):
+        if args.far_from:
+            boxes["far"] = reported(args.far_from)[:args.frames]
+        for mode in ("stream",) if args.far_from else ("far", "stream"):
             t0 = time.perf_counter()
             source = RecordingSource(calibration=rec / "calibration.yaml", ego_poses=rec / "ego_poses.csv",
                                      images=rec / "images", fps=rate)
-            summary = run_recording(source, Path(tmp) / mode, PoseOptions(detection=mode))
+            summary = run_recording(source, Path(tmp) / mode, PoseOptions(detection=mode),
+                                    backend=stream_backend(args.stream_set) if mode == "stream" else None)
             results[mode] = {"seconds_per_frame": (time.perf_counter() - t0) / max(summary["frames_done"], 1),
                              "stream": summary["pose_backend"].get("stream")}
             boxes[mode] = reported(Path(tmp) / mode / "environment.jsonl")

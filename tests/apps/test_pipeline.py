@@ -3,6 +3,8 @@ realtime pacing drops the frames that arrive while the model is busy (a fake clo
 
 from __future__ import annotations
 
+import os
+import sys
 import threading
 import time
 
@@ -129,7 +131,33 @@ def test_realtime_drops_the_frames_that_arrive_while_the_model_is_busy(work_s, s
     ({"write_behind": True}, r"pipeline\.write_behind must be an integer in \[1, 256\], got True"),
     ({"write_behind": 257}, r"pipeline\.write_behind"),
     ({"realtime": "yes"}, r"pipeline\.realtime must be true or false, got 'yes'"),
+    ({"nice": -1}, r"pipeline\.nice must be an integer in \[0, 19\], got -1"),
+    ({"nice": 20}, r"pipeline\.nice must be an integer in \[0, 19\], got 20"),
 ])
 def test_pipeline_settings_are_checked(changes, message):
     with pytest.raises(InputError, match=message):
         PipelineConfig(**changes)
+
+
+def _niceness() -> int:
+    return os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a thread's own niceness is Linux's")
+@pytest.mark.parametrize("nice", [None, 0, 10, 19])
+def test_reading_and_writing_run_nicer_than_the_network(nice):
+    seen: dict[str, set[int]] = {"read": set(), "step": set(), "write": set()}
+
+    def frames():
+        for frame in _frames(np.arange(5) * 0.1):
+            seen["read"].add(_niceness())
+            yield frame
+
+    def step(frame):
+        seen["step"].add(_niceness())
+        return frame.index
+
+    run_frames(frames(), step, lambda _: seen["write"].add(_niceness()), config=PipelineConfig(nice=nice))
+    (network,) = seen["step"]
+    assert network == _niceness()  # the calling thread keeps its own
+    assert seen["read"] == seen["write"] == {min(19, network + (nice or 0))}

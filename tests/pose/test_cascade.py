@@ -61,6 +61,12 @@ def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, c
     ("stream", {"track_edge_px": 40.0}, "detection.stream.track_edge_px"),  # not below the 33.6 px of context
     ("stream", {"crowd_edge_px": 20.0}, "detection.stream.crowd_edge_px"),  # not below the 20 px of context
     ("stream", {"crowd_person_px": 8.0}, "detection.stream.crowd_person_px"),
+    ("stream", {"merge_scale_ratio": 0.9}, "detection.stream.merge_scale_ratio"),
+    ("stream", {"merge_scale_ratio": math.nan}, "detection.stream.merge_scale_ratio"),
+    ("stream", {"merge_crops": 1}, "detection.stream.merge_crops"),
+    ("stream", {"search_untracked": "no"}, "detection.stream.search_untracked"),
+    ("stream", {"track_max_shift": -1.0}, "detection.stream.track_max_shift"),
+    ("stream", {"track_max_shift": math.inf}, "detection.stream.track_max_shift"),
 
     ("cascade", {"min_score": 0.0}, "detection.cascade.min_score"),
     ("cascade", {"max_units": 0}, "detection.cascade.max_units"),

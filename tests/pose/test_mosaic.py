@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pedenv.datasets.mot17 import read_sequence
-from pedenv.pose.mosaic import GAP_PX, Crop, crop_around, pack, pack_tallest_first, render, unpack
+from pedenv.pose.mosaic import GAP_PX, Crop, crop_around, merge_crops, pack, pack_tallest_first, render, unpack
 from pedenv.records import Detections
 
 MOSAIC = (384, 640)
@@ -133,3 +133,47 @@ def test_a_person_found_in_a_tallest_first_packed_crop_lands_at_the_right_image_
     # an edge margin wider than the context (24 px) would cut them
     assert sum(bool(c[0]) for _, c in unpack(found, [replace(p, crop=replace(p.crop, edge_px=None)) for p in placed],
                                             size, 24.0)) > 0
+
+
+def test_a_crop_can_cover_a_second_place_at_the_first_boxs_scale():
+    box, last = np.array([500.0, 300, 530, 360]), np.array([470.0, 310, 500, 370])  # 60 px tall, 30 px apart
+    crop = crop_around(box, (900, 1600), 96.0, 0.25, 3.5, MOSAIC, also=last)
+    assert crop.region == (455, 285, 545, 385)  # both boxes with 15 px (0.25 of 60) around
+    assert crop.scale == pytest.approx(96.0 / 60.0)
+
+
+@pytest.mark.parametrize("second, ratio, joined", [
+    ((520, 300, 560, 380), 1.25, True),  # overlapping neighbours of the same height: one crop
+    ((900, 300, 940, 380), 1.25, False),  # far apart: one crop over both costs more input px
+    ((520, 300, 560, 400), 1.25, True),  # 100 px against 80 px: scales within 1.25
+    ((520, 300, 560, 420), 1.25, False),  # 120 px against 80 px: 1.5 apart
+    ((520, 300, 560, 420), 1.5, True),
+])
+def test_neighbours_crops_are_joined_when_that_saves_input_px(second, ratio, joined):
+    boxes = [np.array([500.0, 300, 540, 380]), np.array(second, float)]
+    crops = [crop_around(b, (900, 1600), 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
+    merged, groups = merge_crops(crops, ratio, MOSAIC)
+    if not joined:
+        assert merged == crops and groups == [[0], [1]]
+        return
+    assert groups == [[0, 1]] and len(merged) == 1
+    x0, y0, x1, y1 = merged[0].region
+    assert (x0, y0) == (min(c.region[0] for c in crops), min(c.region[1] for c in crops))
+    assert (x1, y1) == (max(c.region[2] for c in crops), max(c.region[3] for c in crops))
+    assert merged[0].scale == min(c.scale for c in crops)  # the taller person at 80 px, the other a little less
+    h, w = merged[0].size
+    assert h * w <= sum(c.size[0] * c.size[1] for c in crops)
+
+
+def test_a_person_found_in_a_joined_crop_lands_at_the_right_image_pixels():
+    boxes = np.array([[500.0, 300, 540, 380], [525, 305, 563, 381], [540, 296, 580, 380]])
+    crops = [crop_around(b, (900, 1600), 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
+    merged, groups = merge_crops(crops, 1.25, MOSAIC)
+    assert groups == [[0, 1, 2]]
+    placed = pack(merged, MOSAIC)
+    in_mosaic = np.array([person_in_mosaic(b, placed[0]) for b in boxes])
+    kps = np.repeat(0.5 * (in_mosaic[:, None, :2] + in_mosaic[:, None, 2:]), 17, axis=1)
+    found = Detections(kps, np.full((3, 17), 0.9), in_mosaic, np.full(3, 0.8))
+    (people, cut), = unpack(found, placed, (900, 1600), 4.0)
+    np.testing.assert_allclose(people.boxes, boxes, atol=1e-6)
+    assert not cut.any()  # all three inside the joined crop, none at its inner edges

@@ -1,5 +1,6 @@
 """``stream`` detection with the real network on KITTI tracking 0016's real consecutive frames."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -77,10 +78,30 @@ def test_a_crowd_gets_the_smaller_crops_and_a_few_tracks_the_usual_ones(stream):
     boxes = seq.pedestrians.in_frame(2).boxes  # 42 people, 110-251 px, at 30 Hz
     stream._dt = 1 / 30
     band = (1.0, np.full(36, 1.75), np.full(36, 0.2))  # its band (measured): 36 tiles, seen 0.2 s ago
-    crops, plan = stream._plan_tracks(boxes, [], (1080, 1920), band)
+    (crops, groups), plan = stream._plan_tracks((boxes, boxes), [], (1080, 1920), band)
     heights = boxes[:, 3] - boxes[:, 1]
     assert plan.mosaics == 2  # the budget of 3 units: the whole frame and 2 packed inputs
-    np.testing.assert_allclose([c.scale for c in crops], 80.0 / heights)  # the crowd's crops: all 42 fit in 2
-    crops, plan = stream._plan_tracks(boxes[:8], [], (1080, 1920), band)
+    assert sorted(i for g in groups for i in g) == list(range(42)) and len(crops) < 42  # neighbours joined
+    for crop, group in zip(crops, groups):  # the crowd's crops: each person 80 px tall, or a little less when joined
+        scales = 80.0 / heights[group]
+        assert crop.scale == pytest.approx(scales.min()) and scales.max() <= 1.25 * scales.min() + 1e-9
+    (crops, groups), plan = stream._plan_tracks((boxes[:8], boxes[:8]), [], (1080, 1920), band)
     assert plan.mosaics == 1
-    np.testing.assert_allclose([c.scale for c in crops], 96.0 / heights[:8])  # few: the usual crops
+    for crop, group in zip(crops, groups):  # few: the usual crops
+        assert crop.scale == pytest.approx((96.0 / heights[group]).min())
+
+
+def test_persons_no_track_holds_are_searched_again_in_the_next_frame(stream, frames):
+    images, samples = frames
+    stream.detect_frame(images[0], samples[0].geometry, 0.0)  # the cold start: the whole band, no tracks
+    held = len(stream._untracked)
+    stream.detect_frame(images[0], samples[0].geometry, 0.1)  # no tracks given: those persons stand in
+    accounts = stream.describe()["stream"]
+    assert held >= 6  # measured: 7 (of the frame's 8 pedestrians)
+    # those the whole-frame pass misses (all 7) are searched in packed inputs and found there again
+    assert accounts["tracks_at_risk_searched"] >= 6 and accounts["tracks_found_in_crops"] >= 6  # measured: 7, 7
+    off = type(stream)(detection=replace(stream.config, stream=replace(stream.config.stream, search_untracked=False)),
+                       model_path=stream.backend.model_path)
+    off.detect_frame(images[0], samples[0].geometry, 0.0)
+    off.detect_frame(images[0], samples[0].geometry, 0.1)
+    assert len(off._untracked) == 0 and off.describe()["stream"]["tracks_at_risk_searched"] == 0

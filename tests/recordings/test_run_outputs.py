@@ -8,6 +8,7 @@ import sys
 import time
 
 import cv2
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 import rerun.dataframe as rrd
@@ -39,12 +40,39 @@ def test_run_writes_every_output_of_the_bus_recording(tmp_path, pose_env, monkey
     # written beside the network by the pipeline, in frame order
     assert [line["frame"] for line in lines] == list(range(6))
     assert sorted(p.name for p in (out / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(6)]
+    overlay = cv2.imread(str(out / "overlays" / "000005.png"))  # stored: the pixels' bytes plus 0.1 % at most
+    assert overlay.nbytes < (out / "overlays" / "000005.png").stat().st_size < 1.001 * overlay.nbytes
     run = json.loads((out / "run.json").read_text())
+    assert run["speed"]["pipeline"]["nice"] == 10  # the light outputs' writer runs after the network
     assert run["pose_backend"]["device"] == "auto" and run["pose_backend"]["provider"] == "CPUExecutionProvider"
     speed = run["speed"]
     assert speed["frames_dropped"] == run["frames_dropped"] == 0 and speed["frames_per_second"] > 0
     assert speed["latency_ms"]["p95"] >= speed["latency_ms"]["median"] >= speed["network_ms_per_frame"] > 0
     assert speed["network_passes_per_frame"] >= 1.0
+
+
+def test_run_video_out_and_deflated_pngs_hold_the_same_overlays(tmp_path, pose_env, monkeypatch):  # noqa: F811
+    """``--video-out``: overlay.mp4 has every frame in RGB order turned to the video's BGR (an overlay
+    differs from its camera image only where it is drawn on); ``--png-compression fast``: the
+    same overlays as the stored default, deflated, and the writer not made nicer than the network."""
+    from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
+    from pedenv.apps.run import run_recording
+
+    monkeypatch.setenv("PEDENV_CACHE", pose_env["PEDENV_CACHE"])
+    rec = RecordingSource(**_bus_recording(tmp_path / "rec", pose_env["bus"], frames=3))
+    pose = PoseOptions(detection="fast")
+    runs = {name: run_recording(rec, OutputOptions(tmp_path / name, **options), pose)
+            for name, options in (("mp4", {"video_out": True}), ("stored", {}), ("fast", {"png_compression": "fast"}))}
+    assert [runs[n]["speed"]["pipeline"]["nice"] for n in ("mp4", "stored", "fast")] == [10, 10, 0]
+    cap = cv2.VideoCapture(str(tmp_path / "mp4" / "overlay.mp4"))
+    assert cap.get(cv2.CAP_PROP_FRAME_COUNT) == 3
+    ok, first = cap.read()
+    camera = cv2.imread(str(rec.images / "frame_000.jpg")).astype(float)
+    assert ok and np.median(np.abs(first - camera)) < 6 < np.median(np.abs(first[..., ::-1] - camera))
+    for i in range(3):
+        stored, fast = (tmp_path / n / "overlays" / f"{i:06d}.png" for n in ("stored", "fast"))
+        np.testing.assert_array_equal(cv2.imread(str(stored)), cv2.imread(str(fast)))
+        assert fast.stat().st_size < 0.75 * stored.stat().st_size  # 0.70 on these resized JPEG crops
 
 
 def test_run_realtime_drops_the_frames_that_arrive_while_the_model_is_busy(tmp_path, pose_env, monkeypatch):  # noqa: F811

@@ -26,7 +26,9 @@ With ``realtime`` the frames are taken at the recording's own rate: frame ``i`` 
 from __future__ import annotations
 
 import enum
+import os
 import queue
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -59,17 +61,26 @@ class PipelineConfig:
         run on while a slow writer (PNG encoding) catches up; each holds its image too.
     realtime: take frames at the recording's own rate and drop those that arrive while the
         model is busy (module doc); False runs every frame as fast as it can.
+    nice: how much lower the reader and writer threads run than the network (0..19, added to
+        the process's niceness; Linux only, elsewhere ignored). Higher lets the network's threads
+        go first and the reading and writing fill the time they leave, which pays while the
+        writer needs less time than the network; a writer slower than the network must not wait
+        for it (0). None (the default): 0 here, and ``pedenv run`` chooses by its outputs
+        (:func:`pedenv.apps.run.run_recording`; docs/speed.md).
     """
 
     read_ahead: int = 4
     write_behind: int = 8
     realtime: bool = False
+    nice: int | None = None
 
     def __post_init__(self) -> None:
-        for name, top in (("read_ahead", 64), ("write_behind", 256)):
+        for name, low, top in (("read_ahead", 1, 64), ("write_behind", 1, 256), ("nice", 0, 19)):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= top:
-                raise InputError(f"pipeline.{name} must be an integer in [1, {top}], got {value!r}")
+            if name == "nice" and value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= top:
+                raise InputError(f"pipeline.{name} must be an integer in [{low}, {top}], got {value!r}")
         if not isinstance(self.realtime, bool):
             raise InputError(f"pipeline.realtime must be true or false, got {self.realtime!r}")
 
@@ -113,7 +124,21 @@ def _put(q: queue.Queue, item: object, stop: threading.Event) -> bool:
     return False
 
 
-def _read(frames: Iterable[Frame], out: queue.Queue[Frame | _Failure | _End], stop: threading.Event) -> None:
+def lower_priority(nice: int | None) -> None:
+    """Run the calling thread ``nice`` steps nicer than it runs now (Linux: a thread's niceness is
+    its own; elsewhere nothing is done). A niceness that cannot be set is left as it is."""
+    if not nice or not sys.platform.startswith("linux"):
+        return
+    tid = threading.get_native_id()
+    try:
+        os.setpriority(os.PRIO_PROCESS, tid, min(19, os.getpriority(os.PRIO_PROCESS, tid) + nice))
+    except OSError:
+        return  # a speed hint only: the thread runs on at its niceness
+
+
+def _read(frames: Iterable[Frame], out: queue.Queue[Frame | _Failure | _End], stop: threading.Event,
+          nice: int | None = None) -> None:
+    lower_priority(nice)
     iterator = iter(frames)
     try:
         for frame in iterator:
@@ -132,14 +157,16 @@ class _Writer(threading.Thread):
     """Writes results in order; stops at the end marker or at its first error (kept in ``error``)."""
 
     def __init__(self, write: Callable[[Any], None], done: Callable[[Any], None], stats: PipelineStats,
-                 clock: Callable[[], float], size: int) -> None:
+                 clock: Callable[[], float], config: PipelineConfig) -> None:
         super().__init__(name="pedenv-writer")
-        self.items: queue.Queue = queue.Queue(size)
+        self.items: queue.Queue = queue.Queue(config.write_behind)
+        self.nice = config.nice
         self.write, self.done, self.stats, self.clock = write, done, stats, clock
         self.error: BaseException | None = None
         self.failed = threading.Event()
 
     def run(self) -> None:
+        lower_priority(self.nice)
         while True:
             item = self.items.get()
             if item is _END:
@@ -193,8 +220,8 @@ def run_frames(frames: Iterable[Frame], step: Callable[[Frame], Any], write: Cal
     stats = stats if stats is not None else PipelineStats()
     stop = threading.Event()
     inbox: queue.Queue[Frame | _Failure | _End] = queue.Queue(config.read_ahead)
-    reader = threading.Thread(target=_read, args=(frames, inbox, stop), name="pedenv-reader", daemon=True)
-    writer = _Writer(write, done, stats, clock, config.write_behind)
+    reader = threading.Thread(target=_read, args=(frames, inbox, stop, config.nice), name="pedenv-reader", daemon=True)
+    writer = _Writer(write, done, stats, clock, config)
     pace = _RealtimeClock(clock, sleep) if config.realtime else None
     start = None
     reader.start()

@@ -12,16 +12,17 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import cv2
 import numpy as np
 
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.images import write_image
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import holds_files, prepare_output_dir
+from pedenv.outputs.png import write_png
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
@@ -45,13 +46,14 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
     ``run.json`` (pose backend and the provider that ran it, recording, frames done, speed),
-    ``overlays/<index>.png`` or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and
-    distances, and ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the
-    ``output.extra`` outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra
-    is missing). Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`,
-    ``pipeline``); every output holds the frames in order. A bad frame stops the run with an
-    InputError; what was computed before it stays on disk. ``progress(done, total)`` is called
-    per frame written.
+    ``overlays/<index>.png`` (``output.png_compression``: stored by default, :mod:`pedenv.outputs.png`)
+    or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and distances, and
+    ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the ``output.extra``
+    outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra is missing).
+    Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`, ``pipeline``; its
+    ``nice`` None: chosen by the outputs, :func:`_pipeline`); every output holds the frames in
+    order. A bad frame stops the run with an InputError; what was computed before it stays on
+    disk. ``progress(done, total)`` is called per frame written.
     ``output.folder`` must be empty or new, unless ``output.overwrite`` (then an earlier pedenv run there is
     deleted once every frame's size and ego pose are checked:
     :func:`pedenv.outputs.output_dir.prepare_output_dir`).
@@ -72,7 +74,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    pipe = pipeline or PipelineConfig()
+    pipe = _pipeline(pipeline or PipelineConfig(), output)
     extra = output.extra or ExtraOutputs()
     rec, backend, out = _open_run(source, output, pose, cfg, pipe, backend)
     model = PedestrianEnvironmentModel(cfg)
@@ -81,7 +83,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(out / "environment.jsonl")}
     stats, timer = PipelineStats(), _StepTimes()
-    outputs = _Outputs(out, rec, output.video_out, summary, progress)
+    outputs = _Outputs(out, rec, output, summary, progress)
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
         with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
@@ -111,6 +113,21 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
     cfg.save(out / "config.json")
     return rec, backend, out
+
+
+#: ``pipeline.nice`` of ``pedenv run`` when none is given and its writer is lighter than the network.
+WRITER_NICE = 10
+
+
+def _pipeline(pipe: PipelineConfig, output: OutputOptions) -> PipelineConfig:
+    """``pipe`` with ``nice`` chosen when it is None: :data:`WRITER_NICE` for the light outputs
+    (overlay.mp4 or stored PNGs, about 11 ms of CPU per 1600x900 frame with the bird's-eye video
+    and the JSON Lines), 0 for deflated PNGs (about 45 ms: on 2 cores more than the network's
+    share, docs/speed.md)."""
+    if pipe.nice is not None:
+        return pipe
+    light = output.video_out or output.png_compression == "none"
+    return dataclasses.replace(pipe, nice=WRITER_NICE if light else 0)
 
 
 def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording) -> PoseBackend:
@@ -188,9 +205,10 @@ class _Outputs:
     """The writer stage: each frame's state to the JSON Lines file and the sinks, its overlay
     to a PNG or the overlay video; counts the frames written into ``summary``."""
 
-    def __init__(self, out: Path, rec: Recording | BagRecording, video_out: bool, summary: dict,
+    def __init__(self, out: Path, rec: Recording | BagRecording, output: OutputOptions, summary: dict,
                  progress: Callable[[int, int], None] | None) -> None:
-        self.out, self.rec, self.video_out, self.summary, self.progress = out, rec, video_out, summary, progress
+        self.out, self.rec, self.summary, self.progress = out, rec, summary, progress
+        self.video_out, self.png_compression = output.video_out, output.png_compression
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
         self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
@@ -207,9 +225,9 @@ class _Outputs:
         if self.video_out:
             if self.video is None:
                 self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)
-            self.video.write(drawn[..., ::-1].copy())
+            self.video.write(cv2.cvtColor(drawn, cv2.COLOR_RGB2BGR))  # 0.2 ms; drawn[..., ::-1].copy() took 8
         else:
-            write_image(self.out / "overlays" / f"{frame.index:06d}.png", drawn)
+            write_png(self.out / "overlays" / f"{frame.index:06d}.png", drawn, self.png_compression)
         self.last = (state, frame)
 
     def done(self, result: tuple[EnvironmentState, Frame]) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
@@ -224,8 +242,6 @@ class _Outputs:
 
 
 def _open_video(path: Path, rec: Recording | BagRecording, shape: tuple[int, ...]) -> VideoOut:
-    import cv2
-
     stamps = np.array([t for _, t in rec.images]) if rec.images else None
     rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
     if rec.video is not None and not rec.fps:

@@ -109,6 +109,9 @@ def run(
         None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."
     ),
     video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+    png_compression: str = typer.Option(
+        "none", "--png-compression",
+        help="Overlay PNGs: none (stored: 4.3 MB at 1600x900) or fast (deflate: 3x smaller, 8x the CPU to write)."),
     overwrite: Overwrite = False,
     detection: Detection = "far",
     parquet: Parquet = False,
@@ -148,7 +151,7 @@ def run(
     topics = BagOptions(image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame)
     outcome = run_command(
         source=Source(images, video, calibration, ego_poses, static, fps, start_time, bag=bag, bag_options=topics),
-        output=OutputOptions(output, overwrite=overwrite, video_out=video_out),
+        output=OutputOptions(output, overwrite=overwrite, video_out=video_out, png_compression=png_compression),
         flags=OutputFlags(parquet=parquet, rerun=rerun, mcap=mcap, ros=ros_out, live=live_port if live else None),
         pose=PoseOptions(pose_backend, pose_model, pose_input_size, detection, device),
         method=MethodOptions(config, method), manifest=manifest, realtime=realtime,

@@ -63,7 +63,7 @@ def jpeg_bytes(image: np.ndarray, quality: int = 90) -> bytes:
     """(H, W, 3) uint8 RGB -> JPEG bytes."""
     import cv2
 
-    ok, data = cv2.imencode(".jpg", np.ascontiguousarray(image[..., ::-1]), [cv2.IMWRITE_JPEG_QUALITY, quality])
+    ok, data = cv2.imencode(".jpg", cv2.cvtColor(image, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, quality])
     if not ok:
         raise ValueError(f"cannot encode a {image.shape} image as JPEG")
     return data.tobytes()

@@ -71,18 +71,56 @@ def cut_by_inner_edge(boxes: np.ndarray, region: tuple[int, int, int, int], imag
 
 
 def crop_around(box: np.ndarray, image_size: tuple[int, int], person_px: float, margin: float, max_zoom: float,
-                mosaic_size: tuple[int, int]) -> Crop:
+                mosaic_size: tuple[int, int], also: np.ndarray | None = None) -> Crop:
     """The crop for a person's ``box`` (4,) px in an image of ``image_size`` (height, width):
     ``margin`` times the box height on every side, clipped to the image; scaled so the box is
-    ``person_px`` tall (at most ``max_zoom``, and so the crop fits in ``mosaic_size``)."""
+    ``person_px`` tall (at most ``max_zoom``, and so the crop fits in ``mosaic_size``).
+    ``also`` (4,) px: a second place the person may be (the crop covers both, with the same
+    margin; the scale stays ``box``'s)."""
     h, w = image_size
     box = np.asarray(box, float)
     height = max(float(box[3] - box[1]), 1.0)
-    x0, y0 = max(0, int(math.floor(box[0] - margin * height))), max(0, int(math.floor(box[1] - margin * height)))
-    x1, y1 = min(w, int(math.ceil(box[2] + margin * height))), min(h, int(math.ceil(box[3] + margin * height)))
+    span = box if also is None else np.concatenate([np.minimum(box[:2], also[:2]), np.maximum(box[2:], also[2:])])
+    x0, y0 = max(0, int(math.floor(span[0] - margin * height))), max(0, int(math.floor(span[1] - margin * height)))
+    x1, y1 = min(w, int(math.ceil(span[2] + margin * height))), min(h, int(math.ceil(span[3] + margin * height)))
     x1, y1 = max(x1, x0 + 1), max(y1, y0 + 1)
     fit = min((mosaic_size[0] - 2 * GAP_PX) / (y1 - y0), (mosaic_size[1] - 2 * GAP_PX) / (x1 - x0))
     return Crop((x0, y0, x1, y1), float(min(person_px / height, max_zoom, fit)))
+
+
+def merge_crops(crops: list[Crop], max_scale_ratio: float,
+                mosaic_size: tuple[int, int]) -> tuple[list[Crop], list[list[int]]]:
+    """Neighbouring crops joined where that costs fewer input px (a crowd's crops overlap).
+
+    Taken in the given (priority) order, a crop joins the first crop before it whose scale
+    differs by at most ``max_scale_ratio`` when one crop over both regions, at the smaller of
+    the two scales, fits in ``mosaic_size`` and has at most the input area of the two apart.
+    Returns the crops and, per crop, the indices of ``crops`` it holds (its first one's priority).
+    """
+    merged: list[Crop] = []
+    groups: list[list[int]] = []
+    for i, crop in enumerate(crops):
+        for k, other in enumerate(merged):
+            joined = _joined(other, crop, max_scale_ratio, mosaic_size)
+            if joined is not None:
+                merged[k] = joined
+                groups[k].append(i)
+                break
+        else:
+            merged.append(crop)
+            groups.append([i])
+    return merged, groups
+
+
+def _joined(a: Crop, b: Crop, max_scale_ratio: float, mosaic_size: tuple[int, int]) -> Crop | None:
+    if max(a.scale, b.scale) > max_scale_ratio * min(a.scale, b.scale):
+        return None
+    (ax0, ay0, ax1, ay1), (bx0, by0, bx1, by1) = a.region, b.region
+    joined = Crop((min(ax0, bx0), min(ay0, by0), max(ax1, bx1), max(ay1, by1)), min(a.scale, b.scale), a.edge_px)
+    (h, w), (ah, aw), (bh, bw) = joined.size, a.size, b.size
+    if h + 2 * GAP_PX > mosaic_size[0] or w + 2 * GAP_PX > mosaic_size[1] or h * w > ah * aw + bh * bw:
+        return None
+    return joined
 
 
 def pack(crops: list[Crop], mosaic_size: tuple[int, int], max_mosaics: int | None = None) -> list[Placement]:

@@ -21,11 +21,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pedenv.boxes import iou_matrix
 from pedenv.errors import InputError
 from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
 from pedenv.pose.levels import HeightLine
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import Crop, crop_around, pack_tallest_first, run_mosaics
+from pedenv.pose.mosaic import Crop, crop_around, merge_crops, pack_tallest_first, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
 from pedenv.pose.schedule import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk, units
@@ -37,6 +38,8 @@ if TYPE_CHECKING:
     from pedenv.pose.postprocess import DecodeSettings
     from pedenv.pose.redetect import TrackPredictor
 
+#: Crops and, per crop, the indices of the tracks (of those searched) it holds.
+Grouped = tuple[list[Crop], list[list[int]]]
 #: Boxes of the latest people found (all passes) kept to fit the band's rows without a calibration.
 FIT_MEMORY = 60
 
@@ -85,6 +88,7 @@ class StreamPose:
         self._dt = 0.1
         self.finder = TrackFinder()
         self.bank = CreditBank()
+        self._untracked = np.zeros((0, 4))
 
     def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
         """One image on its own (no stream): as ``far`` (the whole band), the cascade included."""
@@ -133,27 +137,33 @@ class StreamPose:
         tiles, note = band_tiles(width, height, cfg, geometry, line)
         ids, predicted, hits = tracks if tracks is not None else (np.zeros(0, np.int64), np.zeros((0, 4)),
                                                                  np.zeros(0, np.int64))
+        ids, predicted, hits = self._with_untracked(ids, np.asarray(predicted, float).reshape(-1, 4), hits)
         unseen = self.finder.unseen_s(ids, timestamp)
-        rows = tracks_at_risk(predicted, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
-        known = np.asarray(predicted, float).reshape(-1, 4)
+        known, last = self.finder.search_boxes(ids, predicted, cfg.stream.track_max_shift)
+        rows = tracks_at_risk(known, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
         early = candidates(concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled else Detections.empty()
         early_crops = candidate_placements(early, (height, width), cfg.cascade, cfg.stream.mosaic_size)
         ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])
-        track_crops, plan = self._plan_tracks(known[rows], early_crops, (height, width),
+        track_crops, plan = self._plan_tracks((known[rows], last[rows]), early_crops, (height, width),
                                               (units(first.input_size), np.array([t.units for t in tiles]), ages))
+        held = [rows[group] for group in track_crops[1]]  # per crop, the tracks it holds
         chosen = list(range(len(tiles))) if cold else plan.tiles
         steps = [tiles[i].step for i in chosen]
         parts += run(steps)
         for i in chosen:
             self._tile_seen[tiles[i].key] = timestamp
         dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, max_detections=b.max_detections)
-        extra, passes, found_tracks, verified = self._packed(image, dets, low, known, rows, track_crops,
+        extra, passes, found_tracks, verified = self._packed(image, dets, low, (known, last), held, track_crops,
                                                              plan.mosaics + (cfg.cascade.max_units if cold else 0),
                                                              settings)
         if len(extra):
             dets = merge_detections([(dets, np.zeros(len(dets), bool)), (extra, np.zeros(len(extra), bool))],
                                     max_detections=b.max_detections)
-        self.finder.update(ids, predicted, dets.boxes, timestamp, cfg.stream.missed_iou)
+        self.finder.update(ids, known, dets.boxes, timestamp, cfg.stream.missed_iou)
+        tracked = known[ids >= 0]
+        free = iou_matrix(dets.boxes, tracked).max(axis=1) <= cfg.stream.missed_iou if len(tracked) and len(dets) \
+            else np.ones(len(dets), bool)
+        self._untracked = dets.boxes[free] if cfg.stream.search_untracked else np.zeros((0, 4))
         self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= cfg.fit_min_score]])[-FIT_MEMORY:]
         self.last_passes = [first, *steps, *passes]
         self.last_note = ("cold start, whole band; " if cold else "") + note
@@ -164,43 +174,73 @@ class StreamPose:
         self.accounts.add((first, steps, passes), plan, cold, (len(rows), found_tracks, verified), late)
         return dets
 
-    def _plan_tracks(self, boxes: np.ndarray, early_crops: list[Crop], image_size: tuple[int, int],
-                     costs: tuple[float, np.ndarray, np.ndarray]) -> tuple[list[Crop], FramePlan]:
-        """The crops of the tracks to search (``boxes`` (K, 4) px, most at risk first) and the
-        frame's plan; ``costs``: the whole-frame pass's units, the band tiles' units and ages (s).
-        The usual crops when the plan pays for all of them, else the crowd's smaller ones."""
+    def _plan_tracks(self, boxes: tuple[np.ndarray, np.ndarray], early_crops: list[Crop], image_size: tuple[int, int],
+                     costs: tuple[float, np.ndarray, np.ndarray]) -> tuple[Grouped, FramePlan]:
+        """The crops of the tracks to search (``boxes``: their search boxes and last detections,
+        (K, 4) px each, most at risk first) and the frame's plan; ``costs``: the whole-frame
+        pass's units, the band tiles' units and ages (s). The first of these the plan pays for
+        in full: the usual crops, the usual crops with neighbours joined
+        (:func:`~pedenv.pose.mosaic.merge_crops`), the crowd's smaller crops, those joined; per
+        crop the rows of ``boxes`` it holds."""
         cfg = self.config
         mosaic = cfg.stream.mosaic_size
+        searched, last = (np.asarray(b, float).reshape(-1, 4) for b in boxes)
         for person_px, margin, edge_px in cfg.stream.crop_styles:
-            crops = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic),
-                             edge_px=edge_px) for box in boxes]
-            needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
-            with_cascade = pack_tallest_first(crops + early_crops, mosaic, max_mosaics=needed + cfg.cascade.max_units)
-            wanted = max(needed, len({p.mosaic for p in with_cascade}))
-            plan = plan_frame(costs[0], units(mosaic), wanted, costs[1], costs[2], self._dt, cfg.stream,
-                              self.bank.credit)
-            if plan.mosaics >= needed:
-                break
-        return crops, plan
+            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic, also),
+                             edge_px=edge_px) for box, also in zip(searched, last)]
+            for crops, groups in self._arrangements(apart, crowd=person_px == cfg.stream.crowd_person_px):
+                needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
+                with_cascade = pack_tallest_first(crops + early_crops, mosaic,
+                                                  max_mosaics=needed + cfg.cascade.max_units)
+                wanted = max(needed, len({p.mosaic for p in with_cascade}))
+                plan = plan_frame(costs[0], units(mosaic), wanted, costs[1], costs[2], self._dt, cfg.stream,
+                                  self.bank.credit)
+                if plan.mosaics >= needed:
+                    return (crops, groups), plan
+        return (crops, groups), plan
 
-    def _packed(self, image: np.ndarray, dets: Detections, low: list[Detections], predicted: np.ndarray,
-                rows: np.ndarray, track_crops: list[Crop], limit: int,
+    def _arrangements(self, crops: list[Crop], crowd: bool) -> list[Grouped]:
+        """The tracks' ``crops`` apart, or, the crowd's (``stream.merge_crops``), with neighbours
+        joined unless that needs more packed inputs; per crop the indices of ``crops`` it holds."""
+        apart = (crops, [[i] for i in range(len(crops))])
+        if not crowd or not self.config.stream.merge_crops:
+            return [apart]
+        mosaic = self.config.stream.mosaic_size
+        joined = merge_crops(crops, self.config.stream.merge_scale_ratio, mosaic)
+        needed = [len({p.mosaic for p in pack_tallest_first(c, mosaic)}) for c in (joined[0], crops)]
+        return [joined if needed[0] <= needed[1] else apart]
+
+    def _with_untracked(self, ids: np.ndarray, predicted: np.ndarray,
+                        hits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tracks and, after them, the persons found last frame that no track held (ids < 0)."""
+        boxes = self._untracked
+        if len(boxes) and len(predicted):
+            boxes = boxes[iou_matrix(boxes, predicted).max(axis=1) <= self.config.stream.missed_iou]
+        if not len(boxes):
+            return ids, predicted, hits
+        return (np.concatenate([ids, -1 - np.arange(len(boxes))]), np.concatenate([predicted, boxes]),
+                np.concatenate([hits, np.ones(len(boxes), np.int64)]))
+
+    def _packed(self, image: np.ndarray, dets: Detections, low: list[Detections],
+                boxes: tuple[np.ndarray, np.ndarray], rows: list[np.ndarray],
+                track_crops: Grouped, limit: int,
                 settings: DecodeSettings) -> tuple[Detections, list[Pass], int, int]:
         """At most ``limit`` packed inputs: the tracks' crops first, then the cascade's candidates
-        in the room left (best score first)."""
+        in the room left (best score first). boxes: all tracks' search boxes and last detections
+        ((T, 4) px each); rows: per crop of ``track_crops``, the rows of the tracks it holds."""
         cfg = self.config
         mosaic = cfg.stream.mosaic_size
         cands = candidates(concat(low), dets, cfg.cascade) if cfg.cascade.enabled else Detections.empty()
         cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), cfg.cascade, mosaic)
-        tracks = sorted(pack_tallest_first(track_crops, mosaic, max_mosaics=limit), key=lambda p: p.item)
+        tracks = sorted(pack_tallest_first(track_crops[0], mosaic, max_mosaics=limit), key=lambda p: p.item)
         placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
         if not placements:
             return Detections.empty(), [], 0, 0
         results, passes = run_mosaics(self.backend.infer, image, placements, mosaic, settings)
         n = len(tracks)
-        track_parts = [(p, r) for p, r in zip(placements, results) if p.item < n]
-        found = self.finder.pick(predicted, [rows[tracks[p.item].item] for p, _ in track_parts],
-                                 [r for _, r in track_parts])
+        track_parts = [(int(row), r) for p, r in zip(placements, results) if p.item < n
+                       for row in rows[tracks[p.item].item]]
+        found = self.finder.pick(*boxes, [row for row, _ in track_parts], [r for _, r in track_parts])
         cand_parts = [(p, r) for p, r in zip(placements, results) if p.item >= n]
         verified = confirmed(cands, [p.item - n for p, _ in cand_parts], [p for p, _ in cand_parts],
                              [r for _, r in cand_parts], cfg.cascade)

@@ -17,43 +17,78 @@ from pedenv.records import Detections
 #: confidence at least PLAUSIBLE_KEYPOINT_CONF): a person, not a pole.
 SURE_SCORE = 0.5
 PLAUSIBLE_KEYPOINT_CONF = 0.5
+#: A remembered box overlapping another track's predicted box by this IoU (and not its own) is that track's.
+SAME_BOX_IOU = 0.95
 
 
 class TrackFinder:
-    """When each track was last detected, and which person in its crop is the track.
+    """When each track was last detected, where, and which person in its crop is the track.
 
-    A person found in a track's crop re-detects it when whole, sure or plausible, nearest the
-    predicted box (within :class:`~pedenv.pose.redetect_config.RedetectConfig`'s ``match_distance`` and
-    ``match_height_ratio``) and nearer it than any other track's.
+    A track is searched around its **search box**: the box it was last detected with, moved by
+    the prediction's centre shift since (the predicted box's size follows the tracker's edge
+    velocities, which a detector's jitter distorts; the detected size does not); its crop covers
+    the last detection too (the crop's ``also``). A shift over ``max_shift`` of its height, or a
+    remembered box that is another track's predicted box (IoU >= :data:`SAME_BOX_IOU`) and not
+    near its own, means the box is not that track's (stand-in tracks whose ids change between
+    frames, a wrong association):
+    the predicted box is searched as it is. A person found in a track's crop
+    re-detects it when whole, sure or plausible, nearest the search box or the last detection
+    (within :class:`~pedenv.pose.redetect_config.RedetectConfig`'s ``match_distance`` and
+    ``match_height_ratio``) and nearer the search box than any other track's.
     """
 
     def __init__(self, match: RedetectConfig | None = None) -> None:
         self.match = match or RedetectConfig()
         self._seen: dict[int, float] = {}
+        self._last: dict[int, np.ndarray] = {}
 
     def unseen_s(self, ids: np.ndarray, timestamp: float) -> np.ndarray:
-        """(T,) seconds since each track of ``ids`` was last detected (0 for a new one)."""
-        return np.array([timestamp - self._seen.setdefault(int(i), timestamp) for i in ids], float)
+        """(T,) seconds since each track of ``ids`` was last detected (0 for a new one, and for a
+        person no track holds, id < 0)."""
+        return np.array([timestamp - self._seen.setdefault(int(i), timestamp) if i >= 0 else 0.0 for i in ids], float)
 
-    def update(self, ids: np.ndarray, predicted: np.ndarray, boxes: np.ndarray, timestamp: float,
+    def search_boxes(self, ids: np.ndarray, predicted: np.ndarray, max_shift: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(search boxes, last detections)``, both (T, 4) px, for the tracks ``ids`` (T,) with
+        their ``predicted`` boxes (T, 4) px; a track never detected here or id < 0 (a person no
+        track holds): its predicted box for both.
+        max_shift: the most centre shift from the last detection, in its heights, for it to count."""
+        predicted = np.asarray(predicted, float).reshape(-1, 4)
+        last = np.array([self._last.get(int(i), p) for i, p in zip(ids, predicted)], float).reshape(-1, 4)
+        shift = 0.5 * (predicted[:, :2] + predicted[:, 2:] - last[:, :2] - last[:, 2:])
+        heights = np.maximum(last[:, 3] - last[:, 1], 1.0)
+        other = np.linalg.norm(shift, axis=1) > max_shift * heights
+        if len(predicted):  # or it is another track's predicted box, apart from its own
+            overlap = iou_matrix(last, predicted)
+            other |= (np.diag(overlap) <= 0.0) & (overlap.max(axis=1) >= SAME_BOX_IOU)
+        last[other] = predicted[other]
+        shift[other] = 0.0
+        return last + np.tile(shift, 2), last
+
+    def update(self, ids: np.ndarray, searched: np.ndarray, boxes: np.ndarray, timestamp: float,
                iou: float) -> None:
-        """Tracks whose predicted box (T, 4) px some detected box (N, 4) px overlaps by more than ``iou`` were seen."""
+        """Tracks whose search box (T, 4) px some detected box (N, 4) px overlaps by more than
+        ``iou`` were seen, at the best-overlapping box."""
+        self._last = {k: v for k, v in self._last.items() if k in set(np.asarray(ids).tolist())}
         if not len(ids) or not len(boxes):
             return
-        seen = iou_matrix(np.asarray(predicted, float), np.asarray(boxes, float)).max(axis=1) > iou
-        for i in np.asarray(ids)[seen]:
-            self._seen[int(i)] = timestamp
+        overlap = iou_matrix(np.asarray(searched, float), np.asarray(boxes, float))
+        for row in np.flatnonzero((overlap.max(axis=1) > iou) & (np.asarray(ids) >= 0)):
+            self._seen[int(ids[row])] = timestamp
+            self._last[int(ids[row])] = np.asarray(boxes[int(np.argmax(overlap[row]))], float).copy()
 
-    def pick(self, predicted: np.ndarray, rows: list[int], results: list[tuple[Detections, np.ndarray]]) -> Detections:
-        """Per searched track (``rows`` of ``predicted`` (T, 4) px) the person of its crop's
-        ``results`` (image px, cut flags) that is that track, if any."""
+    def pick(self, searched: np.ndarray, last: np.ndarray, rows: list[int],
+             results: list[tuple[Detections, np.ndarray]]) -> Detections:
+        """Per searched track (``rows`` of the search boxes ``searched`` and last detections
+        ``last``, (T, 4) px) the person of its crop's ``results`` (image px, cut flags) that is that track, if any."""
         kept = []
         for row, (found, cut) in zip(rows, results):
             if not len(found):
                 continue
             sure = (found.scores >= SURE_SCORE) | (found.confidences.mean(axis=1) >= PLAUSIBLE_KEYPOINT_CONF)
-            pick = found.take(nearest_person(predicted[row], found.boxes, ~cut & sure, self.match))
-            if len(pick) and nearest_track(pick.boxes[0], predicted) == row:
+            pick = found.take(nearest_person(searched[row], found.boxes, ~cut & sure, self.match))
+            if not len(pick):
+                pick = found.take(nearest_person(last[row], found.boxes, ~cut & sure, self.match))
+            if len(pick) and nearest_track(pick.boxes[0], searched) == row:
                 kept.append(pick)
         return concat(kept)
 

@@ -111,6 +111,24 @@ class StreamConfig:
         risk need more packed inputs than the frame can pay with the crops above: smaller crops,
         about twenty to an input instead of about ten, each found a little less often
         (``benchmarks/stream_crops.py``: 89 % instead of 92 % of MOT17's people).
+    search_untracked: the persons a frame found that no track holds (most score below what the
+        tracker needs to start a track) are searched again in the next frame's packed inputs, after
+        the tracks: zoomed, a weak person usually scores enough to become a track. MOT17 samples
+        (``benchmarks/run_real.py``): recall 0.511 -> 0.523, false positives 121 -> 132.
+    merge_crops: in the crowd's style (the frame cannot pay for the usual crops), join
+        neighbouring tracks' crops into one where that costs fewer input px and packs in no more
+        inputs (:func:`pedenv.pose.mosaic.merge_crops`): overlapping people are then seen
+        together, not cut by each other's crop edges, and more fit in a packed input.
+    merge_scale_ratio: only crops whose scales differ by at most this factor are joined (1..4);
+        the joined crop takes the smaller scale, so its shorter person is up to this much smaller
+        in the input than ``crowd_person_px``. Chosen on the MOT17 samples (1.1, 1.25, 1.5, 2).
+    track_max_shift: a track is searched around the box it was last detected with, moved by the
+        centre shift of its predicted box (the tracker's per-edge velocities distort the box's
+        size), and its crop covers the last detection too; a shift longer than this many of its
+        heights means the remembered box is not that track's (ids reused between frames, as
+        ``evaluate-detections``' stand-in tracks are, or a wrong association): its predicted box
+        is searched as it is (0..100; 0: always the predicted box). MOT17 samples and vtest.avi
+        (docs/detection.md): 0.5, 1 and 100 gave the same counts, 0 lost 14 and 13 people.
     track_min_hits: only tracks detected at least this many times are looked for (1..1000). A new
         track (one hit) is looked for at once: a person the band rotation found once is kept.
     missed_iou: a track whose predicted box overlaps no whole-frame detection by more than this
@@ -131,6 +149,10 @@ class StreamConfig:
     crowd_person_px: float = number(80.0, 32.0, 384.0)
     crowd_margin: float = number(0.25, 0.0, 2.0)
     crowd_edge_px: float = number(8.0, 0.0, 64.0)
+    search_untracked: bool = flag(True)
+    merge_crops: bool = flag(True)
+    merge_scale_ratio: float = number(1.25, 1.0, 4.0)
+    track_max_shift: float = number(1.0, 0.0, 100.0)
     track_min_hits: int = count(1, 1, 1000)
     missed_iou: float = number(0.3, 0.0, 1.0)
     max_gap_s: float = number(2.0, 0.1, 3600.0)
