@@ -80,7 +80,7 @@ class PoseOptions:
     backend: str | None = "onnx"
     model: str | Path | None = None
     input_size: str | None = None
-    detection: str | None = "far"
+    detection: str | None = "stream"
     device: str = "auto"
 
 

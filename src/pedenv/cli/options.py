@@ -34,8 +34,9 @@ PoseModel = Annotated[Path | None, typer.Option(
 PoseInputSize = Annotated[str | None, typer.Option(
     "--pose-input-size", help="Network input, 640 or 384x640 (run's default: by camera aspect).")]
 Detection = Annotated[str | None, typer.Option(
-    "--detection", help="onnx: far (whole frame + tiles over the far band; the default), stream (far over "
-                        "consecutive frames, within a budget) or fast (one pass).")]
+    "--detection", help="onnx: far (whole frame + tiles over the far band; detect's and evaluate's "
+                        "default), stream (far over consecutive frames, within a budget; run's default) or fast "
+                        "(one pass).")]
 Device = Annotated[str, typer.Option(
     "--device", help="onnx: auto (the GPU when onnxruntime has one, else the CPU), cpu or cuda (a GPU or an "
                      "error).")]

@@ -113,7 +113,7 @@ def run(
         "none", "--png-compression",
         help="Overlay PNGs: none (stored: 4.3 MB at 1600x900) or fast (deflate: 3x smaller, 8x the CPU to write)."),
     overwrite: Overwrite = False,
-    detection: Detection = "far",
+    detection: Detection = "stream",
     parquet: Parquet = False,
     rerun: RerunOption = None,
     mcap: Mcap = None,
