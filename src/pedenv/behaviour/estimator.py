@@ -31,7 +31,7 @@ class TrackStore:
     (:meth:`BehaviourEstimator._orient`): ``held (4, T)`` the yaw (radians, world), its spread
     (radians) and the body's and the head's facing probability, ``available (T,)`` int8. A new
     track holds ``flat`` (4,), the values of the flat grid, and ``UNAVAILABLE`` until then. Rows
-    are kept sorted by id."""
+    are in the order the tracks came; ``index`` maps a track id to its row."""
 
     def __init__(self, bins: int, flat: np.ndarray) -> None:
         self.bins, self.flat = bins, flat
@@ -44,31 +44,26 @@ class TrackStore:
         self.time = np.zeros(0)
         self.held = np.zeros((4, 0))
         self.available = np.zeros(0, np.int8)
-        self._last = (np.zeros(0, np.int64), np.zeros(0, np.intp))  # the last ids asked for and their rows
+        self.index: dict[int, int] = {}
 
     def rows(self, ids: np.ndarray, now: float) -> np.ndarray:
         """(N,) the rows of ``ids`` (N,), new ones added flat, standing, last updated ``now`` (s)."""
-        last_ids, last_index = self._last
-        if len(ids) == len(last_ids) and (ids == last_ids).all():
-            return last_index  # the usual frame: the same tracks as the last, the rows unchanged
-        index = np.searchsorted(self.ids, ids)
-        if len(self.ids) and (self.ids[np.minimum(index, len(self.ids) - 1)] == ids).all():
-            self._last = (ids.copy(), index)
-            return index  # every track known
-        found = index < len(self.ids)
-        found[found] = self.ids[index[found]] == ids[found]
-        if not found.all():
-            new = np.unique(ids[~found])
-            self.ids = np.concatenate([self.ids, new])
-            self.p = np.concatenate([self.p, heading_filter.uniform(len(new), self.bins)])
-            self.state = np.concatenate([self.state, np.zeros(len(new), np.int8)])
-            self.time = np.concatenate([self.time, np.full(len(new), now)])
-            self.held = np.concatenate([self.held, np.repeat(self.flat[:, None], len(new), axis=1)], axis=1)
-            self.available = np.concatenate([self.available, np.full(len(new), heading_filter.UNAVAILABLE, np.int8)])
-            self._take(np.argsort(self.ids, kind="stable"))
-            index = np.searchsorted(self.ids, ids)
-        self._last = (ids.copy(), index)
-        return index
+        index, keys = self.index, ids.tolist()
+        try:
+            return np.array([index[i] for i in keys], np.intp)
+        except KeyError:
+            pass
+        new = sorted({i for i in keys if i not in index})
+        for i in new:
+            index[i] = len(index)
+        m = len(new)
+        self.ids = np.concatenate([self.ids, np.array(new, np.int64)])
+        self.p = np.concatenate([self.p, heading_filter.uniform(m, self.bins)])
+        self.state = np.concatenate([self.state, np.zeros(m, np.int8)])
+        self.time = np.concatenate([self.time, np.full(m, now)])
+        self.held = np.concatenate([self.held, np.repeat(self.flat[:, None], m, axis=1)], axis=1)
+        self.available = np.concatenate([self.available, np.full(m, heading_filter.UNAVAILABLE, np.int8)])
+        return np.array([index[i] for i in keys], np.intp)
 
     def keep(self, live_ids: np.ndarray) -> None:
         """Forget every track not in ``live_ids`` (checked once the store holds more rows than there
@@ -78,12 +73,9 @@ class TrackStore:
         mask = ((self.ids[:, None] == live_ids).any(axis=1) if len(self.ids) * len(live_ids) < 4096
                 else np.isin(self.ids, live_ids))
         if not mask.all():
-            self._take(mask)
-
-    def _take(self, index: np.ndarray) -> None:
-        self._last = (np.zeros(0, np.int64), np.zeros(0, np.intp))
-        self.ids, self.p, self.state, self.time = self.ids[index], self.p[index], self.state[index], self.time[index]
-        self.held, self.available = self.held[:, index], self.available[index]
+            self.ids, self.p, self.state, self.time = self.ids[mask], self.p[mask], self.state[mask], self.time[mask]
+            self.held, self.available = self.held[:, mask], self.available[mask]
+            self.index = {i: row for row, i in enumerate(self.ids.tolist())}
 
 
 class BehaviourEstimator:
@@ -159,11 +151,11 @@ class BehaviourEstimator:
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
         ahead, ahead_cov, steps, steps_cov = self.predictor(x, P)
-        fast = speed > cfg.max_pedestrian_speed_mps
-        if fast.any():  # the corridor's prediction at most that fast
+        if speed.max() > cfg.max_pedestrian_speed_mps:  # the corridor's positions at most that fast
+            scale = np.minimum(cfg.max_pedestrian_speed_mps / np.maximum(speed, 1e-9), 1.0)
             capped = x.copy()
-            capped[:, 1::2] *= np.where(fast, cfg.max_pedestrian_speed_mps / np.maximum(speed, 1e-9), 1.0)[:, None]
-            steps, steps_cov = self.predictor(capped, P)[2:]
+            capped[:, 1::2] *= scale[:, None]
+            steps = self.predictor.steps(capped)
         conflict = conflict_of(path, steps, steps_cov, cfg.corridor_half_width_m, cfg.corridor_front_m)
         return Behaviour(held[0], held[1], store.available[rows], held[2], held[3], state, speed, speed_std,
                          self.horizons, ahead, ahead_cov, conflict.probability, conflict.time_s, conflict.time_std_s,

@@ -66,6 +66,11 @@ class JointPredictor:
         self.position_map = np.concatenate([reported.position_map, stacked.component_maps[0]], axis=1)
         self.covariance_map = np.concatenate([reported.covariance_map, stacked.component_maps[1]], axis=1)
         self.noise = np.concatenate([reported.noise, stacked.component_maps[2]])
+        self.step_map = stacked.component_maps[0]
+
+    def steps(self, x: np.ndarray) -> np.ndarray:
+        """The corridor's positions (N, 2, K) alone (:meth:`PathPredictor.stacked`), of the states x (N, 4)."""
+        return (x @ self.step_map).reshape(len(x), 2, self.sizes[1])
 
     def __call__(self, x: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
         """The reported path's positions (N, H, 2) and covariances (N, H, 2, 2) (:meth:`PathPredictor.__call__`)
