@@ -48,7 +48,7 @@ GATE_SIGMAS = 6.0
 GATE_MIN_PEDESTRIANS = 32
 #: Weights of the stacked covariance components ``xx, xy, yy`` in a quadratic form ``u^T C u``.
 _QUADRATIC = np.array([1.0, 2.0, 1.0])
-_FIRST, _SECOND = [0, 0, 1], [0, 1, 1]  # the products ``ux ux, ux uy, uy uy``
+_FIRST, _SECOND = np.array([0, 0, 1]), np.array([0, 1, 1])  # the products ``ux ux, ux uy, uy uy``
 
 
 def path_coordinates(path: EgoPath, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -83,12 +83,16 @@ class PathFrame:
         """``s``, ``d`` (N, K) metres of points (N, 2, K) world x, y; the points from the origin
         (N, 2, K) and, for an arc, their squared distances from the centre (N, K) (None for a line)."""
         rel = points - self.origin
-        turned = np.matmul(self.rotation, rel)
+        x, y = rel[:, 0], rel[:, 1]
+        (a, b), (c, e) = self.rotation.tolist()
+        first, second = a * x + b * y, c * x + e * y  # the rotation
         if self.straight:
-            return turned[:, 0], turned[:, 1], rel, None
-        dist2 = (rel * rel).sum(axis=1)
-        angle = np.arctan2(turned[:, 1], turned[:, 0])  # swept angle, signed like r
-        return (self.radius * self.sign) * angle, self.sign * (self.radius - np.sqrt(dist2)), rel, dist2
+            return first, second, rel, None
+        sq = rel * rel
+        dist2 = sq[:, 0] + sq[:, 1]
+        angle = np.arctan2(second, first)  # swept angle, signed like r
+        across = self.radius - np.sqrt(dist2) if self.sign > 0 else np.sqrt(dist2) - self.radius
+        return (self.radius * self.sign) * angle, across, rel, dist2
 
     def across_variance(self, rel: np.ndarray, dist2: np.ndarray | None, cov: np.ndarray) -> np.ndarray:
         """(N, K) m^2: the variance across the path of positions with covariances ``cov`` (N, 3, K)
@@ -124,10 +128,11 @@ def conflict_of(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, h
     """:func:`corridor_conflict` from the predicted positions (N, 2, K) world x, y metres and their
     covariances (N, 3, K) m^2, the components xx, xy, yy
     (:meth:`pedenv.behaviour.prediction.PathPredictor.stacked`)."""
-    n, _, k = positions.shape
+    n = len(positions)
     lateral_var = path.lateral_std**2
     sep = positions - path.xy.T  # from the ego at the same time
-    sep2 = (sep * sep).sum(axis=1)
+    sq = sep * sep
+    sep2 = sq[:, 0] + sq[:, 1]
     j = sep2.argmin(axis=1)  # the closest step
     people = np.arange(n)
     u, c = sep[people, :, j], covariances[people, :, j]  # (N, 2), (N, 3)
@@ -137,12 +142,12 @@ def conflict_of(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, h
     horizon, length = path.times[-1], path.length + front_m
     near = _near(path, positions, covariances, length + half_width_m) if n >= GATE_MIN_PEDESTRIANS else None
     if near is None or near.all():
-        prob, mean, spread = _entry(path, positions, covariances, half_width_m, length)
+        prob, mean, spread = _entry(path, positions, covariances, half_width_m, length, lateral_var)
     else:
         prob, mean, spread = np.zeros(n), np.full(n, horizon), np.zeros(n)
         if near.any():
             prob[near], mean[near], spread[near] = _entry(path, positions[near], covariances[near], half_width_m,
-                                                          length)
+                                                          length, lateral_var)
     return Conflict(prob, mean, spread, np.sqrt(closest2), np.sqrt(np.maximum(closest_var, 0.0)), path.times[j])
 
 
@@ -159,16 +164,20 @@ def _near(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, reach: 
 _EDGES = np.array([1.0, -1.0])[:, None, None]
 
 
-def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float, length: float
-           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_width_m: float, length: float,
+           lateral_var: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s, from
-    the positions (M, 2, K) and covariances (M, 3, K) (see :func:`conflict_of`)."""
+    the positions (M, 2, K) and covariances (M, 3, K) (see :func:`conflict_of`; lateral_var (K,) m^2:
+    the path's own variance across)."""
     frame = PathFrame(path)
     s, d, rel, dist2 = frame.coordinates(positions)
-    sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + path.lateral_std**2, 1e-8))
-    beyond = np.maximum(s - length, 0.0)  # past the corridor's straight part: its round end's half chord
-    half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0))
-    edges = ndtr((half * _EDGES - d) / sd)
+    sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + lateral_var, 1e-8))
+    if s.max() > length:  # past the corridor's straight part: its round end's half chord
+        beyond = np.maximum(s - length, 0.0)
+        half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0)) * _EDGES
+    else:
+        half = half_width_m * _EDGES
+    edges = ndtr((half - d) / sd)
     inside = (edges[0] - edges[1]) * (s >= 0.0)  # behind the ego: 0
     running = np.maximum.accumulate(inside, axis=1)
     prob = np.minimum(np.maximum(running[:, -1], 0.0), 1.0)

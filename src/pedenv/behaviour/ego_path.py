@@ -125,11 +125,11 @@ def _turn(a: tuple, b: tuple) -> float:
 
 
 @lru_cache(maxsize=8)
-def _bases(times: tuple[float, ...], trend_s: float) -> tuple[np.ndarray, float, float]:
-    """(4, K) at ``times`` (K,) s: ``t``, ``t^2 / 2``, and the first and second integrals of a rate
-    rising at 1 per second for ``trend_s`` seconds, then holding; and the first and third at the
-    last time."""
-    t = np.asarray(times, float)
+def _bases(times: bytes, trend_s: float) -> tuple[np.ndarray, float, float]:
+    """(4, K) at ``times`` (K,) s (float64 bytes): ``t``, ``t^2 / 2``, and the first and second
+    integrals of a rate rising at 1 per second for ``trend_s`` seconds, then holding; and the
+    first and third at the last time."""
+    t = np.frombuffer(times, float)
     r = np.minimum(t, trend_s)
     e = t - r
     b = np.stack([t, 0.5 * t**2, 0.5 * r**2 + trend_s * e, r**3 / 6.0 + 0.5 * trend_s**2 * e + 0.5 * trend_s * e**2])
@@ -147,8 +147,12 @@ def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_ac
         jerk = (_clip(a + motion.jerk * trend_s, max(max_acceleration, abs(a))) - a) / trend_s
     else:
         trend_s, jerk = 0.0, 0.0
-    b, end_t, end_rate = _bases(tuple(np.asarray(times, float).tolist()), trend_s)
-    s = v * b[0] + a * b[1] + jerk * b[3]
+    b, end_t, end_rate = _bases(np.ascontiguousarray(times, float).tobytes(), trend_s)
+    s = v * b[0]
+    if a:
+        s += a * b[1]
+    if jerk:
+        s += jerk * b[3]
     gain = a * end_t + jerk * end_rate  # the speed's change by the end
     sign = math.copysign(1.0, v if abs(v) > 1e-9 else (gain or 1.0))  # standing: the way the speed goes
     if sign > 0:
@@ -156,33 +160,39 @@ def travelled(motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0, max_ac
     return -np.maximum.accumulate(-s)
 
 
-def predict_ego_path(ego: EgoPose, motion: EgoMotion, times: np.ndarray, trend_s: float = 0.0,
-                     max_acceleration: float = math.inf) -> EgoPath:
-    """The path at ``times`` (K,) s ahead (increasing, from 0) from the pose now: an arc of the
-    curvature now (yaw rate over speed), along which the ego covers :func:`travelled` (its
-    acceleration changing at the jerk for ``trend_s`` s, never beyond ``max_acceleration``)."""
+def predict_ego_path(ego: EgoPose | tuple[float, float, float], motion: EgoMotion, times: np.ndarray,
+                     trend_s: float = 0.0, max_acceleration: float = math.inf) -> EgoPath:
+    """The path at ``times`` (K,) s ahead (increasing, from 0) from the pose now (or its world
+    ``(x, y, yaw)``, metres and radians): an arc of the curvature now (yaw rate over speed),
+    along which the ego covers :func:`travelled` (its acceleration changing at the jerk for
+    ``trend_s`` s, never beyond ``max_acceleration``)."""
     times = np.asarray(times, float)
+    if isinstance(ego, EgoPose):
+        ego = (float(ego.translation[0]), float(ego.translation[1]), ego.yaw)
+    x0, y0, yaw = ego
     s = travelled(motion, times, trend_s, max_acceleration)
     last = float(s[-1])
     direction = -1.0 if last < 0 or (last == 0 and motion.speed < 0) else 1.0
     dist = np.abs(s)
     speed = abs(motion.speed)
     curvature = motion.yaw_rate / speed if speed > 1e-3 else 0.0
-    yaw = ego.yaw
     heading = yaw + (0.0 if direction > 0 else math.pi)
     turn = curvature * dist
-    x0, y0 = float(ego.translation[0]), float(ego.translation[1])
+    xy = np.empty((len(times), 2))
+    x, y = xy[:, 0], xy[:, 1]
     if abs(curvature) < 1e-6:
-        xy = np.multiply.outer(dist, (math.cos(heading), math.sin(heading)))
-        xy += (x0, y0)
+        np.multiply(dist, math.cos(heading), out=x)
+        np.multiply(dist, math.sin(heading), out=y)
     else:
         angle = heading + turn
-        xy = np.empty((len(times), 2))
-        np.sin(angle, out=xy[:, 0])
-        np.cos(angle, out=xy[:, 1])
-        xy -= (math.sin(heading), math.cos(heading))
-        xy /= (curvature, -curvature)
-        xy += (x0, y0)
+        np.sin(angle, out=x)
+        np.cos(angle, out=y)
+        x -= math.sin(heading)
+        y -= math.cos(heading)
+        x /= curvature
+        y /= -curvature
+    x += x0
+    y += y0
     lateral = np.hypot((0.5 * motion.yaw_rate_std) * times * dist,
                        (0.5 * motion.speed_std) * times * np.abs(np.sin(turn)))
     return EgoPath(times, xy, yaw + turn, lateral, motion, curvature, float(dist[-1]), direction)

@@ -6,6 +6,7 @@ in :class:`TrackStore`, keyed by track id; tracks the tracker has dropped are fo
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import time
@@ -128,7 +129,7 @@ class BehaviourEstimator:
                               and np.abs(P).max() < STATE_LIMIT[1]):  # False for NaN
             x, P = _usable_states(peds, x, P, started)
         self.ego.add(frame.timestamp, frame.ego)
-        path = predict_ego_path(frame.ego, self.ego.motion(), self.conflict_times, self.config.ego_trend_s,
+        path = predict_ego_path(self.ego.poses[-1][1:], self.ego.motion(), self.conflict_times, self.config.ego_trend_s,
                                 self.config.max_ego_acceleration_mps2)
         self.store.keep(live_ids)
         if len(peds) == 0:
@@ -137,7 +138,9 @@ class BehaviourEstimator:
         else:
             beh = self._cues(frame, peds, x, P, path)
         self.elapsed_s, self.frames = self.elapsed_s + time.perf_counter() - start, self.frames + 1
-        return dataclasses.replace(peds, behaviour=beh)
+        out = copy.copy(peds)  # dataclasses.replace, without its per-field work
+        object.__setattr__(out, "behaviour", beh)
+        return out
 
     def _cues(self, frame: Frame, peds: Pedestrians, x: np.ndarray, P: np.ndarray, path: EgoPath) -> Behaviour:
         cfg, t, store = self.config, frame.timestamp, self.store

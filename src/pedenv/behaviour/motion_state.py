@@ -57,8 +57,8 @@ def speed_and_std(velocities: np.ndarray, velocity_covariances: np.ndarray) -> t
 
 def speed_from(v: VelocityStats) -> tuple[np.ndarray, np.ndarray]:
     """:func:`speed_and_std` from the :class:`VelocityStats`."""
-    moving = v.speed > 1e-6
-    var = v.var_along if moving.all() else np.where(moving, v.var_along, v.var_largest())
+    moving = len(v.speed) and v.speed.min() > 1e-6
+    var = v.var_along if moving else np.where(v.speed > 1e-6, v.var_along, v.var_largest())
     return v.speed, np.sqrt(np.maximum(var, 0.0))
 
 
@@ -73,6 +73,6 @@ def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, c
     # the state may fall to the number of exit thresholds the speed stays above, and rises to the
     # number of entry thresholds it clearly exceeds (the entries lie above the exits)
     low = speed - config.speed_sigmas * speed_std
-    floor = np.add(low > config.walk_enter_mps, low > config.run_enter_mps, dtype=np.int8)  # entries < low
-    ceiling = np.add(speed >= config.walk_exit_mps, speed >= config.run_exit_mps, dtype=np.int8)  # exits <= speed
-    return np.maximum(np.minimum(previous, ceiling), floor).astype(np.int8, copy=False)
+    floor = np.searchsorted([config.walk_enter_mps, config.run_enter_mps], low)  # entries < low
+    ceiling = np.searchsorted([config.walk_exit_mps, config.run_exit_mps], speed, side="right")  # exits <= speed
+    return np.maximum(np.minimum(previous, ceiling), floor).astype(np.int8)
