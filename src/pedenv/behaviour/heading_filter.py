@@ -128,8 +128,8 @@ def summary(p: np.ndarray, available_std_rad: float) -> tuple[np.ndarray, np.nda
     np.abs(diff, out=diff)
     diff -= np.pi
     axial = np.sqrt((p * np.minimum(sq, diff * diff)).sum(axis=1))  # about the axis: the nearer end
-    availability = np.where(std < available_std_rad, AVAILABLE,
-                            np.where(axial < available_std_rad, SIGN_UNKNOWN, UNAVAILABLE)).astype(np.int8)
+    # axial <= std (each term no larger, summed in the same order): AVAILABLE counts both
+    availability = (std < available_std_rad).view(np.int8) + (axial < available_std_rad).view(np.int8)
     return yaw, std, availability
 
 

@@ -155,10 +155,11 @@ def cue_likelihood(cue: SkeletonCue, cos_a: np.ndarray, sin_a: np.ndarray, confi
     """:func:`skeleton_likelihood` from ``cos(a)`` and ``sin(a)`` (N, B) of each cell."""
     p = config.left_right_swap_probability
     k = np.where(cue.width_ok, -0.5 / cue.width_std**2, 0.0)[:, None]  # a row without the cue: exp(0)
-    a, b = cos_a - cue.width[:, None], cos_a + cue.width[:, None]
-    like = (1.0 - p) * np.exp(a * a * k) + p * np.exp(b * b * k)
-    c = sin_a - cue.face[:, None]
-    like *= np.exp(c * c * np.where(cue.face_ok, -0.5 / cue.face_std**2, 0.0)[:, None])
+    width = cue.width[:, None]
+    a, b, c = cos_a - width, cos_a + width, sin_a - cue.face[:, None]
+    face = c * c * np.where(cue.face_ok, -0.5 / cue.face_std**2, 0.0)[:, None]  # the face's exponent
+    like = (1.0 - p) * np.exp(a * a * k + face)
+    like += p * np.exp(b * b * k + face)
     return _floored(like)
 
 
