@@ -83,9 +83,8 @@ class PathFrame:
         """``s``, ``d`` (N, K) metres of points (N, 2, K) world x, y; the points from the origin
         (N, 2, K) and, for an arc, their squared distances from the centre (N, K) (None for a line)."""
         rel = points - self.origin
-        x, y = rel[:, 0], rel[:, 1]
-        (a, b), (c, e) = self.rotation.tolist()
-        first, second = a * x + b * y, c * x + e * y  # the rotation
+        turned = np.matmul(self.rotation, rel)
+        first, second = turned[:, 0], turned[:, 1]
         if self.straight:
             return first, second, rel, None
         sq = rel * rel

@@ -73,6 +73,6 @@ def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, c
     # the state may fall to the number of exit thresholds the speed stays above, and rises to the
     # number of entry thresholds it clearly exceeds (the entries lie above the exits)
     low = speed - config.speed_sigmas * speed_std
-    floor = np.searchsorted([config.walk_enter_mps, config.run_enter_mps], low)  # entries < low
-    ceiling = np.searchsorted([config.walk_exit_mps, config.run_exit_mps], speed, side="right")  # exits <= speed
-    return np.maximum(np.minimum(previous, ceiling), floor).astype(np.int8)
+    floor = np.add(low > config.walk_enter_mps, low > config.run_enter_mps, dtype=np.int8)  # entries < low
+    ceiling = np.add(speed >= config.walk_exit_mps, speed >= config.run_exit_mps, dtype=np.int8)  # exits <= speed
+    return np.maximum(np.minimum(previous, ceiling), floor).astype(np.int8, copy=False)
