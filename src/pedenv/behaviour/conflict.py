@@ -171,15 +171,12 @@ def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_w
     frame = PathFrame(path)
     s, d, rel, dist2 = frame.coordinates(positions)
     sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + lateral_var, 1e-8))
-    if s.max() > length:  # past the corridor's straight part: its round end's half chord
-        beyond = np.maximum(s - length, 0.0)
-        half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0)) * _EDGES
-    else:
-        half = half_width_m * _EDGES
-    edges = ndtr((half - d) / sd)
+    beyond = np.maximum(s - length, 0.0)  # past the corridor's straight part: its round end's half chord
+    half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0))
+    edges = ndtr((half * _EDGES - d) / sd)
     inside = (edges[0] - edges[1]) * (s >= 0.0)  # behind the ego: 0
     running = np.maximum.accumulate(inside, axis=1)
-    prob = np.minimum(np.maximum(running[:, -1], 0.0), 1.0)
+    prob = np.maximum(running[:, -1], 0.0)  # at most 1: a difference of two ndtr's (NaN stays NaN)
     some = prob > 1e-3
     t = path.times
     if not some.any():
