@@ -13,6 +13,7 @@ the cells of the heading filter (:mod:`pedenv.behaviour.heading_filter`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,8 +110,9 @@ def cue_from_rays(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarr
     w = weights[:, 0] + weights[:, 1]  # (a reduction over a last axis of 2 is slow)
     width_ok = w > 0
     weighted = ratios * weights
-    width = np.minimum(np.maximum((weighted[:, 0] + weighted[:, 1]) / np.maximum(w, 1e-12), -1.2), 1.2)
-    width_std = np.where(width_ok, 1.0 / np.sqrt(np.maximum(w, 1e-12)), 1.0)
+    w_safe = np.maximum(w, 1e-12)
+    width = np.minimum(np.maximum((weighted[:, 0] + weighted[:, 1]) / w_safe, -1.2), 1.2)
+    width_std = np.where(width_ok, 1.0 / np.sqrt(w_safe), 1.0)
     face, face_std, face_ok = _face_offset(lateral, ok, pixel_m, config)
     seen = np.minimum(np.minimum(confidences[:, KP.NOSE], confidences[:, KP.LEFT_EYE]), confidences[:, KP.RIGHT_EYE])
     face_seen = np.minimum(np.fmax(seen, 0.0), 1.0)  # NaN -> 0
@@ -181,7 +183,7 @@ def walking_likelihood(v: VelocityStats, cos_sin: np.ndarray, config: BehaviourC
     cosines and sines (2, B)."""
     speed = v.speed
     use = (speed > config.min_walking_speed_mps) & (speed > config.speed_sigmas * np.sqrt(np.maximum(v.var_along, 0.0)))
-    spread = np.radians(config.walking_direction_std_deg) ** 2 + v.var_across() / np.maximum(speed, 1e-9) ** 2
+    spread = math.radians(config.walking_direction_std_deg) ** 2 + v.var_across() / np.maximum(speed, 1e-9) ** 2
     kappa = np.where(use, np.minimum(1.0 / np.maximum(spread, 1e-6), 1e4), 0.0)[:, None]  # unused: exp(0)
     return _floored(np.exp(kappa * (v.unit() @ cos_sin - 1.0))), use
 
