@@ -18,6 +18,8 @@ pedenv's backends. Steps:
    distance of keypoints both models see (visibility > 0.5), in image px and in % of box height.
 
     PYTHONPATH=src python benchmarks/int8_pose.py [--out DIR] [--runs 40] [--skip-eval]
+        [--variants int8,int8-heads-fp32,int8-ends-fp32] [--calibrate minmax|percentile]
+        [--modes fast,far] [--no-keypoints]
 
 The int8 models are written to ``--out`` (default: a temporary folder), never into the repository.
 """
@@ -69,14 +71,20 @@ def calibration_inputs(count: int, seed: int = 0) -> list[np.ndarray]:
     return inputs
 
 
-def excluded_nodes(model_path: Path, heads_fp32: bool) -> list[str]:
+#: The variants: name -> (heads' last convs in fp32, the first conv (on the raw image) in fp32).
+VARIANTS = {"int8": (False, False), "int8-heads-fp32": (True, False), "int8-ends-fp32": (True, True)}
+
+
+def excluded_nodes(model_path: Path, heads_fp32: bool, first_fp32: bool = False) -> list[str]:
     """Nodes left in fp32: the head's decode (``/model.23/`` outside its conv branches: DFL,
-    anchors, concat of boxes, scores and keypoints) and, with ``heads_fp32``, the branches' last
-    1x1 convs (``cv2.k.2``, ``cv3.k.2``, ``cv4.k.2``)."""
+    anchors, concat of boxes, scores and keypoints); with ``heads_fp32`` the branches' last
+    1x1 convs (``cv2.k.2``, ``cv3.k.2``, ``cv4.k.2``); with ``first_fp32`` the first conv block."""
     import onnx
 
     names = []
     for node in onnx.load(str(model_path)).graph.node:
+        if first_fp32 and node.name.startswith("/model.0/"):
+            names.append(node.name)
         if not node.name.startswith("/model.23/"):
             continue
         branch = any(f"/{b}." in node.name for b in ("cv2", "cv3", "cv4"))
@@ -86,9 +94,16 @@ def excluded_nodes(model_path: Path, heads_fp32: bool) -> list[str]:
     return names
 
 
-def quantize(model: Path, out: Path, inputs: list[np.ndarray], heads_fp32: bool) -> Path:
-    """Static QDQ quantization of ``model`` to ``out`` (per-channel S8 weights, U8 activations)."""
-    from onnxruntime.quantization import CalibrationDataReader, QuantFormat, QuantType, quantize_static
+def quantize(model: Path, out: Path, inputs: list[np.ndarray], variant: str, method: str) -> Path:
+    """Static QDQ quantization of ``model`` to ``out`` (per-channel S8 weights, U8 activations);
+    ``variant`` a key of :data:`VARIANTS`, ``method`` the calibration (``minmax``, ``percentile``)."""
+    from onnxruntime.quantization import (
+        CalibrationDataReader,
+        CalibrationMethod,
+        QuantFormat,
+        QuantType,
+        quantize_static,
+    )
 
     class Reader(CalibrationDataReader):
         def __init__(self) -> None:
@@ -99,7 +114,9 @@ def quantize(model: Path, out: Path, inputs: list[np.ndarray], heads_fp32: bool)
 
     quantize_static(str(model), str(out), Reader(), quant_format=QuantFormat.QDQ, per_channel=True,
                     activation_type=QuantType.QUInt8, weight_type=QuantType.QInt8,
-                    nodes_to_exclude=excluded_nodes(model, heads_fp32))
+                    nodes_to_exclude=excluded_nodes(model, *VARIANTS[variant]),
+                    calibrate_method={"minmax": CalibrationMethod.MinMax,
+                                      "percentile": CalibrationMethod.Percentile}[method])
     return out
 
 
@@ -189,17 +206,21 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=60, help="calibration frames of vtest.avi (2 inputs each)")
     parser.add_argument("--runs", type=int, default=40, help="timed passes per model and input size")
     parser.add_argument("--skip-eval", action="store_true", help="timing only: no recall or keypoints")
+    parser.add_argument("--variants", default="int8,int8-heads-fp32", help=f"comma-separated, of {list(VARIANTS)}")
+    parser.add_argument("--calibrate", default="minmax", choices=["minmax", "percentile"])
+    parser.add_argument("--modes", default="fast,far", help="detection modes to evaluate (fast, far)")
+    parser.add_argument("--no-keypoints", action="store_true", help="skip the keypoint comparison")
     args = parser.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="pedenv_int8_"))
     out.mkdir(parents=True, exist_ok=True)
     fp32 = find_onnx_model()
     inputs = calibration_inputs(args.frames)
     models = {"fp32": fp32}
-    for name, heads in (("int8", False), ("int8-heads-fp32", True)):
-        target = out / f"yolo11n-pose_{name}.onnx"
+    for name in args.variants.split(","):
+        target = out / f"yolo11n-pose_{name}_{args.calibrate}.onnx"
         if not target.is_file():
             start = time.perf_counter()
-            quantize(fp32, target, inputs, heads)
+            quantize(fp32, target, inputs, name, args.calibrate)
             print(f"{name}: quantized in {time.perf_counter() - start:.0f} s -> {target}", flush=True)
         models[name] = target
     print("load before timing:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
@@ -210,8 +231,8 @@ def main() -> None:
                                          for size, ms in row.items()))
     if args.skip_eval:
         return
-    recall_rows(models, ("fast", "far"))
-    for name in ("int8", "int8-heads-fp32"):
+    recall_rows(models, tuple(args.modes.split(",")))
+    for name in [] if args.no_keypoints else list(models)[1:]:
         print(f"keypoints fp32 vs {name} (far):", keypoint_gaps(fp32, models[name]), flush=True)
 
 
