@@ -146,18 +146,23 @@ def time_passes(models: dict[str, Path], runs: int) -> dict[str, dict[str, float
     return medians
 
 
-def recall_rows(models: dict[str, Path], modes: tuple[str, ...]) -> None:
-    """Prints recall (all, 40-80 px, >= 80 px) and precision on the samples per model and mode."""
+def recall_rows(models: dict[str, Path], modes: tuple[str, ...], int8_score: float = 0.25) -> None:
+    """Prints recall (all, 40-80 px, >= 80 px) and precision on the samples per model and mode;
+    the int8 models decode with score threshold ``int8_score`` (fp32 with pedenv's 0.25)."""
     from pedenv.apps.evaluate_detections import evaluate_detections
+    from pedenv.pose.base import create_pose_backend
     from pedenv.pose.tiling import DetectionConfig
 
     for mode in modes:  # "far-nocascade": far without the cascade's verified low-score persons
         detection = DetectionConfig.named("far", cascade={"enabled": False}) if mode == "far-nocascade" else mode
         for name, path in models.items():
-            report = evaluate_detections(SAMPLES, detection=detection, model_path=path, threads=2)
+            score = 0.25 if name == "fp32" else int8_score
+            backend = create_pose_backend("onnx", model_path=path, detection=detection, threads=2,
+                                          score_threshold=score)
+            report = evaluate_detections(SAMPLES, detection=detection, backend=backend, threads=2)
             s = report["summary"]["all"]
             goal = {b["bin"]: b for b in s["by_goal_height"]}
-            print(f"{mode:5s} {name:16s} recall {s['recall']:.3f} ({s['found']}/{s['persons']})  "
+            print(f"{mode:5s} {name:16s} score>{score:.2f} recall {s['recall']:.3f} ({s['found']}/{s['persons']})  "
                   f"40-80 px {goal['40-80']['recall']:.3f} ({goal['40-80']['found']}/{goal['40-80']['persons']})  "
                   f">=80 px {goal['>=80']['recall']:.3f}  precision {s['precision']:.3f} "
                   f"(FP {s['false_positives']})  ms/frame {s['ms_per_frame']:.0f}", flush=True)
@@ -211,6 +216,7 @@ def main() -> None:
     parser.add_argument("--variants", default="int8,int8-heads-fp32", help=f"comma-separated, of {list(VARIANTS)}")
     parser.add_argument("--calibrate", default="minmax", choices=["minmax", "percentile"])
     parser.add_argument("--modes", default="fast,far", help="detection modes to evaluate (fast, far, far-nocascade)")
+    parser.add_argument("--int8-score", type=float, default=0.25, help="int8 models' score threshold")
     parser.add_argument("--no-keypoints", action="store_true", help="skip the keypoint comparison")
     args = parser.parse_args()
     out = args.out or Path(tempfile.mkdtemp(prefix="pedenv_int8_"))
@@ -233,7 +239,7 @@ def main() -> None:
                                          for size, ms in row.items()))
     if args.skip_eval:
         return
-    recall_rows(models, tuple(args.modes.split(",")))
+    recall_rows(models, tuple(args.modes.split(",")), args.int8_score)
     for name in [] if args.no_keypoints else list(models)[1:]:
         print(f"keypoints fp32 vs {name} (far):", keypoint_gaps(fp32, models[name]), flush=True)
 
