@@ -14,6 +14,7 @@ from pedenv.pose.postprocess import (
     parse_input_size,
     read_image_rgb,
     to_input_tensor,
+    to_input_tensor_plain,
 )
 from pedenv.records import Camera, EgoPose, Frame
 
@@ -65,6 +66,24 @@ def test_to_input_tensor():
     assert x.shape == (1, 3, 32, 64) and x.dtype == np.float32
     assert x[0, 0].min() == 1.0 and x[0, 1].max() == 0.0
     assert x[0, 2, 0, 0] == pytest.approx(114 / 255)
+
+
+@pytest.mark.parametrize("name, input_size", [
+    ("nuscenes-0061/n015-2018-07-24-11-22-45+0800__CAM_BACK__1532402927637525.jpg", (384, 640)),  # 1600x900
+    ("nuscenes-0061/n015-2018-07-24-11-22-45+0800__CAM_BACK__1532402927637525.jpg", (640, 640)),
+    ("kitti/tracking_mini/training/image_02/0016/000002.png", (224, 640)),  # 1242x375
+    ("kitti/tracking_mini/training/image_02/0016/000002.png", (384, 640)),
+])
+def test_to_input_tensor_equals_the_plain_conversion_on_a_real_image(name, input_size):
+    from shared_paths import REAL_SAMPLES
+
+    path = REAL_SAMPLES / name
+    if not path.is_file():
+        pytest.fail(f"{path}: the real samples are missing (see /work/shared/samples/real/README.md)")
+    padded, _ = letterbox(read_image_rgb(path), input_size)
+    fast, plain = to_input_tensor(padded), to_input_tensor_plain(padded)
+    assert fast.shape == plain.shape == (1, 3, *input_size) and fast.dtype == plain.dtype == np.float32
+    assert fast.flags.c_contiguous and np.array_equal(fast, plain)  # bit for bit, pad rows included
 
 
 def _raw_output(persons: list[tuple[list[float], float, float]], anchors: int = 10) -> np.ndarray:

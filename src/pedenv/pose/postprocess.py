@@ -148,7 +148,23 @@ class DecodeSettings:
 
 
 def to_input_tensor(padded: np.ndarray) -> np.ndarray:
-    """(H, W, 3) uint8 RGB -> (1, 3, H, W) float32 in [0, 1], the network's input."""
+    """(H, W, 3) uint8 RGB -> (1, 3, H, W) float32 in [0, 1], the network's input.
+
+    One channel at a time into a fresh array, then one in-place scale: the same float32 values as
+    ``padded.transpose(2, 0, 1).astype(np.float32) * np.float32(1 / 255)``
+    (:func:`to_input_tensor_plain`) at about half its cost (docs/preprocessing.md).
+    """
+    height, width = padded.shape[:2]
+    tensor = np.empty((1, 3, height, width), np.float32)
+    for c, channel in enumerate(cv2.split(padded)):
+        tensor[0, c] = channel
+    tensor *= np.float32(1.0 / 255.0)
+    return tensor
+
+
+def to_input_tensor_plain(padded: np.ndarray) -> np.ndarray:
+    """:func:`to_input_tensor` written plainly (transpose, convert, scale): the reference its tests
+    compare with."""
     chw = np.ascontiguousarray(padded.transpose(2, 0, 1), dtype=np.float32)
     chw *= np.float32(1.0 / 255.0)
     return chw[None]
