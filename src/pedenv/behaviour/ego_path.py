@@ -70,7 +70,9 @@ class EgoHistory:
         timestamp = float(timestamp)
         if self.poses and not 0.0 < timestamp - self.poses[-1][0] <= self.config.max_ego_gap_s:
             self.reset()  # a gap, or a time that does not increase: start again
-        pose = (timestamp, float(ego.translation[0]), float(ego.translation[1]), float(ego.yaw))
+        x, y = ego.translation[:2].tolist()
+        cos_yaw, sin_yaw = ego.rotation[:2, 0].tolist()
+        pose = (timestamp, x, y, math.atan2(sin_yaw, cos_yaw))  # ``EgoPose.yaw``, on Python floats
         if self.poses:
             last = self.poses[-1]
             self.pairs.append((0.5 * (last[0] + timestamp), _speed(last, pose), _turn(last, pose)))
@@ -90,13 +92,13 @@ class EgoHistory:
             return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * cfg.ego_speed_std_mps,
                              UNKNOWN_MOTION_FACTOR * cfg.ego_yaw_rate_std_radps, False)
         now = poses[-1][0]
-        fit = (_fit_map(tuple([round(p[0] - now, 6) for p in self.pairs]))
-               @ np.array([p[1:] for p in self.pairs])).tolist()  # (3, 2): value, slope, curvature
-        speed, rate = fit[0]
-        acceleration = _clip(fit[1][0], cfg.max_ego_acceleration_mps2)
+        value, slope, bend = _fit_rows(tuple([round(p[0] - now, 6) for p in self.pairs]))
+        speeds, rates = [p[1] for p in self.pairs], [p[2] for p in self.pairs]
+        speed, rate = _dot(value, speeds), _dot(value, rates)  # a handful of pairs: plain Python, not numpy
+        acceleration = _clip(_dot(slope, speeds), cfg.max_ego_acceleration_mps2)
         clipped = _clip(rate, cfg.max_yaw_rate_radps)
         return EgoMotion(speed, clipped, cfg.ego_speed_std_mps, cfg.ego_yaw_rate_std_radps + abs(rate - clipped),
-                         True, acceleration, _clip(2.0 * fit[2][0], cfg.max_ego_jerk_mps3))
+                         True, acceleration, _clip(2.0 * _dot(bend, speeds), cfg.max_ego_jerk_mps3))
 
 
 def _clip(value: float, limit: float) -> float:
@@ -112,6 +114,16 @@ def _fit_map(times: tuple[float, ...]) -> np.ndarray:
     out = np.zeros((3, len(times)))
     out[: degree + 1] = np.linalg.pinv(design)
     return out
+
+
+@lru_cache(maxsize=32)
+def _fit_rows(times: tuple[float, ...]) -> tuple[tuple[float, ...], ...]:
+    """:func:`_fit_map` as three tuples of floats (value, slope, curvature rows)."""
+    return tuple(tuple(row) for row in _fit_map(times).tolist())
+
+
+def _dot(a: tuple[float, ...], b: list[float]) -> float:
+    return sum([x * y for x, y in zip(a, b)])
 
 
 def _speed(a: tuple, b: tuple) -> float:

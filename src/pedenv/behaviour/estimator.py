@@ -125,8 +125,10 @@ class BehaviourEstimator:
         finite or beyond :data:`STATE_LIMIT`); live_ids: every track id the tracker still holds.
         """
         start = time.perf_counter()
-        if len(peds) and not (started.all() and np.abs(x).max() < STATE_LIMIT[0]
-                              and np.abs(P).max() < STATE_LIMIT[1]):  # False for NaN
+        # sums of squares below the squared limits bound every entry (False for NaN, inf and overflow);
+        # otherwise the rows are checked one by one (the same x, P where all are usable)
+        if len(peds) and not (started.all() and np.vdot(x, x) < STATE_LIMIT[0] ** 2
+                              and np.vdot(P, P) < STATE_LIMIT[1] ** 2):
             x, P = _usable_states(peds, x, P, started)
         self.ego.add(frame.timestamp, frame.ego)
         path = predict_ego_path(self.ego.poses[-1][1:], self.ego.motion(), self.conflict_times, self.config.ego_trend_s,
@@ -171,7 +173,12 @@ class BehaviourEstimator:
         (``TrackStore.held``, ``TrackStore.available``)."""
         cfg, t, store, g = self.config, frame.timestamp, self.store, self.grid
         walk, available_std, half = self.angles
-        p = heading_filter.spread(store.p[rows], t - store.time[rows], walk, g)
+        # every row of the store (the live tracks absent from this frame too) is predicted to now, so that
+        # all share one time and the next prediction is one matrix product (a wrapped normal's spread
+        # over two gaps in turn is that over their sum)
+        store.p = heading_filter.spread(store.p, t - store.time, walk, g)
+        store.time[:] = t
+        p = store.p[rows]
         cam_to_world = frame.cam_to_world
         rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
         cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
@@ -179,7 +186,7 @@ class BehaviourEstimator:
         cos_a = cue.toward @ g.cos_sin
         moving, _ = walking_likelihood(velocity, g.cos_sin, cfg)
         p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin, cfg) * moving)
-        store.p[rows], store.time[rows] = p, t
+        store.p[rows] = p
         yaw, yaw_std, available = heading_filter.summary(p, available_std)
         store.held[:, rows] = (yaw, yaw_std, facing.body_facing_from(p, cos_a, math.cos(half)),
                                facing.head_facing(cue, half))
