@@ -75,3 +75,24 @@ def test_the_coordinates_and_normal_of_a_turning_path():
     s, d, normal = path_coordinates(path, points)
     assert s[:2] == pytest.approx([0.0, 0.0], abs=1e-9) and d[:2] == pytest.approx([1.0, -1.0], abs=1e-9)
     assert np.allclose(normal[0], [0.0, 1.0]) and np.allclose(normal[2], [-np.sin(0.6), np.cos(0.6)])
+
+
+def test_a_pedestrian_behind_or_beyond_a_straight_corridor_is_exactly_out():
+    # a standing ego: the corridor reaches 2.5 + 1.5 m ahead. Behind it (walking away), beyond it
+    # (walking along) and 10 m to the side: when all are out lengthwise the per-step work is skipped,
+    # and the answer is what the full computation gives them beside a pedestrian in front (no skip)
+    standing = EgoMotion(0.0, 0.0, 0.5, 0.05, True)
+    out = [[-1.0, -1.0, 0.3, 0.0], [4.3, 1.5, -0.5, 0.0], [30.0, -0.5, 10.0, 0.0]]
+    alone = _conflict(standing, out)
+    beside = _conflict(standing, out + [[1.5, 0.0, 0.2, 0.0]])
+    assert (alone.probability == 0.0).all() and (alone.time_s == 2.0).all() and (alone.time_std_s == 0.0).all()
+    for f in alone.__dataclass_fields__:
+        assert np.array_equal(getattr(alone, f), getattr(beside, f)[:3]), f
+    assert beside.probability[3] > 0.9
+
+
+def test_a_pedestrian_passing_through_the_corridor_lengthwise_is_not_skipped():
+    # behind the standing ego's front at the first step and beyond its reach (4 m) at the last:
+    # on the path in between, so inside, although both ends are out
+    c = _conflict(EgoMotion(0.0, 0.0, 0.5, 0.05, True), [[-1.0, 3.0, 0.0, 0.0]])
+    assert c.probability[0] > 0.9 and 0.0 < c.time_s[0] < 1.0

@@ -113,3 +113,17 @@ def test_the_orientation_interval_holds_the_orientation_between_updates(frames):
                 assert values == held[track]  # as at its last update
             else:
                 assert values[1] > 1.8 and values[4] == hf.UNAVAILABLE  # new since: nothing known yet
+
+
+def test_far_but_valid_states_are_used_as_they_are(frames):
+    # positions of 9e5 m: every entry within the limit (1e6 m), their sum of squares beyond its square,
+    # so the rows are checked one by one; all are usable and the path is the state's, not the reported
+    state = PedestrianEnvironmentModel(Config()).update(frames[0])
+    peds, n = dataclasses.replace(state.pedestrians, behaviour=None), len(state.pedestrians)
+    x = np.tile([9e5, 1.0, -9e5, 0.5], (n, 1))
+    P = np.repeat(np.diag([0.1, 0.2, 0.1, 0.2])[None], n, axis=0)
+    est = PedestrianEnvironmentModel(Config()).behaviour
+    b = est.update(frames[1], peds, x, P, np.ones(n, bool), peds.track_ids).behaviour
+    assert np.vdot(x, x) > 1e12
+    assert np.allclose(b.predicted_positions[:, -1], [9e5 + 3.0, -9e5 + 1.5])  # 3 s ahead at (1, 0.5) m/s
+    assert np.allclose(b.speed, np.hypot(1.0, 0.5))

@@ -47,3 +47,15 @@ def test_a_shared_time_step_takes_the_kernel_and_agrees_with_the_fourier_path():
     shared = hf.spread(p, np.full(3, 0.1), np.radians(45), g)  # one dt: the circulant kernel
     mixed = hf.spread(np.vstack([p, p[:1]]), np.array([0.1, 0.1, 0.1, 0.2]), np.radians(45), g)  # the FFT
     assert np.abs(shared - mixed[:3]).max() < 1e-15 and np.allclose(shared.sum(axis=1), 1.0)
+
+
+@pytest.mark.parametrize("first, second", [(0.3, 0.3), (0.1, 0.6), (0.0, 2.0)])
+def test_spreading_over_two_gaps_in_turn_is_spreading_over_their_sum(first, second):
+    # the estimator predicts every grid at each orientation update (so that all share one time step)
+    # instead of a returning track over its whole gap at once: the same, a wrapped normal's variances add
+    p = np.vstack([_peaked([1.0]), _peaked([0.5, 0.5 + np.pi], kappa=5.0)])
+    walk, g = np.radians(45), hf.grid(72)
+    in_turn = hf.spread(hf.spread(p, np.array([first, first]), walk, g), np.array([second, second]), walk, g)
+    at_once = hf.spread(p, np.array([first + second, 0.0]), walk, g)[:1]  # mixed steps: the Fourier path
+    assert np.abs(in_turn[:1] - at_once).max() < 1e-15
+    assert np.abs(in_turn - hf.spread(p, np.full(2, first + second), walk, g)).max() < 1e-15
