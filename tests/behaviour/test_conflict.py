@@ -77,9 +77,9 @@ def test_the_coordinates_and_normal_of_a_turning_path():
     assert np.allclose(normal[0], [0.0, 1.0]) and np.allclose(normal[2], [-np.sin(0.6), np.cos(0.6)])
 
 
-def test_a_pedestrian_behind_or_beyond_a_straight_corridor_is_exactly_out():
+def test_pedestrians_behind_or_beyond_the_corridor_at_every_step_are_exactly_out():
     # a standing ego: the corridor reaches 2.5 + 1.5 m ahead. Behind it (walking away), beyond it
-    # (walking along) and 10 m to the side: when all are out lengthwise the per-step work is skipped,
+    # (walking along) and 10 m to the side: when all are out at every step the Gaussian work is skipped,
     # and the answer is what the full computation gives them beside a pedestrian in front (no skip)
     standing = EgoMotion(0.0, 0.0, 0.5, 0.05, True)
     out = [[-1.0, -1.0, 0.3, 0.0], [4.3, 1.5, -0.5, 0.0], [30.0, -0.5, 10.0, 0.0]]

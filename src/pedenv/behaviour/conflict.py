@@ -159,14 +159,6 @@ def _near(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, reach: 
     return np.sqrt((rel * rel).sum(axis=1).min(axis=1)) < reach + GATE_SIGMAS * spread_max
 
 
-def _outside_lengthwise(first: np.ndarray, last: np.ndarray, reach: float) -> bool:
-    """Whether every pedestrian stays behind the ego or beyond ``reach`` metres (the corridor's length
-    and its round end) along a straight path at every step, given the arc lengths (N,) of the first
-    and the last step: on a line, a constant velocity moves the arc length linearly in time, so its
-    range is theirs. Such a pedestrian's entry probability is exactly 0 at every step."""
-    return bool(((np.maximum(first, last) < 0.0) | (np.minimum(first, last) > reach)).all())
-
-
 #: The corridor's two edges, as multiples of its half width.
 _EDGES = np.array([1.0, -1.0])[:, None, None]
 
@@ -175,17 +167,20 @@ def _entry(path: EgoPath, positions: np.ndarray, covariances: np.ndarray, half_w
            lateral_var: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Probability (M,) of entering within the horizon, the entry time's mean and std (M,) s, from
     the positions (M, 2, K) and covariances (M, 3, K) (see :func:`conflict_of`; lateral_var (K,) m^2:
-    the path's own variance across)."""
+    the path's own variance across). The corridor's half chord is 0 behind the ego (``s < 0``) and
+    beyond its round end; where it is 0 at every step for everyone, each step's probability is
+    exactly 0 and the Gaussian work is skipped (a standing ego, people beside or ahead of it)."""
     frame = PathFrame(path)
     s, d, rel, dist2 = frame.coordinates(positions)
     t = path.times
-    if frame.straight and _outside_lengthwise(s[:, 0], s[:, -1], length + half_width_m):
-        return np.zeros(len(s)), np.full(len(s), t[-1]), np.zeros(len(s))  # exactly what the steps below give
-    sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + lateral_var, 1e-8))
     beyond = np.maximum(s - length, 0.0)  # past the corridor's straight part: its round end's half chord
     half = np.sqrt(np.maximum(half_width_m * half_width_m - beyond * beyond, 0.0))
+    half *= s >= 0.0  # behind the ego: none (both edges at 0, so the difference below is exactly 0)
+    if not half.any():
+        return np.zeros(len(s)), np.full(len(s), t[-1]), np.zeros(len(s))  # what the steps below give
+    sd = np.sqrt(np.maximum(frame.across_variance(rel, dist2, covariances) + lateral_var, 1e-8))
     edges = ndtr((half * _EDGES - d) / sd)
-    inside = (edges[0] - edges[1]) * (s >= 0.0)  # behind the ego: 0
+    inside = edges[0] - edges[1]
     running = np.maximum.accumulate(inside, axis=1)
     prob = np.maximum(running[:, -1], 0.0)  # at most 1: a difference of two ndtr's (NaN stays NaN)
     some = prob > 1e-3
