@@ -3,11 +3,12 @@
 
     PYTHONPATH=src python benchmarks/stream_video.py [--video /usr/share/doc/opencv-doc/examples/data/vtest.avi]
         [--frames 200] [--json out.json] [--keep DIR] [--far-from DIR/far/environment.jsonl]
-        [--stream-set FIELD=VALUE ...]
+        [--stream-set FIELD=VALUE ...] [--size 900x1600]
 
 The video (Debian's ``opencv-doc``: ``examples/data/vtest.avi``, 768x576, a pedestrian
 street seen from above; ``apt-get install opencv-doc``) is written as a recording of its first
-``--frames`` frames at the video's rate, with a GUESSED calibration (focal = image width, 5 m
+``--frames`` frames at the video's rate (``--size HxW``: each frame scaled to that size, as a
+1600x900 camera would see the street), with a GUESSED calibration (focal = image width, 5 m
 up, 30 deg down: no usable calibration for the band, so the rows come from the fit) and a
 standing ego, and run by :func:`pedenv.apps.run.run_recording` (what ``pedenv run`` calls)
 with ``--detection far`` and ``--detection stream`` (default config, the ``fused`` preset).
@@ -36,9 +37,10 @@ cam_to_vehicle:
 """
 
 
-def write_recording(video: Path, frames: int, out: Path) -> tuple[Path, float]:
+def write_recording(video: Path, frames: int, out: Path,
+                    size: tuple[int, int] | None = None) -> tuple[Path, float]:
     """The first ``frames`` frames of ``video`` as images (and their rate, Hz), a guessed calibration,
-    a standing ego."""
+    a standing ego; ``size`` (height, width) px: the frames scaled to it."""
     import cv2
 
     cap = cv2.VideoCapture(str(video))
@@ -49,6 +51,8 @@ def write_recording(video: Path, frames: int, out: Path) -> tuple[Path, float]:
         ok, bgr = cap.read()
         if not ok:
             break
+        if size is not None:
+            bgr = cv2.resize(bgr, (size[1], size[0]), interpolation=cv2.INTER_LINEAR)
         cv2.imwrite(str(out / "images" / f"{i:06d}.jpg"), bgr, [cv2.IMWRITE_JPEG_QUALITY, 95])
         stamps.append(i / rate)
     cap.release()
@@ -95,6 +99,7 @@ def main(argv=None) -> int:
     parser.add_argument("--far-from", type=Path, default=None,
                         help="The environment.jsonl of an earlier far run of the same frames (--keep's far/): "
                              "far is not run again.")
+    parser.add_argument("--size", default=None, metavar="HxW", help="Scale the frames to this size, e.g. 900x1600.")
     parser.add_argument("--stream-set", action="append", default=[], metavar="FIELD=VALUE",
                         help="stream: a StreamConfig field (repeatable), e.g. merge_crops=false.")
     args = parser.parse_args(argv)
@@ -103,10 +108,11 @@ def main(argv=None) -> int:
     from pedenv.apps.run import run_recording
     from pedenv.boxes import iou_matrix
 
-    results: dict = {"video": str(args.video), "load_at_start": os.getloadavg()[0]}
+    results: dict = {"video": str(args.video), "size": args.size, "load_at_start": os.getloadavg()[0]}
     with tempfile.TemporaryDirectory() as scratch:
         tmp = args.keep or Path(scratch)
-        rec, rate = write_recording(args.video, args.frames, Path(tmp) / "recording")
+        size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
+        rec, rate = write_recording(args.video, args.frames, Path(tmp) / "recording", size)
         boxes = {}
         if args.far_from:
             boxes["far"] = reported(args.far_from)[:args.frames]

@@ -67,6 +67,10 @@ def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, c
     ("stream", {"search_untracked": "no"}, "detection.stream.search_untracked"),
     ("stream", {"track_max_shift": -1.0}, "detection.stream.track_max_shift"),
     ("stream", {"track_max_shift": math.inf}, "detection.stream.track_max_shift"),
+    ("stream", {"crop_min_width": -0.1}, "detection.stream.crop_min_width"),
+    ("stream", {"crop_min_width": math.nan}, "detection.stream.crop_min_width"),
+    ("stream", {"band_row_stretch": 0.5}, "detection.stream.band_row_stretch"),
+    ("stream", {"band_row_stretch": 2.5}, "detection.stream.band_row_stretch"),
 
     ("cascade", {"min_score": 0.0}, "detection.cascade.min_score"),
     ("cascade", {"max_units": 0}, "detection.cascade.max_units"),

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from pedenv.pose.schedule import CreditBank, band_tiles, plan_frame, tracks_at_risk
+from pedenv.pose.schedule import CreditBank, band_tiles, one_row, plan_frame, tracks_at_risk, units
 from pedenv.pose.stream_config import StreamConfig
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
 
 
 def simulate(config: StreamConfig, tile_units: np.ndarray, wanted: list[int], dt: float, frames: int):
@@ -145,3 +145,17 @@ def test_band_tiles_cover_the_calibrated_band_in_packed_input_sized_tiles():
     for level in {t.key[0] for t in tiles}:  # each level's tiles span the image's width
         regions = np.array([t.step.region for t in tiles if t.key[0] == level])
         assert regions[:, 0].min() == 0 and regions[:, 2].max() == 1600
+
+
+def test_a_band_a_little_taller_than_a_tile_is_scanned_in_one_row_of_taller_tiles():
+    # vtest.avi's x2 band (measured): rows 0-326, tiles of 320 image px at x2 (640x640 inputs) in two
+    # rows 6 px apart: 6 tiles, 10 units per scan period; one row over the same rows: 3 tiles, 5.25
+    two_rows = [Pass((x, y, x + 320, y + 320), (640, 640), "band") for y in (0, 6) for x in (0, 224, 448)]
+    one = one_row(two_rows, 1.5)
+    assert [p.region for p in one] == [(0, 0, 320, 326), (224, 0, 544, 326), (448, 0, 768, 326)]
+    assert [p.input_size for p in one] == [(672, 640)] * 3 and one[0].scale == pytest.approx(2.0)
+    assert sum(units(p.input_size) for p in one) == pytest.approx(5.25)
+    assert one_row(two_rows, 1.0) == two_rows  # 1: never
+    tall = [Pass((0, y, 320, y + 320), (640, 640), "band") for y in (0, 280)]  # a band of 600 rows: 1.9 tiles
+    assert one_row(tall, 1.5) == tall
+    assert one_row(two_rows[:3], 1.5) == two_rows[:3]  # one row already

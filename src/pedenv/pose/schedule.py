@@ -28,7 +28,7 @@ import numpy as np
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.redetect import searchable
 from pedenv.pose.stream_config import StreamConfig
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, round32
 
 #: A predicted box shorter than this (px, clipped to the image) is not searched (``redetect.searchable``).
 MIN_TRACK_PX = 8.0
@@ -63,9 +63,29 @@ def band_tiles(width: int, height: int, config: DetectionConfig, geometry: Camer
     levels = pyramid(width, height, config)[1:]
     for li, level in enumerate(levels):
         passes, note = plan_level(level, width, height, small, geometry, line, finest=li == len(levels) - 1)
+        passes = one_row(passes, config.stream.band_row_stretch)
         tiles += [Tile((li, ti), p) for ti, p in enumerate(passes)]
         notes.append(note)
     return tiles, "; ".join(notes)
+
+
+def one_row(passes: list[Pass], stretch: float) -> list[Pass]:
+    """A level's tiles in two rows, as one row of taller tiles over the same rows when the band is at
+    most ``stretch`` tile heights tall (the same image px, fewer input px: a band 6 px taller than
+    one tile no longer costs a second row of square tiles); otherwise ``passes`` as they are."""
+    tops = sorted({p.region[1] for p in passes})
+    if len(tops) != 2:
+        return passes
+    y0, y1 = tops[0], max(p.region[3] for p in passes)
+    first = [p for p in passes if p.region[1] == y0]
+    if y1 - y0 > stretch * (first[0].region[3] - y0):
+        return passes
+    out = []
+    for p in first:
+        x0, _, x1, _ = p.region
+        scale = p.input_size[1] / (x1 - x0)
+        out.append(Pass((x0, y0, x1, y1), (round32((y1 - y0) * scale), p.input_size[1]), p.kind))
+    return out
 
 
 def tracks_at_risk(predicted: np.ndarray, hits: np.ndarray, unseen_s: np.ndarray, found: np.ndarray,

@@ -186,8 +186,9 @@ class StreamPose:
         mosaic = cfg.stream.mosaic_size
         searched, last = (np.asarray(b, float).reshape(-1, 4) for b in boxes)
         for person_px, margin, edge_px in cfg.stream.crop_styles:
-            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic, also),
-                             edge_px=edge_px) for box, also in zip(searched, last)]
+            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic, also,
+                                         cfg.stream.crop_min_width), edge_px=edge_px)
+                     for box, also in zip(searched, last)]
             for crops, groups in self._arrangements(apart, crowd=person_px == cfg.stream.crowd_person_px):
                 needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
                 with_cascade = pack_tallest_first(crops + early_crops, mosaic,

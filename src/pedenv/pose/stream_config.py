@@ -129,6 +129,16 @@ class StreamConfig:
         ``evaluate-detections``' stand-in tracks are, or a wrong association): its predicted box
         is searched as it is (0..100; 0: always the predicted box). MOT17 samples and vtest.avi
         (docs/detection.md): 0.5, 1 and 100 gave the same counts, 0 lost 14 and 13 people.
+    crop_min_width: a track's crop is cut as if its box were at least this share of its height wide,
+        about the box's centre (0..2; 0: the box's own width). A walker's box widens and narrows
+        within a stride (legs together, legs apart) and a new track has no motion yet: a crop
+        around a narrow box cut the person it looked for by its inner edge. Off by default: 0.6
+        found 94.9 -> 95.8 % of far's people on vtest.avi but cost the MOT17 samples 0.523 -> 0.516
+        (``benchmarks/stream_misses.py``, docs/detection.md).
+    band_row_stretch: a finer level's band at most this many tile heights tall is scanned in one
+        row of taller tiles instead of two rows of square ones (1..2; 1: never). The same image
+        rows for fewer input px: on vtest.avi the x2 band, 6 px taller than a tile, cost 6 tiles of
+        1.67 units per scan period instead of 3 of 1.75, and the rotation ran past the budget.
     track_min_hits: only tracks detected at least this many times are looked for (1..1000). A new
         track (one hit) is looked for at once: a person the band rotation found once is kept.
     missed_iou: a track whose predicted box overlaps no whole-frame detection by more than this
@@ -153,6 +163,8 @@ class StreamConfig:
     merge_crops: bool = flag(True)
     merge_scale_ratio: float = number(1.25, 1.0, 4.0)
     track_max_shift: float = number(1.0, 0.0, 100.0)
+    crop_min_width: float = number(0.0, 0.0, 2.0)
+    band_row_stretch: float = number(1.5, 1.0, 2.0)
     track_min_hits: int = count(1, 1, 1000)
     missed_iou: float = number(0.3, 0.0, 1.0)
     max_gap_s: float = number(2.0, 0.1, 3600.0)

@@ -143,7 +143,8 @@ class DetectionConfig:
                          v.to_dict() if hasattr(v, "to_dict") else v) for f in fields(self)}
 
 
-def _round32(value: float) -> int:
+def round32(value: float) -> int:
+    """``value`` (input px) rounded up to the network's stride (32), at least one stride."""
     return max(STRIDE, int(math.ceil(value / STRIDE - 1e-9)) * STRIDE)
 
 
@@ -151,8 +152,8 @@ def fit_input(width: int, height: int, long_side: int) -> tuple[int, int]:
     """Network input (height, width) with ``long_side`` along the image's long side and the
     other side fitted to the aspect, rounded up to a multiple of 32 (1600x900 -> 384x640)."""
     if width >= height:
-        return _round32(long_side * height / width), long_side
-    return long_side, _round32(long_side * width / height)
+        return round32(long_side * height / width), long_side
+    return long_side, round32(long_side * width / height)
 
 
 @dataclass(frozen=True)
@@ -289,7 +290,7 @@ def _tiles(region: tuple[int, int, int, int], scale: float, config: DetectionCon
         for tx in _starts(x1 - x0, window, config.tile_overlap):
             tw = min(window, x1 - x0)
             box = (x0 + tx, y0 + ty, x0 + tx + tw, y0 + ty + th)
-            tiles.append(Pass(box, (_round32(th * scale), _round32(tw * scale)), kind))
+            tiles.append(Pass(box, (round32(th * scale), round32(tw * scale)), kind))
     return tiles
 
 
