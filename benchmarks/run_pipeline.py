@@ -2,7 +2,7 @@
 
     PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 900x1600]
         [--detection fast] [--video-out] [--png-compression fast,none] [--nice 0,10] [--rounds 3]
-        [--threads 2] [--realtime] [--output-json FILE]
+        [--threads 2] [--side-by-side on,off] [--realtime] [--output-json FILE]
 
 The video (default: ``vtest.avi``, the 768x576 street video of Debian's ``opencv-doc``,
 ``/usr/share/doc/opencv-doc/examples/data/vtest.avi``) is cut to its first ``--frames`` frames,
@@ -19,8 +19,10 @@ before the clock starts):
    the other, so that they see the same load);
 3. with ``--realtime``: the run once more at the recording's own rate: frames done and dropped.
 
-``--rounds`` repeats 1 and 2 and prints each variant's median run; the ratios of a round use
-that round's network alone. On a shared machine compare variants within one invocation.
+``--side-by-side on,off`` makes one backend each way (``SessionConfig.side_by_side``: the
+independent passes of a frame side by side on one-thread sessions, or one after another) and
+runs 1 and 2 with each in turn. ``--rounds`` repeats 1 and 2 and prints each variant's median
+run; the ratios of a round use that round's network alone. On a shared machine compare variants within one invocation.
 
 The network's time is the backend's session runs (``infer`` wrapped here, so the same
 script times main's serial loop: ``PYTHONPATH=/path/to/main/src``); ``ratio`` is run ms per
@@ -82,25 +84,23 @@ def write_recording(video: Path, out: Path, frames: int, size: tuple[int, int] |
 
 
 class NetworkClock:
-    """Wraps a backend's ``infer`` (its session runs) to add up their seconds and count them."""
+    """A backend's network seconds and session runs since :meth:`reset` (``OnnxPose.network_s``
+    and ``network_runs``: passes run side by side count once, as the group's wall time)."""
 
     def __init__(self, backend) -> None:
-        self.seconds, self.runs = 0.0, 0
-        backend = backend if hasattr(backend, "infer") else backend.backend  # stream: its OnnxPose
-        infer = backend.infer
-
-        def timed(tensor):
-            start = time.perf_counter()
-            try:
-                return infer(tensor)
-            finally:
-                self.seconds += time.perf_counter() - start
-                self.runs += 1
-
-        backend.infer = timed
+        self.backend = backend if hasattr(backend, "infer") else backend.backend  # stream: its OnnxPose
+        self.reset()
 
     def reset(self) -> None:
-        self.seconds, self.runs = 0.0, 0
+        self._start = (self.backend.network_s, self.backend.network_runs)
+
+    @property
+    def seconds(self) -> float:
+        return self.backend.network_s - self._start[0]
+
+    @property
+    def runs(self) -> int:
+        return self.backend.network_runs - self._start[1]
 
 
 def network_alone(rec: dict, backend, clock: NetworkClock) -> dict:
@@ -159,34 +159,46 @@ def run_once(rec: dict, backend, clock: NetworkClock, folder: Path, variant: dic
             "speed": summary.get("speed"), "provider": summary["pose_backend"].get("provider", "CPUExecutionProvider")}
 
 
-def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, threads: int = 2) -> dict:
-    """``rounds`` times: the network alone, then a run of each of ``variants`` (module doc), one
-    after the other on one pose backend (``threads`` intra-op threads, made before any clock starts)."""
+def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, threads: int = 2,
+            side_by_side: tuple[bool, ...] = (True,)) -> dict:
+    """``rounds`` times, for each ``side_by_side`` value (``SessionConfig.side_by_side``, one pose
+    backend each with ``threads`` intra-op threads, made before any clock starts): the network
+    alone, then a run of each of ``variants`` (module doc), one after the other."""
     from pedenv.config import Config
     from pedenv.pose.base import create_pose_backend
 
     detection = variants[0]["detection"]
-    backend = create_pose_backend("onnx", detection=detection, score_threshold=Config().tracking.pose_score_threshold,
-                                  threads=threads)
-    clock = NetworkClock(backend)
+    score = Config().tracking.pose_score_threshold
+    backends = {side: create_pose_backend("onnx", detection=detection, score_threshold=score, threads=threads,
+                                          **({} if side is None else {"side_by_side": side}))
+                for side in side_by_side}
     alone, runs = [], []
     for r in range(rounds):
-        alone.append(network_alone(rec, backend, clock))
-        print(f"round {r + 1}: network alone {alone[-1]['ms_per_frame']:.1f} ms/frame, network "
-              f"{alone[-1]['network_ms_per_frame']:.1f}, CPU {alone[-1]['cpu_ms_per_frame']:.1f} ms/frame", flush=True)
-        for variant in variants:
-            run = {**run_once(rec, backend, clock, work / "run", variant), "variant": variant, "round": r + 1}
-            run["ratio_same_run"] = run["ms_per_frame"] / run["network_ms_per_frame"]
-            run["ratio_network_alone"] = run["ms_per_frame"] / alone[-1]["network_ms_per_frame"]
-            runs.append(run)
-            print(_run_line(run), flush=True)
+        for side, backend in backends.items():
+            clock = NetworkClock(backend)
+            alone.append({**network_alone(rec, backend, clock), "side_by_side": side, "round": r + 1})
+            print(f"round {r + 1}{_side(side)}: network alone {alone[-1]['ms_per_frame']:.1f} ms/frame, network "
+                  f"{alone[-1]['network_ms_per_frame']:.1f}, CPU {alone[-1]['cpu_ms_per_frame']:.1f} ms/frame",
+                  flush=True)
+            for variant in variants:
+                run = {**run_once(rec, backend, clock, work / "run", variant),
+                       "variant": {**variant, "side_by_side": side}, "round": r + 1}
+                run["ratio_same_run"] = run["ms_per_frame"] / run["network_ms_per_frame"]
+                run["ratio_network_alone"] = run["ms_per_frame"] / alone[-1]["network_ms_per_frame"]
+                runs.append(run)
+                print(_run_line(run), flush=True)
     return {"alone": alone, "runs": runs}
+
+
+def _side(side: bool | None) -> str:
+    return "" if side is None else f", passes side by side {'on' if side else 'off'}"
 
 
 def _run_line(run: dict) -> str:
     v = run["variant"]
     name = "mp4" if v["video_out"] else f"png {v.get('png_compression') or 'default'}"
     name += f", nice {v['nice']}" if v.get("nice") is not None else ""
+    name += _side(v.get("side_by_side"))
     png = f", {run['png_mb_per_frame']:.2f} MB/png" if run["png_mb_per_frame"] else ""
     dropped = f", {run['frames_dropped']} dropped" if v.get("realtime") else ""
     return (f"  run ({name}{', realtime' if v.get('realtime') else ''}): {run['ms_per_frame']:.1f} ms/frame "
@@ -212,6 +224,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=1, help="repeat the network alone and the runs")
     parser.add_argument("--threads", type=int, default=2, help="onnxruntime's intra-op threads (pedenv's default: 2)")
     parser.add_argument("--realtime", action="store_true", help="also a --realtime run: frames done and dropped")
+    parser.add_argument("--side-by-side", default=None,
+                        help="on, off, or both: on,off (SessionConfig.side_by_side; one backend each, alternated)")
     parser.add_argument("--output-json", type=Path, default=None)
     args = parser.parse_args()
     size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None
@@ -227,10 +241,12 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         rec = write_recording(args.video, work, args.frames, size)  # type: ignore[arg-type]
-        result = measure(rec, variants, work, args.rounds, args.threads)
+        sides = tuple({"on": True, "off": False}[v] for v in args.side_by_side.split(",")) if args.side_by_side \
+            else (None,)
+        result = measure(rec, variants, work, args.rounds, args.threads, sides)
     result.update(pedenv=str(Path(pedenv.__file__).parent), video=str(args.video), size=args.size,
                   detection=args.detection, threads=args.threads)
-    for variant in variants:
+    for variant in {json.dumps(r["variant"], sort_keys=True): r["variant"] for r in result["runs"]}.values():
         runs = [r for r in result["runs"] if r["variant"] == variant]
         print(f"median over {len(runs)} round(s): {_run_line(_median_run(runs))[2:]}")
     if args.output_json:

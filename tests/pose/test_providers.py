@@ -35,6 +35,7 @@ def test_the_providers_asked_for_per_device(device, available, wanted, tmp_path)
     ({"device": None}, "device must be one of"),
     ({"batch": "yes"}, "batch must be true or false"),
     ({"spin_wait": 1}, "spin_wait must be true or false"),
+    ({"side_by_side": "yes"}, "side_by_side must be true or false"),
     ({"gpu": 0}, "unknown onnx backend option.* gpu; valid: device, threads, spin_wait, batch"),
 ])
 def test_session_options_are_checked(options, message):
@@ -84,6 +85,55 @@ def test_a_batch_of_passes_gives_what_the_passes_give_one_by_one(use_pose_cache,
         assert len(da) == len(db)
         np.testing.assert_allclose(da.boxes, db.boxes, atol=0.05)
     assert len(decode(together[0], inputs[0][1], 0.25, 0.7, 300)) >= 4
+
+
+@pytest.mark.onnx_model
+@pytest.mark.ultralytics
+def test_passes_side_by_side_give_what_they_give_one_after_another(use_pose_cache, photo):
+    from pedenv.images import read_image_rgb
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.postprocess import letterbox, to_input_tensor
+
+    image = read_image_rgb(photo("bus.jpg"))
+    crops = [(0, 0, 810, 1080), (0, 300, 405, 1000), (400, 300, 810, 1000), (100, 400, 500, 800), (0, 0, 405, 540)]
+    sizes = [(640, 480), (416, 256), (416, 256), (320, 320), (256, 192)]
+    tensors = [to_input_tensor(letterbox(image[y0:y1, x0:x1], size)[0])
+               for (x0, y0, x1, y1), size in zip(crops, sizes)]
+    pose = OnnxPose(detection="fast", threads=2)
+    assert pose.side_by_side  # the CPU, two threads, no batching
+    together = pose.infer_many(tensors)
+    assert pose.network_runs == 5
+    alone = OnnxPose(detection="fast", threads=2, side_by_side=False)
+    assert not alone.side_by_side
+    apart = [alone.infer(t) for t in tensors]
+    for a, b in zip(together, apart, strict=True):  # in order; one thread sums some convolutions in another order
+        assert a.shape == b.shape
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-3)
+    assert not OnnxPose(detection="fast", threads=1).side_by_side  # one thread: nothing to split
+    assert not OnnxPose(detection="fast", batch=True).side_by_side  # a batch instead
+
+
+@pytest.mark.onnx_model
+@pytest.mark.ultralytics
+@pytest.mark.slow
+def test_stream_finds_the_same_persons_with_its_passes_side_by_side(use_pose_cache):
+    from pedenv.images import read_image_rgb
+    from pedenv.pose.base import create_pose_backend
+
+    from shared_paths import REAL_SAMPLES
+
+    frames = sorted((REAL_SAMPLES / "mot17" / "MOT17-04-FRCNN" / "img1").glob("*.jpg"))[:3]  # a crowd
+    side = create_pose_backend("onnx", detection="stream")
+    alone = create_pose_backend("onnx", detection="stream", side_by_side=False)
+    assert side.backend.side_by_side and not alone.backend.side_by_side
+    for i, path in enumerate(frames):  # the cold start's band tiles, then two packed inputs a frame
+        image = read_image_rgb(path)
+        got, want = side.detect_frame(image, None, 0.1 * i), alone.detect_frame(image, None, 0.1 * i)
+        assert side.last_passes == alone.last_passes and len(side.last_passes) >= 3
+        assert len(got) == len(want) >= 25
+        for field in ("keypoints", "confidences", "boxes", "scores"):
+            np.testing.assert_allclose(getattr(got, field), getattr(want, field), rtol=0, atol=1e-3)
+    assert side.backend.network_runs == alone.backend.network_runs
 
 
 def test_the_cuda_provider_picks_cudnn_algorithms_as_configured(tmp_path):

@@ -10,14 +10,12 @@ the zoomed detection (sharper keypoints) replaces it. Settings: :class:`CascadeC
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from pedenv.boxes import iou_matrix
 from pedenv.pose.merge import merge_detections
 from pedenv.pose.mosaic import Placement, crop_around, pack, run_mosaics
-from pedenv.pose.postprocess import DecodeSettings
+from pedenv.pose.postprocess import DecodeSettings, InferMany
 from pedenv.pose.stream_config import CascadeConfig
 from pedenv.pose.tiling import Pass
 from pedenv.records import Detections
@@ -77,7 +75,7 @@ def candidate_placements(cands: Detections, image_size: tuple[int, int], config:
             for b in cands.boxes]
 
 
-def verify(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, cands: Detections, config: CascadeConfig,
+def verify(infer: InferMany, image: np.ndarray, cands: Detections, config: CascadeConfig,
            mosaic_size: tuple[int, int], settings: DecodeSettings) -> tuple[Detections, list[Pass]]:
     """The candidates (image px) that the zoomed pass confirms, as found there (image px), and the
     passes run (at most ``config.max_units`` mosaics over ``image`` (H, W, 3) uint8 RGB)."""

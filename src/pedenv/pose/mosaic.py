@@ -11,13 +11,12 @@ edge of its crop that is not an image edge is marked cut (it may belong to a nei
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from pedenv.pose.postprocess import PAD_VALUE, DecodeSettings, Letterbox, decode, to_input_tensor
+from pedenv.pose.postprocess import PAD_VALUE, DecodeSettings, InferMany, Letterbox, decode, to_input_tensor
 from pedenv.pose.tiling import Pass
 from pedenv.records import Detections
 
@@ -217,22 +216,23 @@ def unpack(dets: Detections, placements: list[Placement], image_size: tuple[int,
     return out
 
 
-def run_mosaics(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, placements: list[Placement],
+def run_mosaics(infer: InferMany, image: np.ndarray, placements: list[Placement],
                 mosaic_size: tuple[int, int],
                 settings: DecodeSettings) -> tuple[list[tuple[Detections, np.ndarray]], list[Pass]]:
-    """Run every mosaic of ``placements`` over ``image`` (H, W, 3) uint8 RGB; per placement (in
-    order) its persons in image px and their cut flags, and the passes run (kind ``mosaic``)."""
+    """Run every mosaic of ``placements`` over ``image`` (H, W, 3) uint8 RGB (one network call for
+    all: ``infer`` may batch them or run them side by side); per placement (in order) its persons
+    in image px and their cut flags, and the passes run (kind ``mosaic``)."""
     results: list[tuple[Detections, np.ndarray] | None] = [None] * len(placements)
     passes = []
     identity = Letterbox(1.0, 0, 0, mosaic_size, mosaic_size)
     image_size = (image.shape[0], image.shape[1])
-    for m in sorted({p.mosaic for p in placements}):
-        rows = [i for i, p in enumerate(placements) if p.mosaic == m]
-        group = [placements[i] for i in rows]
-        canvas = render(image, group, mosaic_size)
-        dets = decode(infer(to_input_tensor(canvas)), identity, settings.score_threshold, settings.iou_threshold,
-                      settings.max_detections)
-        for i, part in zip(rows, unpack(dets, group, image_size, settings.edge_margin_px)):
+    mosaics = sorted({p.mosaic for p in placements})
+    rows = [[i for i, p in enumerate(placements) if p.mosaic == m] for m in mosaics]
+    groups = [[placements[i] for i in r] for r in rows]
+    outputs = infer([to_input_tensor(render(image, group, mosaic_size)) for group in groups]) if groups else []
+    for members, group, output in zip(rows, groups, outputs):
+        dets = decode(output, identity, settings.score_threshold, settings.iou_threshold, settings.max_detections)
+        for i, part in zip(members, unpack(dets, group, image_size, settings.edge_margin_px)):
             results[i] = part
         regions = np.array([p.crop.region for p in group])
         bound = (int(regions[:, 0].min()), int(regions[:, 1].min()), int(regions[:, 2].max()), int(regions[:, 3].max()))

@@ -1,6 +1,7 @@
 """Run the pose network over the levels of the pyramid (whole frame, bands, tiles) and merge.
 
-``infer(tensor (1, 3, h, w) float32) -> (1, 56, N)`` is the network; each pass crops its
+``infer([tensor (1, 3, h, w) float32, ...]) -> [(1, 56, N), ...]`` is the network on the
+independent passes of a step (:data:`~pedenv.pose.postprocess.InferMany`); each pass crops its
 region, letterboxes it into its input size, decodes, shifts back to image pixels and
 marks the persons touching an inner tile edge as cut. A finer level keeps a person only
 when they are not too tall for it (``max_person_px``: fragments of someone the coarser
@@ -12,7 +13,6 @@ calibration each level's rows come from a line fitted to the people found so far
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
 from functools import partial
 
@@ -22,7 +22,7 @@ from pedenv.pose.cascade import candidates, concat, verify
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.merge import MergeConfig, merge_detections
 from pedenv.pose.mosaic import cut_by_inner_edge
-from pedenv.pose.postprocess import DecodeSettings, decode, letterbox, to_input_tensor
+from pedenv.pose.postprocess import DecodeSettings, InferMany, Letterbox, decode, letterbox, to_input_tensor
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
@@ -43,17 +43,33 @@ def spans_the_region(boxes: np.ndarray, region: tuple[int, int, int, int], image
     return vertical | horizontal
 
 
-def run_pass(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, step: Pass, input_size: tuple[int, int],
-             score_threshold: float, iou_threshold: float, max_detections: int) -> Detections:
-    """Detections of one pass, in pixels of the whole ``image`` (H, W, 3) uint8 RGB."""
+def pass_input(image: np.ndarray, step: Pass, input_size: tuple[int, int]) -> tuple[np.ndarray, Letterbox]:
+    """The network input of one pass over ``image`` (H, W, 3) uint8 RGB: its region letterboxed
+    into ``input_size``, as a (1, 3, h, w) tensor, and where the region went."""
     x0, y0, x1, y1 = step.region
-    crop = image[y0:y1, x0:x1]
-    padded, box = letterbox(crop, input_size)
-    dets = decode(infer(to_input_tensor(padded)), box, score_threshold, iou_threshold, max_detections)
+    padded, box = letterbox(image[y0:y1, x0:x1], input_size)
+    return to_input_tensor(padded), box
+
+
+def pass_detections(output: np.ndarray, box: Letterbox, step: Pass, score_threshold: float, iou_threshold: float,
+                    max_detections: int) -> Detections:
+    """The persons of one pass's network ``output``, in pixels of the whole image."""
+    dets = decode(output, box, score_threshold, iou_threshold, max_detections)
+    x0, y0 = step.region[:2]
     if not len(dets) or (x0, y0) == (0, 0):
         return dets
     shift = np.array([x0, y0], float)
     return Detections(dets.keypoints + shift, dets.confidences, dets.boxes + np.tile(shift, 2), dets.scores)
+
+
+def run_passes(infer: InferMany, image: np.ndarray, steps: list[Pass], input_sizes: list[tuple[int, int]],
+               score_threshold: float, iou_threshold: float, max_detections: int) -> list[Detections]:
+    """Detections of independent passes (one network call for all: ``infer`` may batch them or run
+    them side by side), in pixels of the whole ``image`` (H, W, 3) uint8 RGB, in order."""
+    inputs = [pass_input(image, step, size) for step, size in zip(steps, input_sizes)]
+    outputs = infer([tensor for tensor, _ in inputs]) if inputs else []
+    return [pass_detections(out, box, step, score_threshold, iou_threshold, max_detections)
+            for out, (_, box), step in zip(outputs, inputs, steps)]
 
 
 def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.ndarray:
@@ -69,20 +85,20 @@ def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.nd
 Parts = list[tuple[Detections, np.ndarray]]
 
 
-def run_level(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, passes: list[Pass],
+def run_level(infer: InferMany, image: np.ndarray, passes: list[Pass],
               fixed_input: tuple[int, int] | None, settings: DecodeSettings,
               config: DetectionConfig, low: list[Detections] | None = None) -> Parts:
-    """Run ``passes`` (``settings``: score threshold, NMS, max persons); with ``low`` a list, persons
-    scoring ``cascade.min_score`` up to the threshold (whole, not too tall for the level) are
-    appended to it for the cascade."""
+    """Run ``passes``, independent of each other (``settings``: score threshold, NMS, max persons);
+    with ``low`` a list, persons scoring ``cascade.min_score`` up to the threshold (whole, not
+    too tall for the level) are appended to it for the cascade."""
     score_threshold, iou_threshold, max_detections = (settings.score_threshold, settings.iou_threshold,
                                                       settings.max_detections)
     parts = []
     image_size = (image.shape[0], image.shape[1])
     floor = min(config.cascade.min_score, score_threshold) if low is not None else score_threshold
-    for step in passes:
-        size = fixed_input or step.input_size
-        dets = run_pass(infer, image, step, size, floor, iou_threshold, max_detections)
+    sizes = [fixed_input or step.input_size for step in passes]
+    for step, size, dets in zip(passes, sizes, run_passes(infer, image, passes, sizes, floor, iou_threshold,
+                                                          max_detections)):
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
         margin = config.edge_margin_px / scale
         if len(dets):
@@ -98,7 +114,7 @@ def run_level(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, pass
     return parts
 
 
-def detect_levels(infer: Callable[[np.ndarray], np.ndarray], image: np.ndarray, config: DetectionConfig,
+def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
                   geometry: CameraGeometry | None = None, *, decoding: DecodeSettings = DEFAULT_DECODING,
                   fixed_input: tuple[int, int] | None = None, base_input: tuple[int, int] | None = None,
                   merge: MergeConfig = DEFAULT_MERGE) -> tuple[Detections, list[Pass], str]:

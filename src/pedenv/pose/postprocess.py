@@ -8,7 +8,7 @@ threshold, suppresses overlapping boxes (NMS) and maps everything back to image 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -25,6 +25,10 @@ from pedenv.validation import check_count, check_number
 PAD_VALUE = 114
 #: Rows of the raw output: 4 box + 1 score + 17 x (x, y, visibility).
 OUTPUT_ROWS = 5 + 3 * NUM_KEYPOINTS
+#: The network on the independent inputs of one step: (1, 3, h, w) float32 tensors in (sizes may
+#: differ), their (1, 56, N) outputs out, in order
+#: (:meth:`~pedenv.pose.onnx_backend.OnnxPose.infer_many`: batched, side by side or one by one).
+InferMany = Callable[[list[np.ndarray]], list[np.ndarray]]
 
 
 def parse_input_size(size: int | np.integer | str | Sequence[int]) -> tuple[int, int]:

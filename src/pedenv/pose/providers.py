@@ -49,6 +49,13 @@ class SessionConfig:
         on 2 cores (median 767 vs 372 ms).
     batch: run the passes of one frame that share an input size as one batch; None (the
         default) batches on a GPU only (on a CPU a batch costs what its passes cost one by one).
+    side_by_side: on the CPU, run the independent passes of one frame (a level's tiles, the
+        packed inputs, the re-detection crops) side by side, each on its own session with one
+        intra-op thread (``threads`` sessions), instead of one after another on ``threads``
+        threads (True). The outputs agree to about 1e-4 px (onnxruntime splits some
+        convolutions' sums differently by thread count); on 2 cores two one-thread passes
+        side by side took 37 ms a 384x640 pass against 48 ms one after another with two threads
+        (docs/speed.md, "Passes side by side").
     cudnn_search: how the CUDA provider picks each convolution's cuDNN algorithm: ``heuristic``
         (the default: cuDNN's own choice, no trial runs), ``exhaustive`` (onnxruntime's default:
         every algorithm tried) or ``default``. pedenv's passes change input size within a frame
@@ -61,6 +68,7 @@ class SessionConfig:
     spin_wait: bool = False
     batch: bool | None = None
     cudnn_search: str = "heuristic"
+    side_by_side: bool = True
 
     def __post_init__(self) -> None:
         check_device(self.device)
@@ -69,6 +77,7 @@ class SessionConfig:
         if self.batch is not None:
             check_bool("batch", self.batch)
         check_choice("cudnn_search", self.cudnn_search, tuple(CUDNN_SEARCHES))
+        check_bool("side_by_side", self.side_by_side)
 
     @classmethod
     def of(cls, session: SessionConfig | None, options: dict) -> SessionConfig:

@@ -20,7 +20,7 @@ import numpy as np
 
 from pedenv.boxes import iou_matrix
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.multipass import cut_by_inner_edge, run_pass
+from pedenv.pose.multipass import cut_by_inner_edge, run_passes
 from pedenv.pose.postprocess import frame_image
 from pedenv.pose.redetect_config import RedetectConfig
 from pedenv.pose.tiling import STRIDE, Pass
@@ -152,7 +152,7 @@ class RedetectingPose:
             return detections
         image = frame_image(frame)
         image_size = (image.shape[0], image.shape[1])
-        found = [self._search(image, predicted[r], image_size) for r in rows]
+        found = self._search(image, predicted[rows], image_size)
         # a person nearer another track's predicted box is that track's business (or a neighbour)
         found = [d for d, r in zip(found, rows) if len(d) and nearest_track(d.boxes[0], predicted) == r]
         self.crops += len(rows)
@@ -165,18 +165,22 @@ class RedetectingPose:
         self.redetected += len(merged) - len(detections)
         return merged
 
-    def _search(self, image: np.ndarray, box: np.ndarray, image_size: tuple[int, int]) -> Detections:
-        """The one whole person in the crop around ``box`` nearest to it, or none."""
+    def _search(self, image: np.ndarray, boxes: np.ndarray, image_size: tuple[int, int]) -> list[Detections]:
+        """Per box of ``boxes`` (K, 4) px, the one whole person in the crop around it nearest to it,
+        or none; the crops are independent passes (one network call: side by side on the CPU)."""
         b = self.backend
-        step = crop_pass(box, image_size, self.config)
-        size = step.input_size if b.dynamic else b.input_size
-        dets = run_pass(b.infer, image, step, size, b.score_threshold, b.iou_threshold, b.max_detections)
-        if not len(dets):
-            return dets
-        scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
-        margin = b.detection.edge_margin_px / scale if b.detection is not None else 0.0
-        whole = ~cut_by_inner_edge(dets.boxes, step.region, image_size, margin)
-        return dets.take(nearest_person(box, dets.boxes, whole, self.config))
+        steps = [crop_pass(box, image_size, self.config) for box in boxes]
+        sizes = [step.input_size if b.dynamic else b.input_size for step in steps]
+        found = run_passes(b.infer_many, image, steps, sizes, b.score_threshold, b.iou_threshold, b.max_detections)
+        margin_px = b.detection.edge_margin_px if b.detection is not None else 0.0
+        out = []
+        for box, step, size, dets in zip(boxes, steps, sizes, found):
+            if len(dets):
+                scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
+                whole = ~cut_by_inner_edge(dets.boxes, step.region, image_size, margin_px / scale)
+                dets = dets.take(nearest_person(box, dets.boxes, whole, self.config))
+            out.append(dets)
+        return out
 
     def describe(self) -> dict:
         """The wrapped backend's description with the re-detection settings and counts."""

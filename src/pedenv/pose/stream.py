@@ -130,7 +130,7 @@ class StreamPose:
         low: list[Detections] = []
         settings = b.decoding
         fixed = None if b.dynamic else b.input_size
-        run = partial(run_level, b.infer, image, fixed_input=fixed, settings=settings, config=cfg,
+        run = partial(run_level, b.infer_many, image, fixed_input=fixed, settings=settings, config=cfg,
                       low=low if cfg.cascade.enabled else None)
         parts = run([first])
         line = HeightLine.fit(self._fit_boxes, cfg.fit_min_people, height)
@@ -237,7 +237,7 @@ class StreamPose:
         placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
         if not placements:
             return Detections.empty(), [], 0, 0
-        results, passes = run_mosaics(self.backend.infer, image, placements, mosaic, settings)
+        results, passes = run_mosaics(self.backend.infer_many, image, placements, mosaic, settings)
         n = len(tracks)
         track_parts = [(int(row), r) for p, r in zip(placements, results) if p.item < n
                        for row in rows[tracks[p.item].item]]
