@@ -136,6 +136,32 @@ def test_stream_finds_the_same_persons_with_its_passes_side_by_side(use_pose_cac
     assert side.backend.network_runs == alone.backend.network_runs
 
 
+@pytest.mark.onnx_model
+@pytest.mark.ultralytics
+@pytest.mark.slow
+def test_far_with_a_calibration_runs_its_levels_in_one_call_and_finds_the_same_persons(use_pose_cache):
+    from pedenv.images import read_image_rgb
+    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.pose.tiling import CameraGeometry
+    from pedenv.records import Camera
+
+    from shared_paths import REAL_SAMPLES
+
+    image = read_image_rgb(next((REAL_SAMPLES / "nuscenes-0061").glob("*CAM_BACK__*.jpg")))  # 1600x900
+    geometry = CameraGeometry.level(Camera.from_fov().intrinsics, 1.5)  # the bands from the calibration
+    side, alone = OnnxPose(detection="far"), OnnxPose(detection="far", side_by_side=False)
+    calls = []
+    many = side.infer_many
+    side.infer_many = lambda tensors: calls.append(len(tensors)) or many(tensors)  # type: ignore[method-assign]
+    got, want = side.detect(image, geometry), alone.detect(image, geometry)
+    assert [p.kind for p in side.last_passes][:3] == ["full", "band", "band"]
+    assert side.last_passes == alone.last_passes
+    assert calls[0] == 3  # the whole frame and both bands together; then the cascade's packed inputs
+    assert len(got) == len(want) >= 3
+    for field in ("keypoints", "confidences", "boxes", "scores"):
+        np.testing.assert_allclose(getattr(got, field), getattr(want, field), rtol=0, atol=1e-3)
+
+
 def test_the_cuda_provider_picks_cudnn_algorithms_as_configured(tmp_path):
     got = wanted_providers("cuda", [CUDA, CPU], tmp_path)
     assert got[0] == (CUDA, {"cudnn_conv_algo_search": "HEURISTIC"}) and got[1] == CPU

@@ -19,7 +19,7 @@ from functools import partial
 import numpy as np
 
 from pedenv.pose.cascade import candidates, concat, verify
-from pedenv.pose.levels import HeightLine, plan_level, pyramid
+from pedenv.pose.levels import HeightLine, calibrated, plan_level, pyramid
 from pedenv.pose.merge import MergeConfig, merge_detections
 from pedenv.pose.mosaic import cut_by_inner_edge
 from pedenv.pose.postprocess import DecodeSettings, InferMany, Letterbox, decode, letterbox, to_input_tensor
@@ -135,9 +135,14 @@ def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
     settings = replace(decoding, edge_margin_px=config.edge_margin_px)
     max_detections = settings.max_detections
     run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, config=config, low=low)
-    parts = run([first])
-    passes, notes = [first], []
     levels = pyramid(width, height, config)[1:]
+    if calibrated(geometry, width, height, config):  # every level's rows known now: one network call for all
+        planned = [plan_level(level, width, height, config, geometry, None) for level in levels]
+        passes = [first, *(p for more, _ in planned for p in more)]
+        parts, notes = run(passes), [note for _, note in planned]
+        levels = []
+    else:
+        parts, passes, notes = run([first]), [first], []
     for i, level in enumerate(levels):
         whole = [d.take(~c & (d.scores >= config.fit_min_score)) for d, c in parts if len(d)]
         boxes = np.concatenate([d.boxes for d in whole]) if whole else np.zeros((0, 4))

@@ -172,8 +172,9 @@ class OnnxPose:
         return [self.infer(t) for t in tensors]
 
     def _infer_side_by_side(self, tensors: list[np.ndarray]) -> list[np.ndarray]:
-        """``tensors`` run on :attr:`threads` one-thread sessions at once, each session taking the
-        next input when it is free; counted in :attr:`network_s` as the group's wall time."""
+        """``tensors`` run on :attr:`threads` one-thread sessions at once, the largest first, each
+        session taking the next input when it is free; counted in :attr:`network_s` as the
+        group's wall time."""
         if self._side_pool is None:
             one = replace(self.session_config, threads=1)
             for _ in range(self.threads):
@@ -188,7 +189,9 @@ class OnnxPose:
                 self._side_sessions.put(session)
 
         start = time.perf_counter()
-        outputs = list(self._side_pool.map(run, tensors))
+        largest_first = sorted(range(len(tensors)), key=lambda i: -tensors[i].size)  # the sessions end together
+        futures = {i: self._side_pool.submit(run, tensors[i]) for i in largest_first}
+        outputs = [futures[i].result() for i in range(len(tensors))]
         self.network_s += time.perf_counter() - start
         self.network_runs += len(tensors)
         return outputs
