@@ -13,10 +13,12 @@ from pedenv.pose.mosaic import (
     crop_around,
     cut_by_inner_edge,
     merge_crops,
+    mosaic_units,
     pack,
     pack_tallest_first,
     render,
     unpack,
+    used_size,
 )
 from pedenv.records import Detections
 
@@ -64,6 +66,21 @@ def test_a_person_found_in_a_packed_crop_lands_at_the_right_image_pixels():
         assert len(dets) == 1 and not cut[0]
         np.testing.assert_allclose(dets.boxes[0], image_boxes[p.item], atol=1e-6)
         np.testing.assert_allclose(dets.keypoints[0, 0], 0.5 * (image_boxes[p.item, :2] + image_boxes[p.item, 2:]))
+
+
+def test_a_packed_input_is_trimmed_to_the_room_its_crops_use():
+    crops = [Crop((0, 0, 50, 80), 1.5), Crop((0, 0, 40, 60), 1.5)]  # 120x75 and 90x60 input px
+    placed = pack(crops, MOSAIC)
+    assert [p.offset for p in placed] == [(GAP_PX, GAP_PX), (GAP_PX + 75 + GAP_PX, GAP_PX)]
+    # extent: 4 + 120 = 124 rows, 4 + 75 + 4 + 60 = 143 columns, the gap after them, up to 32 px
+    assert used_size(placed, MOSAIC) == (128, 160)
+    assert mosaic_units(placed, MOSAIC, trim=True) == pytest.approx(128 * 160 / (384 * 640))
+    assert mosaic_units(placed, MOSAIC, trim=False) == 1.0
+    full = pack([Crop((0, 0, 200, 100), 3.0)] * 4, MOSAIC)  # four 300x600: two mosaics, each whole
+    assert {used_size([p for p in full if p.mosaic == m], MOSAIC) for m in (0, 1)} == {(320, 608)}  # 308 x 608
+    image = np.random.default_rng(0).integers(0, 255, (200, 300, 3), dtype=np.uint8)
+    trimmed = render(image, placed, used_size(placed, MOSAIC))
+    np.testing.assert_array_equal(trimmed, render(image, placed, MOSAIC)[:128, :160])  # the same crops
 
 
 def test_a_person_at_an_inner_crop_edge_is_cut():

@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from pedenv.pose.postprocess import PAD_VALUE, DecodeSettings, InferMany, Letterbox, decode, to_input_tensor
-from pedenv.pose.tiling import Pass
+from pedenv.pose.tiling import STRIDE, UNIT_PX, Pass
 from pedenv.records import Detections
 
 #: Grey input px left between two crops of a mosaic.
@@ -185,7 +185,8 @@ def _find_spot(shelves: list[list[list[int]]], ch: int, cw: int, height: int, wi
 
 
 def render(image: np.ndarray, placements: list[Placement], mosaic_size: tuple[int, int]) -> np.ndarray:
-    """(H, W, 3) uint8 canvas of ``mosaic_size`` with the placements' crops of ``image`` (H, W, 3) uint8 RGB."""
+    """(H, W, 3) uint8 canvas of ``mosaic_size`` (at least the placements' extent) with the
+    placements' crops of ``image`` (H, W, 3) uint8 RGB."""
     canvas = np.full((*mosaic_size, 3), PAD_VALUE, np.uint8)
     for p in placements:
         x0, y0, x1, y1 = p.crop.region
@@ -216,25 +217,47 @@ def unpack(dets: Detections, placements: list[Placement], image_size: tuple[int,
     return out
 
 
+def used_size(placements: list[Placement], mosaic_size: tuple[int, int]) -> tuple[int, int]:
+    """(height, width) of the smallest input that holds ``placements``' crops (one mosaic's) with
+    the grey gap after them: multiples of the network's stride (32), at most ``mosaic_size``."""
+    height = max(p.offset[1] + p.crop.size[0] for p in placements) + GAP_PX
+    width = max(p.offset[0] + p.crop.size[1] for p in placements) + GAP_PX
+    return (min(mosaic_size[0], STRIDE * math.ceil(height / STRIDE)),
+            min(mosaic_size[1], STRIDE * math.ceil(width / STRIDE)))
+
+
+def mosaic_units(placements: list[Placement], mosaic_size: tuple[int, int], trim: bool) -> float:
+    """The mean network units of the mosaics of ``placements`` (0 without any): each a whole
+    ``mosaic_size``, or with ``trim`` the room its crops use (:func:`used_size`)."""
+    mosaics = sorted({p.mosaic for p in placements})
+    if not trim or not mosaics:
+        return mosaic_size[0] * mosaic_size[1] / UNIT_PX
+    sizes = [used_size([p for p in placements if p.mosaic == m], mosaic_size) for m in mosaics]
+    return sum(h * w for h, w in sizes) / len(sizes) / UNIT_PX
+
+
 def run_mosaics(infer: InferMany, image: np.ndarray, placements: list[Placement],
-                mosaic_size: tuple[int, int],
-                settings: DecodeSettings) -> tuple[list[tuple[Detections, np.ndarray]], list[Pass]]:
+                mosaic_size: tuple[int, int], settings: DecodeSettings,
+                trim: bool = False) -> tuple[list[tuple[Detections, np.ndarray]], list[Pass]]:
     """Run every mosaic of ``placements`` over ``image`` (H, W, 3) uint8 RGB (one network call for
     all: ``infer`` may batch them or run them side by side); per placement (in order) its persons
-    in image px and their cut flags, and the passes run (kind ``mosaic``)."""
+    in image px and their cut flags, and the passes run (kind ``mosaic``). ``trim``: each mosaic's
+    input is cut to the room its crops use (:func:`used_size`; a model with a dynamic input):
+    a mosaic of three crops costs what they cover, not a whole packed input."""
     results: list[tuple[Detections, np.ndarray] | None] = [None] * len(placements)
     passes = []
-    identity = Letterbox(1.0, 0, 0, mosaic_size, mosaic_size)
     image_size = (image.shape[0], image.shape[1])
     mosaics = sorted({p.mosaic for p in placements})
     rows = [[i for i, p in enumerate(placements) if p.mosaic == m] for m in mosaics]
     groups = [[placements[i] for i in r] for r in rows]
-    outputs = infer([to_input_tensor(render(image, group, mosaic_size)) for group in groups]) if groups else []
-    for members, group, output in zip(rows, groups, outputs):
-        dets = decode(output, identity, settings.score_threshold, settings.iou_threshold, settings.max_detections)
+    sizes = [used_size(group, mosaic_size) if trim else mosaic_size for group in groups]
+    outputs = infer([to_input_tensor(render(image, group, size)) for group, size in zip(groups, sizes)])
+    for members, group, size, output in zip(rows, groups, sizes, outputs):
+        dets = decode(output, Letterbox(1.0, 0, 0, size, size), settings.score_threshold, settings.iou_threshold,
+                      settings.max_detections)
         for i, part in zip(members, unpack(dets, group, image_size, settings.edge_margin_px)):
             results[i] = part
         regions = np.array([p.crop.region for p in group])
         bound = (int(regions[:, 0].min()), int(regions[:, 1].min()), int(regions[:, 2].max()), int(regions[:, 3].max()))
-        passes.append(Pass(bound, mosaic_size, "mosaic"))
+        passes.append(Pass(bound, size, "mosaic"))
     return [r for r in results if r is not None], passes

@@ -28,12 +28,10 @@ import numpy as np
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.redetect import searchable
 from pedenv.pose.stream_config import StreamConfig
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, round32
+from pedenv.pose.tiling import UNIT_PX, CameraGeometry, DetectionConfig, Pass, round32
 
 #: A predicted box shorter than this (px, clipped to the image) is not searched (``redetect.searchable``).
 MIN_TRACK_PX = 8.0
-#: Units of one network input of ``(height, width)`` px.
-UNIT_PX = 384 * 640
 
 
 def units(input_size: tuple[int, int]) -> float:

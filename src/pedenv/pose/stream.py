@@ -26,7 +26,7 @@ from pedenv.errors import InputError
 from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
 from pedenv.pose.levels import HeightLine
 from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import Crop, crop_around, merge_crops, pack_tallest_first, run_mosaics
+from pedenv.pose.mosaic import Crop, crop_around, merge_crops, mosaic_units, pack_tallest_first, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
 from pedenv.pose.schedule import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk, units
@@ -71,6 +71,11 @@ class StreamPose:
         self.last_passes: list = []
         self.last_note = ""
         self._reset(None)
+
+    @property
+    def _trim(self) -> bool:
+        """Whether packed inputs are cut to the room their crops use (``stream.trim_mosaics``, a dynamic model)."""
+        return self.config.stream.trim_mosaics and self.backend.dynamic
 
     def attach_model(self, model: TrackPredictor) -> None:
         """Take the tracks' predicted boxes from ``model`` (anything with ``predicted_boxes(frame)``)."""
@@ -194,7 +199,8 @@ class StreamPose:
                 with_cascade = pack_tallest_first(crops + early_crops, mosaic,
                                                   max_mosaics=needed + cfg.cascade.max_units)
                 wanted = max(needed, len({p.mosaic for p in with_cascade}))
-                plan = plan_frame(costs[0], units(mosaic), wanted, costs[1], costs[2], self._dt, cfg.stream,
+                per_mosaic = mosaic_units(with_cascade, mosaic, self._trim)
+                plan = plan_frame(costs[0], per_mosaic, wanted, costs[1], costs[2], self._dt, cfg.stream,
                                   self.bank.credit)
                 if plan.mosaics >= needed:
                     return (crops, groups), plan
@@ -237,7 +243,7 @@ class StreamPose:
         placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
         if not placements:
             return Detections.empty(), [], 0, 0
-        results, passes = run_mosaics(self.backend.infer_many, image, placements, mosaic, settings)
+        results, passes = run_mosaics(self.backend.infer_many, image, placements, mosaic, settings, trim=self._trim)
         n = len(tracks)
         track_parts = [(int(row), r) for p, r in zip(placements, results) if p.item < n
                        for row in rows[tracks[p.item].item]]

@@ -148,6 +148,10 @@ class StreamConfig:
     cold_start: on the first frame after a (re)start, scan the whole band (``far``'s cost) so
         far people are found at once; off: the rotation finds them within ``scan_period_s``.
     mosaic_height, mosaic_width: the packed input's size, px (multiples of 32, 128..1280).
+    trim_mosaics: a packed input is cut to the room its crops use (rounded up to 32 px; a model
+        with a dynamic input): three far tracks cost what their crops cover, not a whole
+        packed input. The plan still reserves whole packed inputs; what a frame does not spend
+        goes to the credit bank, then to the band's tiles.
     """
 
     budget_units: float = number(3.0, 1.0, 64.0)
@@ -171,6 +175,7 @@ class StreamConfig:
     cold_start: bool = flag(True)
     mosaic_height: int = count(384, 128, 1280)
     mosaic_width: int = count(640, 128, 1280)
+    trim_mosaics: bool = flag(True)
 
     def __post_init__(self) -> None:
         check_fields("detection.stream", self)

@@ -25,6 +25,8 @@ if TYPE_CHECKING:
 
 MODES = ("fast", "far", "stream")
 STRIDE = 32
+#: Input px of one network unit, the cost measure of detection (a 384x640 input).
+UNIT_PX = 384 * 640
 #: Most levels of the pyramid (``level_scales``): each costs at least one network pass per frame.
 MAX_LEVELS = 8
 
