@@ -131,3 +131,9 @@ def test_persons_no_track_holds_are_searched_again_in_the_next_frame(stream, fra
     off.detect_frame(images[0], samples[0].geometry, 0.0)
     off.detect_frame(images[0], samples[0].geometry, 0.1)
     assert len(off._untracked) == 0 and off.describe()["stream"]["tracks_at_risk_searched"] == 0
+
+
+def test_packed_inputs_are_cut_on_the_cpu_only(stream):
+    assert stream._trim  # the CPU: a pass costs its pixels
+    stream.backend.provider = "CUDAExecutionProvider"  # a GPU: about the same whatever the size, a session per shape
+    assert not stream._trim

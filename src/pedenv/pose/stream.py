@@ -29,6 +29,7 @@ from pedenv.pose.merge import merge_detections
 from pedenv.pose.mosaic import Crop, crop_around, merge_crops, mosaic_units, pack_tallest_first, run_mosaics
 from pedenv.pose.multipass import run_level
 from pedenv.pose.postprocess import frame_image
+from pedenv.pose.providers import CPU
 from pedenv.pose.schedule import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk, units
 from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
 from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
@@ -74,8 +75,10 @@ class StreamPose:
 
     @property
     def _trim(self) -> bool:
-        """Whether packed inputs are cut to the room their crops use (``stream.trim_mosaics``, a dynamic model)."""
-        return self.config.stream.trim_mosaics and self.backend.dynamic
+        """Whether packed inputs are cut to the room their crops use (``stream.trim_mosaics``, a
+        dynamic model, the CPU: on a GPU a pass costs about the same whatever its size, and every
+        new input shape costs a session and cuDNN's set-up, :meth:`OnnxPose._session_for`)."""
+        return self.config.stream.trim_mosaics and self.backend.dynamic and self.backend.provider == CPU
 
     def attach_model(self, model: TrackPredictor) -> None:
         """Take the tracks' predicted boxes from ``model`` (anything with ``predicted_boxes(frame)``)."""

@@ -149,8 +149,9 @@ class StreamConfig:
         far people are found at once; off: the rotation finds them within ``scan_period_s``.
     mosaic_height, mosaic_width: the packed input's size, px (multiples of 32, 128..1280).
     trim_mosaics: a packed input is cut to the room its crops use (rounded up to 32 px; a model
-        with a dynamic input): three far tracks cost what their crops cover, not a whole
-        packed input. The plan still reserves whole packed inputs; what a frame does not spend
+        with a dynamic input, on the CPU: a GPU pass costs about the same whatever its size, and
+        each new input shape there costs a session): three far tracks cost what their crops
+        cover, not a whole packed input. The plan still reserves whole packed inputs; what a frame does not spend
         goes to the credit bank, then to the band's tiles.
     """
 
