@@ -160,9 +160,9 @@ class OnnxPose:
     def infer_many(self, tensors: list[np.ndarray]) -> list[np.ndarray]:
         """The network on the independent inputs of one step (a level's tiles, packed inputs,
         crops): ``tensors`` (1, 3, h, w) float32 each, sizes may differ; one (1, 56, N) output
-        each, in order, what :meth:`infer` gives one by one (side by side to about 1e-4 px). On a GPU inputs of one size
-        run as one batch (:meth:`infer_batch`); on the CPU side by side on one-thread sessions
-        (:attr:`side_by_side`); else one after another."""
+        each, in order, what :meth:`infer` gives one by one (side by side: to about 1e-4 px).
+        On a GPU inputs of one size run as one batch (:meth:`infer_batch`); on the CPU side by
+        side on one-thread sessions (:attr:`side_by_side`); else one after another."""
         if len(tensors) < 2:
             return [self.infer(t) for t in tensors]
         if self.batches:
