@@ -17,7 +17,7 @@ import cv2
 import numpy as np
 
 from pedenv.pose.postprocess import PAD_VALUE, DecodeSettings, InferMany, Letterbox, decode, to_input_tensor
-from pedenv.pose.tiling import STRIDE, UNIT_PX, Pass
+from pedenv.pose.tiling import STRIDE, Pass, units
 from pedenv.records import Detections
 
 #: Grey input px left between two crops of a mosaic.
@@ -227,13 +227,12 @@ def used_size(placements: list[Placement], mosaic_size: tuple[int, int]) -> tupl
 
 
 def mosaic_units(placements: list[Placement], mosaic_size: tuple[int, int], trim: bool) -> float:
-    """The mean network units of the mosaics of ``placements`` (0 without any): each a whole
-    ``mosaic_size``, or with ``trim`` the room its crops use (:func:`used_size`)."""
+    """The mean network units of the mosaics of ``placements``: each a whole ``mosaic_size`` (also
+    without any placement), or with ``trim`` the room its crops use (:func:`used_size`)."""
     mosaics = sorted({p.mosaic for p in placements})
     if not trim or not mosaics:
-        return mosaic_size[0] * mosaic_size[1] / UNIT_PX
-    sizes = [used_size([p for p in placements if p.mosaic == m], mosaic_size) for m in mosaics]
-    return sum(h * w for h, w in sizes) / len(sizes) / UNIT_PX
+        return units(mosaic_size)
+    return sum(units(used_size([p for p in placements if p.mosaic == m], mosaic_size)) for m in mosaics) / len(mosaics)
 
 
 def run_mosaics(infer: InferMany, image: np.ndarray, placements: list[Placement],

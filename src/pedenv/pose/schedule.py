@@ -28,15 +28,10 @@ import numpy as np
 from pedenv.pose.levels import HeightLine, plan_level, pyramid
 from pedenv.pose.redetect import searchable
 from pedenv.pose.stream_config import StreamConfig
-from pedenv.pose.tiling import UNIT_PX, CameraGeometry, DetectionConfig, Pass, round32
+from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, round32, units
 
 #: A predicted box shorter than this (px, clipped to the image) is not searched (``redetect.searchable``).
 MIN_TRACK_PX = 8.0
-
-
-def units(input_size: tuple[int, int]) -> float:
-    """Network units of one input of ``(height, width)`` px."""
-    return input_size[0] * input_size[1] / UNIT_PX
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,11 @@ UNIT_PX = 384 * 640
 MAX_LEVELS = 8
 
 
+def units(input_size: tuple[int, int]) -> float:
+    """Network units of one input of ``(height, width)`` px."""
+    return input_size[0] * input_size[1] / UNIT_PX
+
+
 @dataclass(frozen=True)
 class DetectionConfig:
     """Tunables of the detection passes, section ``detection`` of :class:`pedenv.config.Config`
