@@ -41,13 +41,11 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from real_detections import DEFAULT_SAMPLES  # noqa: E402
-
-from pedenv.boxes import containment_matrix, greedy_match, iou_matrix  # noqa: E402
+from pedenv.boxes import containment_matrix, greedy_match, iou_matrix
 from pedenv.datasets import kitti_files as kitti
-from pedenv.datasets import mot17, nuscenes_cameras  # noqa: E402
-from pedenv.synthetic.detector_fit import BINS, bin_index, fit_detection_curve, fit_noise_law  # noqa: E402
+from pedenv.datasets import mot17, nuscenes_cameras
+from pedenv.evaluation.real_samples import load_detection_cache as load
+from pedenv.synthetic.detector_fit import BINS, bin_index, fit_detection_curve, fit_noise_law
 
 SCORE = 0.25
 SPAN_SCORE = 0.1  # skeleton geometry (spans) is measured on every person scoring above this
@@ -55,15 +53,7 @@ EYES, ANKLES = [1, 2], [15, 16]
 STEADY = [0, 1, 2, 3, 4, 5, 6, 11, 12]  # head, shoulders, hips: little limb motion
 KP_CONF = 0.3
 PAPER_HEIGHT_M = 1.7  # the paper's refinement: the eyes-to-ankles span is 1.7 m
-
-
-def load(path: Path) -> dict[str, dict[str, np.ndarray]]:
-    data = np.load(path)
-    out: dict[str, dict[str, np.ndarray]] = {}
-    for name in data.files:
-        key, field = name.split("|")
-        out.setdefault(key, {})[field] = data[name]
-    return out
+DEFAULT_SAMPLES = Path(__file__).resolve().parents[2] / "shared" / "samples" / "real"
 
 
 def kept(det: dict, score: float = SCORE) -> dict:
@@ -335,8 +325,7 @@ def fit_person_offsets(samples: Path, dets: dict, result: dict) -> dict:
     """``result`` with the persistent per-person offsets (:mod:`person_offsets`): the real ones
     against the 3D truth (MOT17's boxes as a cross-check), the synthetic skeletons' own with
     the fitted model before and after, and ``fit.person_offset_u/v``."""
-    from person_offsets import real_offsets
-
+    from pedenv.evaluation.person_offsets import real_offsets
     from pedenv.synthetic import generate_scenes
     from pedenv.synthetic.detector import DetectorModel
     from pedenv.synthetic.detector_fit import fit_person_offset, synthetic_offsets

@@ -22,69 +22,19 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from real_detections import DEFAULT_SAMPLES  # noqa: E402
-
-from pedenv.boxes import greedy_match, iou_matrix  # noqa: E402
-from pedenv.config import Config  # noqa: E402
-from pedenv.datasets import kitti_files as kitti
-from pedenv.datasets import nuscenes_cameras  # noqa: E402
-from pedenv.evaluation.metrics import calibration  # noqa: E402
-from pedenv.localization import configure, create_locator  # noqa: E402
-from pedenv.localization.base import FrameGeometry  # noqa: E402
-from pedenv.records import Camera, Detections, EgoPose, Frame, default_cam_to_vehicle  # noqa: E402
+from pedenv.boxes import greedy_match, iou_matrix
+from pedenv.config import Config
+from pedenv.evaluation.metrics import calibration
+from pedenv.evaluation.real_samples import place, real_frames
+from pedenv.localization import configure
+from pedenv.records import Detections, Frame
 
 SCORE = 0.25
-#: KITTI's cameras sit about this high above the road (KITTI sensor setup).
-KITTI_CAMERA_HEIGHT_M = 1.65
-
-
-def real_frames(samples: Path) -> list[tuple[str, Frame, np.ndarray, np.ndarray]]:
-    """(key, frame without detections, GT boxes (M, 4) px, GT ground points (M, 2) world x-y m)."""
-    out = []
-
-    def kitti_frame(key, calib, labels, image_size, index):
-        ped = labels.of_type("Pedestrian")
-        k = calib.K
-        cam = Camera(k, *image_size, default_cam_to_vehicle(KITTI_CAMERA_HEIGHT_M))
-        # vehicle frame (x forward, y left, z up) with cam2 at (0, 0, height); labels are in rectified cam0
-        rel = ped.locations - calib.cam2_position
-        ground = np.column_stack([rel[:, 2], -rel[:, 0]])
-        frame = Frame(index, 0.1 * index, cam, EgoPose(np.zeros(3), np.eye(3)), scene=key)
-        out.append((key, frame, ped.boxes, ground))
-
-    training = samples / "kitti" / "tracking_mini" / "training"
-    seq = kitti.read_tracking_sequence(training, "0016")
-    for f in seq.frames:
-        kitti_frame(f"kitti/0016/{f}", seq.calib, seq.labels.in_frame(f), (1224, 370), f)
-    obj = samples / "kitti" / "object_samples" / "training"
-    kitti_frame("kitti-object/000000", kitti.read_calib(obj / "calib" / "000000.txt"),
-                kitti.read_labels(obj / "label_2" / "000000.txt"), (1224, 370), 0)
-    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
-        ego = EgoPose(cam.ego_to_global[:3, 3], cam.ego_to_global[:3, :3])
-        frame = Frame(0, cam.timestamp_us * 1e-6, Camera(cam.K, cam.width, cam.height, cam.cam_to_ego), ego,
-                      scene=f"nuscenes/{cam.camera}")
-        ped = cam.pedestrians
-        out.append((f"nuscenes/{cam.camera}", frame, ped.boxes, ped.ground_points_global[:, :2]))
-    return out
-
-
-def place(method: str, frame: Frame, config: Config):
-    """Positions (N, 2) and reported covariances (N, 2, 2) of the frame's detections by ``method``."""
-    cfg = configure(config, method)
-    locator = create_locator(cfg)
-    geo = FrameGeometry.of(frame)
-    n = len(frame.detections)
-    if getattr(locator, "columns", None) is not None:
-        locator.columns.carry(np.full(n, -1))  # a new track row for every detection
-    m = locator.locate(geo, np.arange(n))
-    cov = m.covariances + (m.bias_covariances if m.bias_covariances is not None else 0.0)
-    return m.positions[:, :2], cov, m.sources
+DEFAULT_SAMPLES = Path(__file__).resolve().parents[2] / "shared" / "samples" / "real"
 
 
 def real_errors(samples: Path, detections: Path, config: Config) -> dict:

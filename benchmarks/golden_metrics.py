@@ -17,28 +17,11 @@ import json
 import sys
 from pathlib import Path
 
+from pedenv.evaluation.golden import differences, figures
+
 GOLDEN = Path(__file__).resolve().parents[1] / "tests" / "golden_metrics.json"
 
-#: Absolute tolerance of each figure: errors in percentage points or metres, coverage and
-#: tracking scores as fractions, counts exact.
-TOLERANCE = {"rel_error_pct": 0.05, "abs_error_m": 0.01, "count": 0, "within_1sigma": 0.002,
-             "within_2sigma": 0.002, "mean_nees": 0.01, "mota": 0.002, "idf1": 0.002, "id_switches": 0}
-
 TERRAIN_SCENES = ["standing-pedestrians", "drive-30kmh-sidewalk"]
-
-
-def figures(metrics) -> dict:
-    """The figures of one evaluation that the golden file keeps."""
-    o = metrics.overall
-    out = {"rel_error_pct": round(o.rel_error_pct, 3), "abs_error_m": round(o.abs_error_m, 4), "count": o.count}
-    for key in ("within_1sigma", "within_2sigma", "mean_nees"):
-        if key in metrics.calibration:
-            out[key] = round(metrics.calibration[key], 4)
-    for key in ("mota", "idf1", "id_switches"):
-        if key in metrics.tracking:
-            value = metrics.tracking[key]
-            out[key] = int(value) if key == "id_switches" else round(float(value), 4)
-    return out
 
 
 def cases(full: bool = False) -> dict:
@@ -76,17 +59,6 @@ def cases(full: bool = False) -> dict:
             "terrain7/fused/detector-model": lambda: run(terrain7(), "fused", "detector-model"),
         })
     return table
-
-
-def differences(measured: dict, golden: dict) -> list[str]:
-    """Lines naming every figure outside its tolerance (or missing)."""
-    bad = []
-    for case, values in measured.items():
-        for key, value in values.items():
-            want = golden.get(case, {}).get(key)
-            if want is None or abs(value - want) > TOLERANCE[key]:
-                bad.append(f"{case} {key}: measured {value}, golden {want} (tolerance {TOLERANCE[key]})")
-    return bad
 
 
 def main() -> int:

@@ -27,37 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
+from pedenv.evaluation.real_samples import sample_images
 
-
-def sample_images(samples: Path) -> list[tuple[str, Path, object]]:
-    """(key, image path, camera geometry for the ``far`` band or None) of every real sample
-    image: ``mot17/<SEQ>/<frame>``, ``kitti/<seq>/<frame>``, ``kitti-object/<id>``,
-    ``nuscenes/<CAM>``. The geometry is the one ``pedenv evaluate-detections`` uses (KITTI:
-    level camera 1.65 m up; nuScenes: the camera's pose; MOT17: none, the whole image is tiled)."""
-    from pedenv.datasets import kitti_files as kitti
-    from pedenv.datasets import mot17, nuscenes_cameras
-    from pedenv.evaluation.detections import KITTI_CAMERA_HEIGHT_M
-    from pedenv.pose.tiling import CameraGeometry
-
-    out = []
-    for folder in mot17.sequence_folders(samples / "mot17"):
-        seq = mot17.read_sequence(folder)
-        out += [(f"mot17/{folder.name}/{f}", seq.image_path(f), None) for f in seq.frames]
-    training = samples / "kitti" / "tracking_mini" / "training"
-    for name in kitti.tracking_sequence_names(training):
-        seq = kitti.read_tracking_sequence(training, name)
-        geometry = CameraGeometry.level(seq.calib.K, KITTI_CAMERA_HEIGHT_M)
-        out += [(f"kitti/{name}/{f}", seq.image_path(f), geometry) for f in seq.frames]
-    objects = samples / "kitti" / "object_samples" / "training"
-    for p in sorted((objects / "image_2").glob("*.png")):
-        calib = kitti.read_calib(objects / "calib" / f"{p.stem}.txt")
-        out.append((f"kitti-object/{p.stem}", p, CameraGeometry.level(calib.K, KITTI_CAMERA_HEIGHT_M)))
-    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
-        height = float(cam.cam_to_global[2, 3] - cam.ego_to_global[2, 3])
-        out.append((f"nuscenes/{cam.camera}", cam.image_path, CameraGeometry(cam.K, cam.cam_to_global[:3, :3], height)))
-    return out
+DEFAULT_SAMPLES = Path(__file__).resolve().parents[2] / "shared" / "samples" / "real"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -19,10 +19,10 @@ scene, the settings before these terms existed). ``--set FIELD=VALUE`` changes a
 setting of every fused row (an ablation).
 
 ``--persons`` prints per MOT17 scene a table of the fused vehicle and static rows person by
-person (:mod:`static_pairs`): each truth's whole-person matches and the protocol's pairs scored
+person (:mod:`pedenv.evaluation.static_pairs`): each truth's whole-person matches and the protocol's pairs scored
 against it, its own estimate's and the others'. Against MOT17's box-bottom truth the coverages
 are also given with that truth's own uncertainty added to the reported covariance
-(:mod:`box_truth`: the slant of upright people under a camera looking down, a foot's length).
+(:mod:`pedenv.evaluation.box_truth`: the slant of upright people under a camera looking down, a foot's length).
 
 Per case: mean relative error (% of the camera-to-truth distance, the paper's matching:
 each estimate with the nearest truth whose box overlaps its box at all, so a fragment of a
@@ -41,10 +41,9 @@ import sys
 import time
 from pathlib import Path
 
-from static_pairs import Pairs, breakdown, coverage_with_truth, persons, print_persons
+from pedenv.evaluation.static_pairs import Pairs, breakdown, coverage_with_truth, persons, print_persons
 
-ROOT = Path(__file__).resolve().parents[1]
-DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
+DEFAULT_SAMPLES = Path(__file__).resolve().parents[2] / "shared" / "samples" / "real"
 STATIC_MOT17 = ("MOT17-02-FRCNN", "MOT17-04-FRCNN", "MOT17-09-FRCNN")
 #: ``fused`` settings of an exactly known camera seen by exact skeletons: no calibration error, the
 #: ankle keypoint at the anatomical height (what the fused method did before these terms).
@@ -69,7 +68,7 @@ def remount(scene, mount: str):
 def evaluate(scene, method: str, backend, fused: dict | None = None, box_truth: bool = False) -> dict:
     """One scene through a fresh model: the figures of the table. fused: settings of the
     ``fused`` section over the defaults. box_truth: the truth is box bottoms (MOT17): also the
-    coverages with its own uncertainty added (:mod:`box_truth`)."""
+    coverages with its own uncertainty added (:mod:`pedenv.evaluation.box_truth`)."""
     from pedenv.apps.scene_result import SceneHooks, evaluate_scene, merge_scene_results
     from pedenv.config import Config
     from pedenv.localization import configure

@@ -2,21 +2,18 @@
 them with an InputError or returns only finite values within the method's maximum range.
 
 Issue 19: small, collapsed, degenerate and far skeletons with ego motion and time steps,
-the sequences of ``benchmarks/fuzz_update.py`` (a seeded share of its 100,000): no NaN or
-inf, no covariance that is not positive semi-definite, no exception but InputError, no
-pedestrian made of a person with no seen keypoint, for both methods."""
+the sequences of :mod:`pedenv.evaluation.fuzz` (a seeded share of the 100,000 that
+``benchmarks/fuzz_update.py`` runs): no NaN or inf, no covariance that is not positive
+semi-definite, no exception but InputError, no pedestrian made of a person with no seen keypoint, for both methods."""
 
 from __future__ import annotations
-
-import importlib.util
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from pedenv.config import Config
 from pedenv.errors import InputError
+from pedenv.evaluation import fuzz as fuzz_update
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -24,10 +21,6 @@ from pedenv.records import Camera, Detections, EgoPose, Frame
 from standing_people import frame_with_people
 
 CAMERA = Camera.from_fov()
-_spec = importlib.util.spec_from_file_location(
-    "fuzz_update", Path(__file__).resolve().parents[1] / "benchmarks" / "fuzz_update.py")
-fuzz_update = sys.modules.setdefault("fuzz_update", importlib.util.module_from_spec(_spec))
-_spec.loader.exec_module(fuzz_update)  # registered first: its dataclasses look their module up
 #: Sequences per method in CI (seeds 0, 2, 4, ... for paper, 1, 3, 5, ... for fused).
 CI_SEQUENCES = 300
 FIELDS = ("positions", "velocities", "covariances", "keypoints", "confidences", "boxes", "keypoints_3d", "distances")

@@ -3,19 +3,15 @@
     PYTHONPATH=src python benchmarks/behaviour.py --detections DET.npz   # the full tables
 """
 
-import sys
-
 import numpy as np
 import pytest
 
-from shared_paths import REAL_SAMPLES, REPO
-
-sys.path.insert(0, str(REPO / "benchmarks"))
+from shared_paths import REAL_SAMPLES
 
 
 @pytest.mark.slow
 def test_synthetic_orientation_path_conflict_and_motion_state():
-    from behaviour_synthetic import synthetic_behaviour
+    from pedenv.evaluation.behaviour_synthetic import synthetic_behaviour
 
     rows, timing = synthetic_behaviour(0, None, ["turn-intersection", "standing-pedestrians"])
     near = [r for r in rows if r["distance_m"] <= 30.0]
@@ -37,13 +33,14 @@ def test_synthetic_orientation_path_conflict_and_motion_state():
 @pytest.mark.slow
 @pytest.mark.onnx_model
 def test_real_orientation(tmp_path):
-    from behaviour_real import real_orientation
-    from real_detections import main as detect
-
     from pedenv.config import Config
+    from pedenv.evaluation.behaviour_real import real_orientation
+    from pedenv.evaluation.real_samples import detect_samples
+    from pedenv.pose import create_pose_backend
 
     cache = tmp_path / "det-far.npz"
-    detect(["--mode", "far", "--min-score", "0.25", "--only", "kitti,nuscenes", "--out", str(cache)])
+    backend = create_pose_backend("onnx", detection="far", score_threshold=0.25, threads=1)
+    np.savez_compressed(cache, **detect_samples(REAL_SAMPLES, backend, ("kitti", "nuscenes")))
     rows = real_orientation(REAL_SAMPLES, cache, Config())
     errors = np.array([r["pedenv"] for r in rows])
     assert len(errors) == 27

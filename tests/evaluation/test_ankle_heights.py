@@ -1,14 +1,9 @@
-"""The ankle keypoint's height above the 3D truth's ground (benchmarks/person_offsets.py --ankle-heights),
+"""The ankle keypoint's height above the 3D truth's ground (:mod:`pedenv.evaluation.person_offsets`,
+printed by benchmarks/ankle_heights.py),
 which sets ``fused.ankle_keypoint_offset_m``, on constructed detections."""
-
-import sys
 
 import numpy as np
 import pytest
-
-from shared_paths import REPO
-
-sys.path.insert(0, str(REPO / "benchmarks"))
 
 #: A KITTI-like camera: focal 721.5 px, principal row 172.9 px.
 K = np.array([[721.5, 0.0, 609.6], [0.0, 721.5, 172.9], [0.0, 0.0, 1.0]])
@@ -29,7 +24,7 @@ def row_at(height_m: float, bottom_y: float = 1.65, depth: float = 10.0) -> floa
 
 
 def test_the_lower_ankle_is_measured_above_the_box_bottom():
-    from person_offsets import lower_ankle_heights
+    from pedenv.evaluation.person_offsets import lower_ankle_heights
 
     truth = np.array([[572.0, 52.0, 648.0, 298.0]])
     bottoms = np.array([[0.0, 1.65, 10.0]])  # camera frame, y down: 1.65 m below the camera, 10 m ahead
@@ -40,7 +35,7 @@ def test_the_lower_ankle_is_measured_above_the_box_bottom():
 
 @pytest.mark.parametrize("change", ["unsure ankles", "not counted", "no overlap", "low score"])
 def test_persons_the_measure_leaves_out(change):
-    from person_offsets import lower_ankle_heights
+    from pedenv.evaluation.person_offsets import lower_ankle_heights
 
     truth = np.array([[572.0, 52.0, 648.0, 298.0]])
     bottoms = np.array([[0.0, 1.65, 10.0]])

@@ -1,18 +1,12 @@
-"""The own uncertainty of a box-bottom ground truth (benchmarks/box_truth.py, used by
+"""The own uncertainty of a box-bottom ground truth (:mod:`pedenv.evaluation.box_truth`, used by
 benchmarks/static_cameras.py on MOT17): the slant of upright people under a camera looking down,
 and a foot's length along the ray."""
-
-import sys
 
 import numpy as np
 import pytest
 
 from pedenv.geometry import invert_transform, project
 from pedenv.synthetic.scenarios import static_camera
-
-from shared_paths import REPO
-
-sys.path.insert(0, str(REPO / "benchmarks"))
 
 #: Thin upright people (feet to a 1.7 m head) standing at these ground points, vehicle frame, metres.
 FEET = np.array([[6.0, 4.0, 0.0], [8.0, -3.0, 0.0], [12.0, 0.0, 0.0]])
@@ -28,7 +22,7 @@ def boxes_of(camera, feet: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @pytest.mark.parametrize("pitch_deg, slanted", [(0.0, False), (20.0, True), (60.0, True)])
 def test_the_feet_lie_on_the_line_from_the_vertical_vanishing_point(pitch_deg, slanted):
-    from box_truth import slant_feet
+    from pedenv.evaluation.box_truth import slant_feet
 
     camera = static_camera(6.0, pitch_deg)
     boxes, foot = boxes_of(camera, FEET)
@@ -39,9 +33,8 @@ def test_the_feet_lie_on_the_line_from_the_vertical_vanishing_point(pitch_deg, s
 
 
 def test_truth_covariance_is_the_slant_and_a_foot_along_the_ray():
-    from box_truth import truth_covariances
-
     from pedenv.datasets.ucmctrack import ground_points
+    from pedenv.evaluation.box_truth import truth_covariances
 
     foot_var = (0.152 * 1.72) ** 2 / 12  # uniform over a foot's length: sigma 0.075 m
     level = static_camera(6.0, 0.0)

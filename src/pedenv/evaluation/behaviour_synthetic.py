@@ -1,4 +1,5 @@
-"""Behaviour cues on the synthetic scenes, against the scenes' own truth.
+"""Behaviour cues on the synthetic scenes, against the scenes' own truth (``benchmarks/behaviour.py``
+prints the tables; ``tests/behaviour/test_measured_figures.py`` checks them).
 
 Each built-in scene (seed 0) runs through the model (``fused`` preset, detector model of
 ``profile``) with the predicted path sampled every 0.25 s up to 2 s. Every reported pedestrian
@@ -24,6 +25,7 @@ from pedenv.behaviour.config import BehaviourConfig
 from pedenv.config import Config
 from pedenv.geometry import wrap_angle
 from pedenv.model import PedestrianEnvironmentModel
+from pedenv.records import Scene
 from pedenv.synthetic import SCENARIOS, generate_scenes
 from pedenv.synthetic.detector import DetectorModel
 from pedenv.synthetic.detector_fit import greedy_match, iou_matrix
@@ -54,7 +56,7 @@ def true_entry(ego_xy: np.ndarray, ego_yaw: float, ped_xy: np.ndarray, cfg: Beha
     return int(hits[0]) if len(hits) else -1
 
 
-def run_scene(scene, seed: int, profile: str | None, config: Config, rows: list, timing: dict) -> None:
+def run_scene(scene: Scene, seed: int, profile: str | None, config: Config, rows: list, timing: dict) -> None:
     """Run one scene and append one row per matched pedestrian and frame to ``rows``."""
     truth = scene_pedestrians(seed, scene.name, scene.frames[-1].timestamp + 1.0 / 10.0 + 1e-9)
     model = PedestrianEnvironmentModel(config)
@@ -84,6 +86,7 @@ def run_scene(scene, seed: int, profile: str | None, config: Config, rows: list,
             ego_xy = np.array([f.ego.translation[:2] for f in scene.frames[k:k + step + 1]])
             ped_path = np.stack([truth.at(s).xy for s in times[k:k + step + 1]], axis=1)
         b = p.behaviour
+        assert b is not None, "the fused preset estimates behaviour"
         for d, g in pairs:
             gid = int(gt.ids[g])
             velocity = (after.xy[gid] - before.xy[gid]) / 0.1
@@ -109,8 +112,8 @@ def run_scene(scene, seed: int, profile: str | None, config: Config, rows: list,
     timing["behaviour_s"] += model.behaviour.elapsed_s if model.behaviour is not None else 0.0
 
 
-def synthetic_behaviour(seed: int = 0, profile: str | None = None, names=None, duration_s: float | None = None,
-                        terrain: bool = False) -> tuple[list[dict], dict]:
+def synthetic_behaviour(seed: int = 0, profile: str | None = None, names: list[str] | None = None,
+                        duration_s: float | None = None, terrain: bool = False) -> tuple[list[dict], dict]:
     """Rows (one per matched pedestrian and frame) and the timing of the run."""
     config = Config().replace(behaviour={"horizons_s": list(BENCH_HORIZONS)})
     rows: list[dict] = []
@@ -118,58 +121,3 @@ def synthetic_behaviour(seed: int = 0, profile: str | None = None, names=None, d
     for scene in generate_scenes(seed, names or list(SCENARIOS), duration_s=duration_s, terrain=terrain):
         run_scene(scene, seed, profile, config, rows, timing)
     return rows, timing
-
-
-def print_synthetic(rows: list[dict], timing: dict) -> None:
-    near = [r for r in rows if r["distance_m"] <= 30.0]
-    e = np.array([r["yaw_error_deg"] for r in near])
-    avail = np.array([r["yaw_error_deg"] for r in near if r["available"] == 2])
-    print("\n### Synthetic orientation (matched pedestrians within 30 m)\n")
-    print("| subset | n | median deg | <= 22.5 | <= 45 |\n|---|---|---|---|---|")
-    for name, x in (("all", e), ("available", avail)):
-        if len(x):
-            print(f"| {name} | {len(x)} | {np.median(x):.1f} | {100 * np.mean(x <= 22.5):.0f} % | "
-                  f"{100 * np.mean(x <= 45):.0f} % |")
-    paths = [r for r in rows if r["in_scene_2s"]]
-    print("\n### Predicted path (metres): pedenv's positions ahead against the truth; 'motion' counts the")
-    print("predicted displacement alone (from pedenv's own position now); CV: constant velocity from the true state\n")
-    print("| pedestrians | n | ADE 1 s | FDE 1 s | ADE 2 s | FDE 2 s | motion FDE 1 s | motion FDE 2 s "
-          "| CV FDE 1 s | CV FDE 2 s | motion FDE 2 s / CV |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for name, limit in (("within 15 m", 15.0), ("within 30 m", 30.0), ("all", 1e9)):
-        sel = [r for r in paths if r["distance_m"] <= limit]
-        if not sel:
-            continue
-        pe, me, ce = (np.array([r[k] for r in sel]) for k in ("pred_err", "motion_err", "cv_err"))
-        cells = (pe[:, :4].mean(), pe[:, 3].mean(), pe.mean(), pe[:, 7].mean(), me[:, 3].mean(), me[:, 7].mean(),
-                 ce[:, 3].mean(), ce[:, 7].mean())
-        print(f"| {name} | {len(sel)} | " + " | ".join(f"{v:.2f}" for v in cells)
-              + f" | {me[:, 7].mean() / max(ce[:, 7].mean(), 1e-9):.1f} |")
-    ev = [r for r in rows if "true_event" in r]
-    tp = [r for r in ev if r["true_event"] and r["predicted_event"]]
-    n_true, n_pred = sum(r["true_event"] for r in ev), sum(r["predicted_event"] for r in ev)
-    terr = np.array([abs(r["predicted_time"] - r["true_time"]) for r in tp])
-    print("\n### Conflict: enters the corridor within 2 s\n")
-    print("| pairs | true events | predicted | recall | precision | median time error s | 90 % time error s |")
-    print("|---|---|---|---|---|---|---|")
-    print(f"| {len(ev)} | {n_true} | {n_pred} | {100 * len(tp) / max(n_true, 1):.1f} % | "
-          f"{100 * len(tp) / max(n_pred, 1):.1f} % | {np.median(terr) if len(terr) else 0:.2f} | "
-          f"{np.quantile(terr, 0.9) if len(terr) else 0:.2f} |")
-    seen = [r for r in ev if not r["turn_ahead"]]
-    hits, n_true, n_pred = (sum(r["true_event"] and r["predicted_event"] for r in seen),
-                            sum(r["true_event"] for r in seen), sum(r["predicted_event"] for r in seen))
-    print(f"\nWithout the pairs whose ego turn begins after now ({len(ev) - len(seen)} pairs, "
-          f"{sum(r['true_event'] for r in ev) - n_true} true events): recall {100 * hits / max(n_true, 1):.1f} %, "
-          f"precision {100 * hits / max(n_pred, 1):.1f} % ({n_true} true events, {n_pred} predicted)")
-    print("\n### Motion state (rows: truth; columns: pedenv)\n")
-    print("| pedestrians | truth | n | standing | walking | running |\n|---|---|---|---|---|---|")
-    for group, limit in (("within 30 m", 30.0), ("all", 1e9)):
-        for name, moving in (("standing", False), ("walking", True)):
-            st = np.array([r["state"] for r in rows if r["true_moving"] == moving and r["distance_m"] <= limit])
-            print(f"| {group} | {name} | {len(st)} | "
-                  + " | ".join(f"{100 * np.mean(st == k):.1f} %" for k in range(3)) + " |")
-    per_frame = 1e3 * timing["update_s"] / max(timing["frames"], 1)
-    extra = 1e3 * timing["behaviour_s"] / max(timing["frames"], 1)
-    print(f"\n### Cost\n\n{timing['frames']} frames, {timing['pedestrians'] / max(timing['frames'], 1):.1f} "
-          f"pedestrians per frame: model.update {per_frame:.2f} ms per frame, of which behaviour {extra:.2f} ms "
-          f"= {100 * extra / max(per_frame - extra, 1e-9):.1f} % of the rest of update")

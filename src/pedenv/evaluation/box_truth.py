@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from pedenv.records import Camera
+
 #: Foot length over body height (Winter, *Biomechanics and Motor Control of Human Movement*,
 #: segment lengths: 0.152 H): 0.26 m for the fused method's 1.72 m person.
 FOOT_LENGTH_FRACTION = 0.152
@@ -35,7 +37,7 @@ BODY_HEIGHT_M = 1.72
 MIN_DOWN_DEPTH = 1e-6
 
 
-def slant_feet(camera, boxes: np.ndarray) -> np.ndarray:
+def slant_feet(camera: Camera, boxes: np.ndarray) -> np.ndarray:
     """(N, 2) pixels: where the feet of the upright people boxed by ``boxes`` (N, 4) px lie on
     the boxes' bottom edge: on the line from the vertical vanishing point through each box's
     centre (module notes); the bottom centre for a camera that does not look down."""
@@ -50,7 +52,7 @@ def slant_feet(camera, boxes: np.ndarray) -> np.ndarray:
     return np.column_stack([np.clip(u, boxes[:, 0], boxes[:, 2]), boxes[:, 3]])
 
 
-def truth_covariances(camera, boxes: np.ndarray, truth_xy: np.ndarray) -> np.ndarray:
+def truth_covariances(camera: Camera, boxes: np.ndarray, truth_xy: np.ndarray) -> np.ndarray:
     """(N, 2, 2) m^2, the box-bottom truths' own covariances (module notes), ground x-y.
 
     camera: the static camera (:class:`pedenv.records.Camera`, its vehicle frame the world: the

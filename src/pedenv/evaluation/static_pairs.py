@@ -9,7 +9,10 @@ the one-to-one matches (box IoU >= 0.5) are the whole persons found, whose error
 from __future__ import annotations
 
 import numpy as np
-from box_truth import truth_covariances
+
+from pedenv.evaluation.box_truth import truth_covariances
+from pedenv.records import Frame
+from pedenv.state import EnvironmentState
 
 #: Range bins (metres from the camera to the truth) of ``--breakdown``.
 RANGE_BINS_M = ((0.0, 15.0), (15.0, 30.0), (30.0, 1000.0))
@@ -26,7 +29,7 @@ class Pairs:
     (m), 1 where that truth is the estimate's one-to-one person (else 0: a fragment or someone
     not in the truth scored against them), the truth's id. with_truth: per frame (K,) the
     one-to-one errors' Mahalanobis distances with the box-bottom truth's own covariance added
-    to the reported one (:mod:`box_truth`), where ``box_truth`` is set (MOT17).
+    to the reported one (:mod:`pedenv.evaluation.box_truth`), where ``box_truth`` is set (MOT17).
     """
 
     def __init__(self, box_truth: bool = False) -> None:
@@ -36,7 +39,7 @@ class Pairs:
         self.protocol: list[np.ndarray] = []
         self.with_truth: list[np.ndarray] = []
 
-    def on_frame(self, state, frame) -> None:
+    def on_frame(self, state: EnvironmentState, frame: Frame) -> None:
         from pedenv.evaluation.matching import match_one_to_one, match_to_ground_truth, position_errors
 
         peds, truth = state.pedestrians, frame.ground_truth

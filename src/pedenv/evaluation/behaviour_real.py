@@ -9,27 +9,25 @@ body's facing), nuScenes' ``yaw_global``. Baselines: "always facing the camera" 
 direction alone (where the labels give one: nuScenes' velocity, KITTI's track 3 frames either
 side; speed at least 0.3 m/s).
 
-    PYTHONPATH=src python benchmarks/behaviour.py real --detections /tmp/h-behaviour-work/det-far.npz
+    PYTHONPATH=src python benchmarks/behaviour.py --detections det-far.npz   # the tables
 """
 
 from __future__ import annotations
 
-import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from fused_calibration import KITTI_CAMERA_HEIGHT_M, place  # noqa: E402
-
-from pedenv.behaviour import heading_filter  # noqa: E402
-from pedenv.behaviour.orientation import skeleton_cue, skeleton_likelihood  # noqa: E402
-from pedenv.config import Config  # noqa: E402
-from pedenv.datasets import kitti_files as kitti  # noqa: E402
-from pedenv.datasets import nuscenes_cameras  # noqa: E402
-from pedenv.geometry import pixel_rays, wrap_angle  # noqa: E402
-from pedenv.records import Camera, Detections, EgoPose, Frame, default_cam_to_vehicle  # noqa: E402
-from pedenv.synthetic.detector_fit import greedy_match, iou_matrix  # noqa: E402
+from pedenv.behaviour import heading_filter
+from pedenv.behaviour.orientation import skeleton_cue, skeleton_likelihood
+from pedenv.config import Config
+from pedenv.datasets import kitti_files as kitti
+from pedenv.datasets import nuscenes_cameras
+from pedenv.evaluation.real_samples import KITTI_CAMERA_HEIGHT_M, load_detection_cache, place
+from pedenv.geometry import pixel_rays, wrap_angle
+from pedenv.records import Camera, Detections, EgoPose, Frame, default_cam_to_vehicle
+from pedenv.synthetic.detector_fit import greedy_match, iou_matrix
 
 SCORE, MIN_WALK_MPS = 0.25, 0.3
 
@@ -56,7 +54,8 @@ def real_samples(samples: Path) -> list[tuple[str, Frame, np.ndarray, np.ndarray
     """(key, frame without detections, GT boxes (M, 4) px, GT yaw (M,), GT walking direction (M,) or NaN)."""
     out = []
 
-    def kitti_frame(key, calib, labels, index, all_labels=None):
+    def kitti_frame(key: str, calib: kitti.KittiCalib, labels: kitti.KittiLabels, index: int,
+                    all_labels: kitti.KittiLabels | None = None) -> None:
         ped = labels.of_type("Pedestrian")
         cam = Camera(calib.K, 1224, 370, default_cam_to_vehicle(KITTI_CAMERA_HEIGHT_M))
         frame = Frame(index, 0.1 * index, cam, EgoPose(np.zeros(3), np.eye(3)), scene=key)
@@ -83,16 +82,16 @@ def real_samples(samples: Path) -> list[tuple[str, Frame, np.ndarray, np.ndarray
 
 def real_orientation(samples: Path, detections: Path, config: Config) -> list[dict]:
     """One row per matched pedestrian: errors (degrees) of pedenv and the baselines, distance, pixel height."""
-    data = np.load(detections)
+    cache = load_detection_cache(detections)
     cfg = config.behaviour
     cells = heading_filter.cell_centres(cfg.orientation_bins)
     rows = []
     for key, frame, gt_boxes, gt_yaw, gt_walk in real_samples(samples):
-        if f"{key}|scores" not in data.files:
+        if key not in cache:
             continue
-        keep = data[f"{key}|scores"] > SCORE
-        det = Detections(*(data[f"{key}|{name}"][keep].astype(float)
-                           for name in ("keypoints", "confidences", "boxes", "scores")))
+        keep = cache[key]["scores"] > SCORE
+        fields = ("keypoints", "confidences", "boxes", "scores")
+        det = Detections(*(cache[key][name][keep].astype(float) for name in fields))
         pairs = greedy_match(iou_matrix(det.boxes, gt_boxes), det.scores, 0.5) if len(det) else []
         if not pairs:
             continue
@@ -115,35 +114,6 @@ def real_orientation(samples: Path, detections: Path, config: Config) -> list[di
     return rows
 
 
-def _error_deg(truth: float):
+def _error_deg(truth: float) -> Callable[[float], float]:
     """A function: estimated yaw (radians) -> absolute error against ``truth`` in degrees."""
     return lambda a: float(np.degrees(abs(wrap_angle(a - truth))))
-
-
-def summarise(errors: list[float]) -> str:
-    e = np.asarray(errors, float)
-    if not len(e):
-        return "| 0 | - | - | - |"
-    return (f"| {len(e)} | {np.median(e):.1f} | {100 * np.mean(e <= 22.5):.0f} % | {100 * np.mean(e <= 45):.0f} % |")
-
-
-def print_real(rows: list[dict]) -> None:
-    """The tables of docs/behaviour.md: all matched pedestrians, then by distance and by pixel height."""
-    print("\n### Orientation on the real samples (median |error| deg, share within 22.5 / 45 deg)\n")
-    print("| estimate | n | median | <= 22.5 | <= 45 |\n|---|---|---|---|---|")
-    print("| pedenv (skeleton, one frame) " + summarise([r["pedenv"] for r in rows]))
-    print("| always facing the camera " + summarise([r["facing_camera"] for r in rows]))
-    walk = [r for r in rows if r["walking"] is not None]
-    print("| walking direction (labels; walkers only) " + summarise([r["walking"] for r in walk]))
-    print("| pedenv on those walkers " + summarise([r["pedenv"] for r in walk]))
-    for name, field, edges in (("distance, m", "distance_m", (0, 15, 30, 1e9)),
-                               ("pixel height, px", "height_px", (0, 80, 150, 1e9))):
-        print(f"\n| {name} | n | pedenv median | <= 22.5 | <= 45 | facing-camera median | walking median (n) |")
-        print("|---|---|---|---|---|---|---|")
-        for lo, hi in zip(edges, edges[1:]):
-            sel = [r for r in rows if lo <= r[field] < hi]
-            walk = [r["walking"] for r in sel if r["walking"] is not None]
-            fc = f"{np.median([r['facing_camera'] for r in sel]):.1f}" if sel else "-"
-            wk = f"{np.median(walk):.1f} ({len(walk)})" if walk else "- (0)"
-            label = f"{lo}-{hi}" if hi < 1e9 else f">= {lo}"
-            print(f"| {label} " + summarise([r["pedenv"] for r in sel]) + f" {fc} | {wk} |")

@@ -1,6 +1,6 @@
 """How far a detected skeleton sits from the person's true ground point, person by person.
 
-Frame-to-frame jitter (``fit_detector_model.py``) is only the part of the keypoint error that
+Frame-to-frame jitter (``benchmarks/fit_detector_model.py``) is only the part of the keypoint error that
 changes between frames. A network also places one person's skeleton consistently off: the
 ankles above or below the soles, the body's centre column to one side. That persistent part
 does not average out in a track, and it sets the fused method's per-person bias.
@@ -21,9 +21,9 @@ the detector model, the ground point being the true position projected. The dete
 model's ``person_offset_u`` / ``person_offset_v`` are what the synthetic skeletons lack:
 ``sqrt(real**2 - synthetic**2)``, converted from box heights to keypoint extents. The
 measuring and the fit live in :mod:`pedenv.synthetic.detector_fit` (the profile test reruns
-the synthetic side); ``fit_detector_model.py --person-offsets`` records everything.
+the synthetic side); ``benchmarks/fit_detector_model.py --person-offsets`` records everything.
 
-``--ankle-heights`` measures, in metres, how high the network's lower ankle keypoint (the one
+:func:`ankle_heights` measures, in metres, how high the network's lower ankle keypoint (the one
 the ground cue cuts with the ground) sits above the ground under the person: the bottom of
 the annotated 3D box, in the camera frame (y down) at the box's depth ``z``,
 ``y_bottom - (v_ankle - c_y) z / f_y``. Per person the median over their frames, then the
@@ -32,25 +32,21 @@ apart; the ground cue's ``fused.ankle_keypoint_offset_m`` is the KITTI median mi
 anatomical ankle height (0.046 x 1.72 m). The spread across persons (``robust_std_m``, 1.4826
 MAD) of KITTI and nuScenes together, people and cameras apart, is the static ground cue's
 ``fused.ankle_keypoint_offset_std_m``: how far one person's ankle keypoint may sit off that offset.
-The detections are the cache of ``real_detections.py``::
+The detections are the cache of ``benchmarks/real_detections.py``::
 
     PYTHONPATH=src python benchmarks/real_detections.py --mode far --min-score 0.25 \\
-        --only kitti,nuscenes --out /tmp/det-far.npz
-    PYTHONPATH=src python benchmarks/person_offsets.py --detections /tmp/det-far.npz --ankle-heights
+        --only kitti,nuscenes --out det-far.npz
+    PYTHONPATH=src python benchmarks/ankle_heights.py --detections det-far.npz
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from pedenv.synthetic.detector_fit import Offsets
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _project(P: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -63,7 +59,8 @@ def real_offsets(samples: Path, dets: dict) -> tuple[Offsets, Offsets]:
     from pedenv.datasets import kitti_files as kitti
     from pedenv.datasets import mot17, nuscenes_cameras
 
-    def add(acc, det, boxes, uv, counted, key_of):
+    def add(acc: Offsets, det: dict, boxes: np.ndarray, uv: np.ndarray, counted: np.ndarray,
+            key_of: Callable) -> None:
         acc.add(key_of, det["keypoints"], det["confidences"], det["scores"], det["boxes"], boxes, uv, counted)
 
     truth3d, boxes2d = Offsets(), Offsets()
@@ -81,15 +78,16 @@ def real_offsets(samples: Path, dets: dict) -> tuple[Offsets, Offsets]:
         add(truth3d, dets[f"kitti-object/{p.stem}"], ped.boxes, _project(calib.P2, ped.locations), ped.occluded <= 1,
             lambda g, s=p.stem: ("kitti-object", s, g))
     for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
-        ped = cam.pedestrians
-        bottom = ped.centers_cam + np.column_stack([np.zeros(len(ped)), ped.sizes_wlh[:, 2] / 2, np.zeros(len(ped))])
+        nped = cam.pedestrians
+        zeros = np.zeros(len(nped))
+        bottom = nped.centers_cam + np.column_stack([zeros, nped.sizes_wlh[:, 2] / 2, zeros])
         uv = bottom @ cam.K.T
-        add(truth3d, dets[f"nuscenes/{cam.camera}"], ped.boxes, uv[:, :2] / uv[:, 2:3], np.ones(len(ped), bool),
+        add(truth3d, dets[f"nuscenes/{cam.camera}"], nped.boxes, uv[:, :2] / uv[:, 2:3], np.ones(len(nped), bool),
             lambda g, c=cam.camera: ("nuscenes", c, g))
     for folder in mot17.sequence_folders(samples / "mot17"):
-        seq = mot17.read_sequence(folder)
-        for f in seq.frames:
-            gt = seq.pedestrians.in_frame(f)
+        mseq = mot17.read_sequence(folder)
+        for f in mseq.frames:
+            gt = mseq.pedestrians.in_frame(f)
             uv = np.column_stack([(gt.boxes[:, 0] + gt.boxes[:, 2]) / 2, gt.boxes[:, 3]])
             add(boxes2d, dets[f"mot17/{folder.name}/{f}"], gt.boxes, uv, gt.visibility >= 0.8,
                 lambda g, n=folder.name, ids=gt.ids: ("mot17", n, int(ids[g])))
@@ -146,46 +144,13 @@ def ankle_heights(samples: Path, dets: dict) -> dict[str, list[float]]:
             per.setdefault(("kitti", p.stem, g), []).append(h)
     nuscenes = samples / "nuscenes-0061"  # when the cache holds its cameras
     for cam in nuscenes_cameras.read_cameras(nuscenes) if any(k.startswith("nuscenes/") for k in dets) else []:
-        ped = cam.pedestrians
-        bottoms = ped.centers_cam + np.column_stack([np.zeros(len(ped)), ped.sizes_wlh[:, 2] / 2, np.zeros(len(ped))])
-        for g, h in lower_ankle_heights(dets[f"nuscenes/{cam.camera}"], ped.boxes, bottoms, cam.K,
-                                        np.ones(len(ped), bool)).items():
+        nped = cam.pedestrians
+        bottoms = nped.centers_cam + np.column_stack([np.zeros(len(nped)), nped.sizes_wlh[:, 2] / 2,
+                                                      np.zeros(len(nped))])
+        for g, h in lower_ankle_heights(dets[f"nuscenes/{cam.camera}"], nped.boxes, bottoms, cam.K,
+                                        np.ones(len(nped), bool)).items():
             per.setdefault(("nuscenes", cam.camera, g), []).append(h)
     out: dict[str, list[float]] = {"kitti": [], "nuscenes": []}
     for key, heights in per.items():
         out[key[0]].append(float(np.median(heights)))
     return out
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--samples", type=Path, default=ROOT.parent / "shared" / "samples" / "real")
-    parser.add_argument("--detections", type=Path, required=True, help="cache written by real_detections.py")
-    parser.add_argument("--ankle-heights", action="store_true", required=True,
-                        help="the lower ankle keypoint's height above the 3D truth's ground (module notes)")
-    args = parser.parse_args(argv)
-    from fit_detector_model import load
-
-    from pedenv.localization.fused.height import ANKLE_FRACTION
-    from pedenv.synthetic.detector_fit import robust_std
-
-    dets = load(args.detections)
-    dets.pop("_meta", None)
-    found = ankle_heights(args.samples, dets)
-    found["kitti+nuscenes"] = found["kitti"] + found["nuscenes"]
-    anatomical = ANKLE_FRACTION * 1.72
-    summary = {}
-    for name, heights in found.items():
-        h = np.array(heights)
-        if len(h):
-            q1, med, q3 = np.percentile(h, [25, 50, 75])
-            summary[name] = {"persons": len(h), "median_m": round(float(med), 4),
-                             "iqr_m": [round(float(q1), 4), round(float(q3), 4)],
-                             "robust_std_m": round(robust_std(h), 4),
-                             "offset_over_anatomical_m": round(float(med - anatomical), 4)}
-    print(json.dumps(summary, indent=2))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
