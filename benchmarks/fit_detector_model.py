@@ -26,9 +26,9 @@ measures how far each person's skeleton sits, persistently, from their true grou
 (:mod:`person_offsets`: KITTI and nuScenes 3D truth, MOT17 boxes as a cross-check) and fits
 the model's ``person_offset_u`` / ``person_offset_v`` to what the synthetic skeletons lack.
 
-    PYTHONPATH=src python benchmarks/fit_detector_model.py --detections /work/cache-h7/det-single.npz \
+    PYTHONPATH=src python benchmarks/fit_detector_model.py --detections det-single.npz \
         --out benchmarks/results/detector_yolo11n-pose-single.json
-    PYTHONPATH=src python benchmarks/fit_detector_model.py --detections /work/cache-h14/det-far.npz \
+    PYTHONPATH=src python benchmarks/fit_detector_model.py --detections det-far.npz \
         --fit-recall-table --person-offsets --check-synthetic --out benchmarks/results/detector_yolo11n-pose-far.json
 """
 

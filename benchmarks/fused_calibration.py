@@ -14,7 +14,7 @@ the coverage and NEES;
 with ``--breakdown`` also where the fused error and NEES come from (false positives,
 people matched to a neighbour, their own person; :func:`nees_breakdown`).
 
-    PYTHONPATH=src python benchmarks/fused_calibration.py --detections /work/cache-h14/det-far.npz \
+    PYTHONPATH=src python benchmarks/fused_calibration.py --detections det-far.npz \
         --profile yolo11n-pose-far --breakdown
 """
 

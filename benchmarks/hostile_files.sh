@@ -1,10 +1,10 @@
 #!/bin/bash
 # Issue 19's file, path and command cases, one line each: exit code, stderr lines, the last stderr line.
-#   benchmarks/hostile_files.sh SRC     (SRC: the src folder to run, e.g. $PWD/src or /work/main/src)
+#   benchmarks/hostile_files.sh SRC     (SRC: the src folder to run, e.g. $PWD/src)
 # Needs the prepared ONNX model (pedenv models prepare) and ultralytics' bus.jpg (the ultralytics extra).
-# Writes its data under $HOSTILE_TMP (default /tmp/pedenv-hostile); docs/hostile_data.md holds the results.
+# Writes its data under $HOSTILE_TMP (default: a new folder from mktemp -d); docs/hostile_data.md holds the results.
 set -u
-SRC=$(realpath "$1"); ROOT=${HOSTILE_TMP:-/tmp/pedenv-hostile}; D=$ROOT/data; PY=${PYTHON:-python}
+SRC=$(realpath "$1"); ROOT=${HOSTILE_TMP:-$(mktemp -d)}; D=$ROOT/data; PY=${PYTHON:-python}
 TESTS=$(dirname "$(realpath "$0")")/../tests
 if [ ! -f $D/rec.mp4 ]; then
   mkdir -p $D

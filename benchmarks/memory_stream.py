@@ -2,7 +2,7 @@
 the growth of the per-frame outputs (issue 19: linear in the stream's length).
 
     PYTHONPATH=src python benchmarks/memory_stream.py --frames 20000 --method fused
-    PYTHONPATH=src python benchmarks/memory_stream.py --frames 10000 --method fused --sinks /tmp/sinks --every 1000
+    PYTHONPATH=src python benchmarks/memory_stream.py --frames 10000 --method fused --sinks sinks --every 1000
 
 With ``--sinks`` every frame also goes to a Rerun recording (``DIR/stream.rrd``; its size is
 printed, with the bytes added per frame since the last checkpoint) and the bird's-eye video

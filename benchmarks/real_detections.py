@@ -15,7 +15,7 @@ for the tiled modes. Modes ``fast`` and ``far``: the onnx backend's detection mo
 (``OnnxPose(detection=...)``, the far band from each sample's calibration); run them with
 ``--min-score 0.25`` (their merge runs at the backend's threshold).
 
-    PYTHONPATH=src python benchmarks/real_detections.py --out /work/cache-h7/det-single.npz
+    PYTHONPATH=src python benchmarks/real_detections.py --out det-single.npz
 """
 
 from __future__ import annotations

@@ -1,11 +1,11 @@
 """``pedenv run`` end to end against the network's own time, on a real video.
 
-    PYTHONPATH=src python benchmarks/run_pipeline.py [--video vtest.avi] [--frames 100] [--size 900x1600]
+    PYTHONPATH=src python benchmarks/run_pipeline.py --video vtest.avi [--frames 100] [--size 900x1600]
         [--detection fast] [--video-out] [--png-compression fast,none] [--nice 0,10] [--rounds 3]
         [--threads 2] [--side-by-side on,off] [--realtime] [--output-json FILE]
 
-The video (default: ``vtest.avi``, the 768x576 street video of Debian's ``opencv-doc``,
-``/usr/share/doc/opencv-doc/examples/data/vtest.avi``) is cut to its first ``--frames`` frames,
+The video (``--video``; the figures of docs/speed.md use ``vtest.avi``, the 768x576 street video
+in ``examples/data`` of Debian's ``opencv-doc`` package) is cut to its first ``--frames`` frames,
 optionally scaled and centre-cropped to ``--size`` (e.g. 1600x900, nuScenes' camera), and
 written as a recording (MJPG video, a GUESSED static camera 5 m up looking 30 deg down, a
 standing ego) into a temporary folder. Then, with one pose backend (``--detection``, made
@@ -44,7 +44,6 @@ import cv2
 import numpy as np
 import yaml
 
-VTEST = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
 
 
 def write_recording(video: Path, out: Path, frames: int, size: tuple[int, int] | None) -> dict:
@@ -214,7 +213,7 @@ def _choices(text: str | None) -> list:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--video", type=Path, default=VTEST)
+    parser.add_argument("--video", type=Path, required=True, help="the video (e.g. opencv-doc's vtest.avi)")
     parser.add_argument("--frames", type=int, default=100)
     parser.add_argument("--size", default=None, help="HEIGHTxWIDTH to scale and crop to, e.g. 900x1600")
     parser.add_argument("--detection", default="fast")
@@ -244,7 +243,7 @@ def main() -> None:
         sides = tuple({"on": True, "off": False}[v] for v in args.side_by_side.split(",")) if args.side_by_side \
             else (None,)
         result = measure(rec, variants, work, args.rounds, args.threads, sides)
-    result.update(pedenv=str(Path(pedenv.__file__).parent), video=str(args.video), size=args.size,
+    result.update(video=args.video.name, size=args.size,
                   detection=args.detection, threads=args.threads)
     for variant in {json.dumps(r["variant"], sort_keys=True): r["variant"] for r in result["runs"]}.values():
         runs = [r for r in result["runs"] if r["variant"] == variant]

@@ -1,7 +1,7 @@
 """``stream`` against ``far`` on a real street video with no ground truth: how many of the people
 ``far`` reports does ``stream`` also report, frame by frame, and at what cost?
 
-    PYTHONPATH=src python benchmarks/stream_video.py [--video /usr/share/doc/opencv-doc/examples/data/vtest.avi]
+    PYTHONPATH=src python benchmarks/stream_video.py --video vtest.avi
         [--frames 200] [--json out.json] [--keep DIR] [--far-from DIR/far/environment.jsonl]
         [--stream-set FIELD=VALUE ...] [--size 900x1600]
 
@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-DEFAULT_VIDEO = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
 CALIBRATION = """width: {w}
 height: {h}
 intrinsics: [[{f}, 0, {cx}], [0, {f}, {cy}], [0, 0, 1]]
@@ -91,7 +90,7 @@ def stream_backend(settings: list[str]):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
+    parser.add_argument("--video", type=Path, required=True, help="the video (e.g. opencv-doc's vtest.avi)")
     parser.add_argument("--frames", type=int, default=200)
     parser.add_argument("--json", type=Path, default=None)
     parser.add_argument("--keep", type=Path, default=None,
@@ -108,7 +107,7 @@ def main(argv=None) -> int:
     from pedenv.apps.run import run_recording
     from pedenv.boxes import iou_matrix
 
-    results: dict = {"video": str(args.video), "size": args.size, "load_at_start": os.getloadavg()[0]}
+    results: dict = {"video": args.video.name, "size": args.size, "load_at_start": os.getloadavg()[0]}
     with tempfile.TemporaryDirectory() as scratch:
         tmp = args.keep or Path(scratch)
         size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else None

@@ -95,7 +95,7 @@ def stream_frame(pose: StreamPose, image: np.ndarray, sample: DetectionSample,
 
 def network_units(pose: OnnxPose | StreamPose) -> float:
     """Network input pixels of the passes ``pose`` ran on its last image, in units of one
-    384x640 pass (a load-independent cost; about 24 ms on two quiet cores, FORMATS.md)."""
+    384x640 pass (a load-independent cost; `pedenv bench` times one such pass on this machine)."""
     return sum(p.input_size[0] * p.input_size[1] for p in pose.last_passes) / (384 * 640)
 
 

@@ -1,4 +1,4 @@
-"""Reader of the paper's CARLA recordings (layout in ``shared/FORMATS.md``).
+"""Reader of the paper's CARLA recordings (the layout below).
 
 ::
 

@@ -1,4 +1,4 @@
-"""The paper's evaluation protocol (Sec. IV-B; FORMATS.md "The paper's evaluation protocol").
+"""The paper's evaluation protocol (Sec. IV-B of Holzbock et al., ITSC 2023).
 
 A predicted pedestrian is matched to the ground-truth pedestrian nearest in world x-y
 among those whose 2D box overlaps the prediction's box (IoU > 0). Several predictions
