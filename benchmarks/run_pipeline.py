@@ -45,7 +45,6 @@ import numpy as np
 import yaml
 
 
-
 def write_recording(video: Path, out: Path, frames: int, size: tuple[int, int] | None) -> dict:
     """The first ``frames`` frames of ``video`` (scaled and centre-cropped to ``size`` (height,
     width) when given) as a recording in ``out``: its RecordingSource fields (:mod:`pedenv.apps.options`)."""
