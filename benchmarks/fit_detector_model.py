@@ -23,7 +23,7 @@ With ``--fit-recall-table`` the detection curve is instead fitted to the binned 
 as the synthetic scenes see it (:func:`fit_to_recall_table`; used for ``far``, whose recall
 a per-person logistic misses by up to 20 points in a bin). With ``--person-offsets`` it also
 measures how far each person's skeleton sits, persistently, from their true ground point
-(:mod:`person_offsets`: KITTI and nuScenes 3D truth, MOT17 boxes as a cross-check) and fits
+(:mod:`pedenv.evaluation.person_offsets`: KITTI and nuScenes 3D truth, MOT17 boxes as a cross-check) and fits
 the model's ``person_offset_u`` / ``person_offset_v`` to what the synthetic skeletons lack.
 
     PYTHONPATH=src python benchmarks/fit_detector_model.py --detections det-single.npz \
@@ -322,7 +322,7 @@ def fit_to_recall_table(result: dict) -> dict:
 
 
 def fit_person_offsets(samples: Path, dets: dict, result: dict) -> dict:
-    """``result`` with the persistent per-person offsets (:mod:`person_offsets`): the real ones
+    """``result`` with the persistent per-person offsets (:mod:`pedenv.evaluation.person_offsets`): the real ones
     against the 3D truth (MOT17's boxes as a cross-check), the synthetic skeletons' own with
     the fitted model before and after, and ``fit.person_offset_u/v``."""
     from pedenv.evaluation.person_offsets import real_offsets
@@ -361,7 +361,7 @@ def main(argv: list[str] | None = None) -> int:
                              "gap, fit_to_recall_table) instead of per person by maximum likelihood")
     parser.add_argument("--person-offsets", action="store_true",
                         help="also measure each person's persistent skeleton offset against the 3D truth and fit "
-                             "the model's person_offset_u/v to it (person_offsets.py)")
+                             "the model's person_offset_u/v to it (pedenv.evaluation.person_offsets)")
     args = parser.parse_args(argv)
     dets = load(args.detections)
     mode = str(dets.pop("_meta")["mode"][0])
