@@ -102,10 +102,10 @@ def nees_breakdown(profile: str, config: Config, duration_s: float) -> dict:
     and the NEES of the non-ghost matches against their own person."""
     from dataclasses import replace
 
+    from pedenv import create_pose_backend
     from pedenv.datasets.memory import MemoryDataset
     from pedenv.evaluation.matching import match_to_ground_truth
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose import create_pose_backend
     from pedenv.synthetic import generate_scenes
 
     data = MemoryDataset(generate_scenes(0, terrain=True, duration_s=duration_s), name="terrain-seed0")

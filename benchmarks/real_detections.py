@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import cv2
 
-    from pedenv.pose import create_pose_backend
+    from pedenv import create_pose_backend
     from pedenv.pose.models import choose_input_size
 
     backends: dict = {}

@@ -162,8 +162,8 @@ def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, thread
     """``rounds`` times, for each ``side_by_side`` value (``SessionConfig.side_by_side``, one pose
     backend each with ``threads`` intra-op threads, made before any clock starts): the network
     alone, then a run of each of ``variants`` (module doc), one after the other."""
+    from pedenv import create_pose_backend
     from pedenv.config import Config
-    from pedenv.pose.base import create_pose_backend
 
     detection = variants[0]["detection"]
     score = Config().tracking.pose_score_threshold

@@ -69,7 +69,7 @@ def budgeted_backend(args, config):
         return None
     from dataclasses import replace
 
-    from pedenv.pose.base import create_pose_backend
+    from pedenv import create_pose_backend
     from pedenv.pose.models import backend_options
     from pedenv.pose.tiling import DetectionConfig
 

@@ -97,7 +97,7 @@ def evaluate(scene, method: str, backend, fused: dict | None = None, box_truth: 
 
 def cases(samples: Path, only: str | None):
     """(scene label, scene, backend label, backend factory)."""
-    from pedenv.pose import create_pose_backend
+    from pedenv import create_pose_backend
     from pedenv.pose.models import backend_options
 
     def onnx_far():

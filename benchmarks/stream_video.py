@@ -75,9 +75,9 @@ def stream_backend(settings: list[str]):
         return None
     from dataclasses import replace
 
+    from pedenv import create_pose_backend
     from pedenv.config import Config
     from pedenv.localization import configure
-    from pedenv.pose.base import create_pose_backend
     from pedenv.pose.models import backend_options
     from pedenv.pose.tiling import DetectionConfig
 
