@@ -9,6 +9,8 @@ import pytest
 from pedenv.config import FusedConfig
 from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
+from pedenv.localization.fused import ground as ground_module
+from pedenv.localization.fused.cue import LATERAL_STD_M
 from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER
 from pedenv.localization.fused.ground import ankle_height, box_bottom_ranges, ground_cue, static_ground_variance
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -56,11 +58,11 @@ def test_static_variance_is_the_foot_points_alone():
     # the per-person part along the ray holds the ground's unevenness only, not the road's height and curvature
     assert static.bias_covariances[0, 0, 0] < vehicle.bias_covariances[0, 0, 0]
     no_ground = run(static_frame("static"), dataclasses.replace(config, static_ground_height_std_m=0.0))
-    np.testing.assert_allclose(no_ground.bias_covariances[:, 1, 1], config.lateral_std_m**2, rtol=0.05)
+    np.testing.assert_allclose(no_ground.bias_covariances[:, 1, 1], LATERAL_STD_M**2, rtol=0.05)
     along = np.sqrt(static.covariances[:, 0, 0] + static.bias_covariances[:, 0, 0]) / RANGES
     # near, the stance (0.14 m) dominates; beyond, the pixel noise's r sigma / h grows with range
     assert np.all(np.diff(along[1:]) > 0)
-    assert along[-1] <= config.static_ground_max_relative_std
+    assert along[-1] <= ground_module.STATIC_GROUND_MAX_RELATIVE_STD
 
 
 @pytest.mark.parametrize("noise_px, limit, valid", [
@@ -71,9 +73,10 @@ def test_static_variance_is_the_foot_points_alone():
     (3.0, 0.015, [True, True, False, False]),
     (3.0, 0.01, [True, False, False, False]),
 ])
-def test_static_range_follows_the_foot_points_variance(noise_px, limit, valid):
+def test_static_range_follows_the_foot_points_variance(noise_px, limit, valid, monkeypatch):
     # 6 m up: the pixel noise alone spreads the cut by about r^2 sigma / (f h), 1.6 % of 120 m at 1 px
-    cue = run(static_frame("static"), FusedConfig(static_ground_max_relative_std=limit), noise_px)
+    monkeypatch.setattr(ground_module, "STATIC_GROUND_MAX_RELATIVE_STD", limit)
+    cue = run(static_frame("static"), FusedConfig(), noise_px)
     assert cue.valid.tolist() == valid
     assert all(r == "beyond-range" for r in cue.reason_names[~cue.valid])
 
