@@ -30,8 +30,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import behaviour_synthetic as bench  # noqa: E402
 
 import pedenv.behaviour.estimator as estimator  # noqa: E402
+from pedenv.behaviour import ego_path  # noqa: E402
 from pedenv.behaviour.config import BehaviourConfig  # noqa: E402
-from pedenv.behaviour.conflict import conflict_of  # noqa: E402
+from pedenv.behaviour.conflict import CONFLICT_PROBABILITY, conflict_of  # noqa: E402
 from pedenv.behaviour.ego_path import EgoHistory, EgoMotion, _clip, _fit_map, predict_ego_path  # noqa: E402
 from pedenv.records import EgoPose  # noqa: E402
 
@@ -90,7 +91,7 @@ def _line(h: EgoHistory, window_s: float) -> EgoMotion:
     if len(recent) < 2:
         return m
     fit = np.polyfit([p[0] - now for p in recent], [p[2] for p in recent], 1)
-    return dataclasses.replace(m, yaw_rate=_clip(float(fit[1]), h.config.max_yaw_rate_radps))
+    return dataclasses.replace(m, yaw_rate=_clip(float(fit[1]), ego_path.MAX_YAW_RATE_RADPS))
 
 
 VARIANTS = {
@@ -102,21 +103,21 @@ VARIANTS = {
     "widen-1s": lambda h, _ego, _i: dataclasses.replace(
         h.motion(), yaw_rate_std=h.motion().yaw_rate_std + abs(_rate_slope(h))),
     "trend-0.25s": lambda h, _ego, _i: dataclasses.replace(
-        h.motion(), yaw_rate=_clip(h.motion().yaw_rate + 0.25 * _rate_slope(h), h.config.max_yaw_rate_radps)),
+        h.motion(), yaw_rate=_clip(h.motion().yaw_rate + 0.25 * _rate_slope(h), ego_path.MAX_YAW_RATE_RADPS)),
 }
 
 
 def replay(rec: dict, cfg: BehaviourConfig, variant) -> np.ndarray:
     """The conflict probability of every row of ``rec`` with the ego's motion read by ``variant``."""
-    times = np.linspace(0.0, cfg.conflict_horizon_s, int(round(cfg.conflict_horizon_s / cfg.conflict_step_s)) + 1)
-    h, probs, calls = EgoHistory(cfg), [], iter(rec["calls"])
+    times = np.linspace(0.0, cfg.conflict_horizon_s, int(round(cfg.conflict_horizon_s / estimator.CONFLICT_STEP_S)) + 1)
+    h, probs, calls = EgoHistory(), [], iter(rec["calls"])
     call = next(calls, None)
     for i, (t, x, y, yaw) in enumerate(rec["ego"]):
         pose = EgoPose.from_xy_yaw(x, y, yaw)
         h.add(t, pose)  # a time that does not increase (the next scene) starts the history again
         while call is not None and call[0] == i:
-            path = predict_ego_path(pose, variant(h, rec["ego"], i), times, cfg.ego_trend_s,
-                                    cfg.max_ego_acceleration_mps2)
+            path = predict_ego_path(pose, variant(h, rec["ego"], i), times, ego_path.EGO_TREND_S,
+                                    ego_path.MAX_EGO_ACCELERATION_MPS2)
             found = conflict_of(path, call[1], call[2], cfg.corridor_half_width_m, cfg.corridor_front_m)
             probs.append(found.probability)
             call = next(calls, None)
@@ -142,7 +143,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", default="0-7", help="seeds: 0-7 or 8,9,10")
     parser.add_argument("--variants", default=",".join(VARIANTS))
-    parser.add_argument("--thresholds", default="", help="conflict_probability values (default: the config's)")
+    parser.add_argument("--thresholds", default="",
+                        help="conflict probability thresholds (default: conflict.CONFLICT_PROBABILITY)")
     parser.add_argument("--cache", type=Path, default=None, help="folder for the recordings (reused when there)")
     args = parser.parse_args(argv)
     cfg = bench.Config().replace(behaviour={"horizons_s": list(bench.BENCH_HORIZONS)}).behaviour
@@ -156,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_bytes(pickle.dumps(recs[seed]))
-    thresholds = [float(v) for v in args.thresholds.split(",") if v] or [cfg.conflict_probability]
+    thresholds = [float(v) for v in args.thresholds.split(",") if v] or [CONFLICT_PROBABILITY]
     print("| variant | threshold | " + " | ".join(f"seed {s}" for s in recs) + " | pooled: recall, precision |")
     print("|---|---|" + "---|" * len(recs) + "---|")
     for name in args.variants.split(","):
