@@ -3,6 +3,8 @@ shortened value."""
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import math
 
 import pytest
@@ -17,6 +19,7 @@ from pedenv.validation import (
     check_number,
     check_sequence,
     shown,
+    without_removed,
 )
 
 
@@ -70,3 +73,36 @@ def test_a_huge_value_is_shown_short(value):
     with pytest.raises(InputError) as info:
         check_number("s.x", value, 0.0, 1.0)
     assert len(str(info.value)) < 100
+
+
+def _removed_sections():
+    from pedenv.config import SECTIONS
+
+    return [(name, kind) for name, kind in SECTIONS.items() if getattr(kind, "REMOVED", None)]
+
+
+@pytest.mark.parametrize("section, kind", _removed_sections())
+def test_each_removed_field_names_the_constant_that_holds_its_value(section, kind):
+    fields = {f.name for f in dataclasses.fields(kind)}
+    for name, where in kind.REMOVED.items():
+        assert name not in fields, f"{section}.{name} is both a field and removed"
+        target, value = where.split(" (")[0].split(" = ")
+        module, constant = target.rsplit(".", 1)
+        assert getattr(importlib.import_module(module), constant) == float(value), where
+
+
+def test_a_saved_section_with_removed_fields_loads_with_one_warning_each():
+    from pedenv.config_tracking import TrackingConfig
+
+    saved = {"max_misses": 5, "camera_check": 0.5, "memory_gate": 9.21}
+    with pytest.warns(UserWarning) as caught:
+        values = without_removed("config.tracking", TrackingConfig, saved)
+    assert values == {"max_misses": 5} and saved["camera_check"] == 0.5  # the saved dict is not changed
+    assert sorted(str(w.message) for w in caught) == [
+        "config.tracking.camera_check is no longer a setting: the saved 0.5 is ignored "
+        "(pedenv.tracking.recall.CAMERA_CHECK = 0.34)",
+        "config.tracking.memory_gate is no longer a setting: the saved 9.21 is ignored "
+        "(pedenv.tracking.recall.MEMORY_GATE = 9.21)"]
+    assert TrackingConfig(**values).max_misses == 5
+    unknown = {"nonsense": 1}
+    assert without_removed("config.tracking", TrackingConfig, unknown) is unknown  # left for the caller to refuse
