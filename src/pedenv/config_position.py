@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from pedenv.validation import check_choice, check_fields, check_sequence, choice, count, flag, number
+from pedenv.validation import check_choice, check_fields, check_sequence, choice, count, flag, number, sequence
 
 #: Most refinement iterations per frame (``paper.refinement_steps``).
 MAX_REFINEMENT_STEPS = 200
@@ -172,7 +172,7 @@ class FusedConfig:
     1..100; keypoint_span_scale [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].
     """
 
-    cues: tuple[str, ...] = FUSED_CUES
+    cues: tuple[str, ...] = sequence(FUSED_CUES, len(FUSED_CUES), choices=FUSED_CUES)
     person_height_mean_m: float = number(1.72, 0.5, 2.5)
     person_height_std_m: float = number(0.09, 0.0, 0.5, low_open=True)
     keypoint_pixel_std: float = number(3.0, 0.0, 100.0, low_open=True)

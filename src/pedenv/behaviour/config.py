@@ -14,7 +14,17 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from pedenv.errors import InputError
-from pedenv.validation import check_below, check_fields, check_number, check_sequence, count, flag, number, shown
+from pedenv.validation import (
+    check_below,
+    check_fields,
+    check_number,
+    check_sequence,
+    count,
+    flag,
+    number,
+    sequence,
+    shown,
+)
 
 #: Horizons (s) of the predicted path.
 DEFAULT_HORIZONS_S = (0.5, 1.0, 2.0, 3.0)
@@ -72,7 +82,7 @@ class BehaviourConfig:
     walk_exit_mps: float = number(0.35, 0.0, 5.0)
     run_enter_mps: float = number(2.8, 0.0, 15.0)
     run_exit_mps: float = number(2.3, 0.0, 15.0)
-    horizons_s: tuple[float, ...] = DEFAULT_HORIZONS_S
+    horizons_s: tuple[float, ...] = sequence(DEFAULT_HORIZONS_S, 8, low=0.0, high=10.0, low_open=True, increasing=True)
     corridor_half_width_m: float = number(1.5, 0.1, 10.0)
     corridor_front_m: float = number(2.5, 0.0, 20.0)
     conflict_horizon_s: float = number(2.0, 0.1, 10.0)
