@@ -61,7 +61,7 @@ def test_an_accelerating_ego_reaches_farther_and_a_braking_one_stops():
     brake = _history([(10 * 0.1 * k - 0.5 * 5.0 * (0.1 * k) ** 2, 0.0, 0.0) for k in range(6)])  # 10 m/s, -5 m/s^2
     m = brake.motion()
     path = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), m, TIMES)
-    assert m.acceleration == pytest.approx(-4.0)  # clipped to max_ego_acceleration_mps2
+    assert m.acceleration == pytest.approx(-4.0)  # clipped to MAX_EGO_ACCELERATION_MPS2
     assert path.length == pytest.approx(m.speed**2 / 8.0, abs=0.05) and path.direction == 1.0
 
 
@@ -81,7 +81,7 @@ def _scripted(speed, yaw_rate, now):
 
 def test_an_ego_starting_from_standstill_is_followed_through_its_jerk():
     # start-from-standstill's profile, 0.5 s into the start: 2.69 m covered in the next 2 s; the
-    # acceleration alone (0.55 m/s^2, as ego_trend_s = 0) reaches 1.38 m, the fit of main before 0.83 m
+    # acceleration alone (0.55 m/s^2, as EGO_TREND_S = 0) reaches 1.38 m, the fit of main before 0.83 m
     m, path, truth = _scripted(lambda t: 11.0 * smooth_step(t, 4.0, 7.0), lambda t: 0.0 * t, 4.5)
     assert m.speed == pytest.approx(0.138, abs=0.005) and m.acceleration == pytest.approx(0.551, abs=0.01)
     assert m.jerk == pytest.approx(1.10, abs=0.02)

@@ -137,7 +137,7 @@ def test_ankle_offset_spread_widens_only_the_static_ground(mount):
     spread = run(frame, dataclasses.replace(EXACT, ankle_keypoint_offset_std_m=0.042))
     added = np.trace(spread.bias_covariances - flat.bias_covariances, axis1=1, axis2=2)
     np.testing.assert_allclose(spread.positions, flat.positions)
-    if mount == "vehicle":  # the road's height under the person (road_height_std_m) holds it there
+    if mount == "vehicle":  # the road's height under the person (ROAD_HEIGHT_STD_M) holds it there
         np.testing.assert_allclose(added, 0.0, atol=1e-12)
         return
     # a person's ankle keypoint 0.042 m off the offset moves the cut by 0.042 r / (h - ankle) along the ray
