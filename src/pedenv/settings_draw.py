@@ -130,11 +130,9 @@ def draw_config(rng: np.random.Generator, how: str | None = None) -> dict:
 def _drop(data: dict, path: str) -> bool:
     """Remove the drawn value at ``section.field`` (or ``section.nested.field``); whether there was one."""
     *parents, leaf = path.split(".")
-    node = data
+    node: Any = data
     for key in parents:
         node = node.get(key) if isinstance(node, dict) else None
-        if node is None:
-            return False
     if isinstance(node, dict) and leaf in node:
         del node[leaf]
         return True
