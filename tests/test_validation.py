@@ -19,7 +19,6 @@ from pedenv.validation import (
     check_number,
     check_sequence,
     shown,
-    without_removed,
 )
 
 
@@ -75,34 +74,29 @@ def test_a_huge_value_is_shown_short(value):
     assert len(str(info.value)) < 100
 
 
-def _removed_sections():
+#: Where each section's retired fields live now: the modules that hold their constants.
+RETIRED_HOMES = {
+    "tracking": ("pedenv.tracking.recall", "pedenv.tracking.tracker", "pedenv.config_tracking"),
+    "kalman": ("pedenv.kalman",),
+    "paper": ("pedenv.localization.paper",),
+    "fused": ("pedenv.localization.fused.ground", "pedenv.localization.fused.cue",
+              "pedenv.localization.fused.triangulation", "pedenv.localization.fused.locator"),
+    "behaviour": ("pedenv.behaviour.orientation", "pedenv.behaviour.motion_state", "pedenv.behaviour.estimator",
+                  "pedenv.behaviour.ego_path", "pedenv.behaviour.conflict"),
+}
+
+
+@pytest.mark.parametrize("section", sorted(RETIRED_HOMES))
+def test_each_retired_field_is_a_constant_holding_its_fixed_value(section):
+    """A config saved before may name a retired field at its fixed value: that value is the
+    constant's (imported where it is used, the same everywhere), and the name is a field no more."""
     from pedenv.config import SECTIONS
 
-    return [(name, kind) for name, kind in SECTIONS.items() if getattr(kind, "REMOVED", None)]
-
-
-@pytest.mark.parametrize("section, kind", _removed_sections())
-def test_each_removed_field_names_the_constant_that_holds_its_value(section, kind):
+    kind = SECTIONS[section]
     fields = {f.name for f in dataclasses.fields(kind)}
-    for name, where in kind.REMOVED.items():
-        assert name not in fields, f"{section}.{name} is both a field and removed"
-        target, value = where.split(" (")[0].split(" = ")
-        module, constant = target.rsplit(".", 1)
-        assert getattr(importlib.import_module(module), constant) == float(value), where
-
-
-def test_a_saved_section_with_removed_fields_loads_with_one_warning_each():
-    from pedenv.config_tracking import TrackingConfig
-
-    saved = {"max_misses": 5, "camera_check": 0.5, "memory_gate": 9.21}
-    with pytest.warns(UserWarning) as caught:
-        values = without_removed("config.tracking", TrackingConfig, saved)
-    assert values == {"max_misses": 5} and saved["camera_check"] == 0.5  # the saved dict is not changed
-    assert sorted(str(w.message) for w in caught) == [
-        "config.tracking.camera_check is no longer a setting: the saved 0.5 is ignored "
-        "(pedenv.tracking.recall.CAMERA_CHECK = 0.34)",
-        "config.tracking.memory_gate is no longer a setting: the saved 9.21 is ignored "
-        "(pedenv.tracking.recall.MEMORY_GATE = 9.21)"]
-    assert TrackingConfig(**values).max_misses == 5
-    unknown = {"nonsense": 1}
-    assert without_removed("config.tracking", TrackingConfig, unknown) is unknown  # left for the caller to refuse
+    modules = [importlib.import_module(m) for m in RETIRED_HOMES[section]]
+    assert kind.RETIRED
+    for name, fixed in kind.RETIRED.items():
+        assert name not in fields, f"{section}.{name} is both a field and retired"
+        values = [getattr(m, name.upper()) for m in modules if hasattr(m, name.upper())]
+        assert set(values) == {fixed}, f"{section}.{name}: {values} in {RETIRED_HOMES[section]}, retired at {fixed}"

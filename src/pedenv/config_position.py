@@ -58,11 +58,12 @@ class PaperConfig:
     refinement_lambda_offset: float = number(5.0, 0.0, 1000.0, low_open=True)
     max_distance_m: float = number(500.0, 1.0, 10000.0)
 
-    #: Fields saved by earlier versions, now module constants (:func:`pedenv.validation.without_removed`).
-    REMOVED: ClassVar[dict[str, str]] = {
-        "min_parallax_rad": "pedenv.localization.paper.MIN_PARALLAX_RAD = 1e-06",
-        "measurement_std_m": "pedenv.localization.paper.MEASUREMENT_STD_M = 0.5",
-        "measurement_std_rel": "pedenv.localization.paper.MEASUREMENT_STD_REL = 0.1"}
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "min_parallax_rad": 1e-06,
+        "measurement_std_m": 0.5,
+        "measurement_std_rel": 0.1}
 
     def __post_init__(self) -> None:
         check_fields("paper", self)
@@ -188,19 +189,20 @@ class FusedConfig:
     keypoint_span_std: float = number(0.017, 0.0, 0.5)
     max_range_m: float = number(200.0, 5.0, 10000.0)
 
-    #: Fields saved by earlier versions, now module constants (:func:`pedenv.validation.without_removed`).
-    REMOVED: ClassVar[dict[str, str]] = {
-        "ankle_height_std_m": "pedenv.localization.fused.ground.ANKLE_HEIGHT_STD_M = 0.04",
-        "road_height_std_m": "pedenv.localization.fused.ground.ROAD_HEIGHT_STD_M = 0.08",
-        "road_curvature_std_per_m": "pedenv.localization.fused.ground.ROAD_CURVATURE_STD_PER_M = 0.008",
-        "static_ground_max_relative_std": "pedenv.localization.fused.ground.STATIC_GROUND_MAX_RELATIVE_STD = 0.2",
-        "stance_std_m": "pedenv.localization.fused.ground.STANCE_STD_M = 0.14",
-        "lateral_std_m": "pedenv.localization.fused.cue.LATERAL_STD_M = 0.05",
-        "min_baseline_m": "pedenv.localization.fused.triangulation.MIN_BASELINE_M = 0.3",
-        "min_parallax_rad": "pedenv.localization.fused.triangulation.MIN_PARALLAX_RAD = 0.01",
-        "pedestrian_speed_std_mps": "pedenv.localization.fused.triangulation.PEDESTRIAN_SPEED_STD_MPS = 0.8",
-        "outlier_sigma": "pedenv.localization.fused.triangulation.OUTLIER_SIGMA = 3.0",
-        "gate_probability": "pedenv.localization.fused.locator.GATE_PROBABILITY = 0.999"}
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "ankle_height_std_m": 0.04,
+        "road_height_std_m": 0.08,
+        "road_curvature_std_per_m": 0.008,
+        "static_ground_max_relative_std": 0.2,
+        "stance_std_m": 0.14,
+        "lateral_std_m": 0.05,
+        "min_baseline_m": 0.3,
+        "min_parallax_rad": 0.01,
+        "pedestrian_speed_std_mps": 0.8,
+        "outlier_sigma": 3.0,
+        "gate_probability": 0.999}
 
     def __post_init__(self) -> None:
         cues = [c for c in self.cues.split(",") if c] if isinstance(self.cues, str) else self.cues

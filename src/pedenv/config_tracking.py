@@ -53,11 +53,11 @@ class TrackingConfig:
     ground_gate: beyond the paper, off (0) by default: each track's Kalman-predicted ground
         position is projected into the image; a detection whose box foot point lies
         farther than this squared Mahalanobis distance (2 dof, pixels) from it cannot be
-        associated with the track, and nearer ones pay the distance over the gate on top of
-        the negative GIoU. Keeps two people side by side or crossing apart when their boxes
-        overlap. The projected covariance is generous (it holds the road's height and a
-        range bias, :mod:`pedenv.tracking.projection`), so the gate can be tight: the
-        ``fused`` preset uses 4 (5.9 id switches per 100 matches on the first 6 s of the
+        associated with the track, and nearer ones pay the distance over the gate (times
+        :data:`pedenv.tracking.recall.GROUND_COST_WEIGHT`) on top of the negative GIoU. Keeps
+        two people side by side or crossing apart when their boxes overlap. The projected
+        covariance is generous (it holds the road's height and a range bias,
+        :mod:`pedenv.tracking.projection`), so the gate can be tight: the ``fused`` preset uses 4 (5.9 id switches per 100 matches on the first 6 s of the
         seed-0 terrain scenes, 7.3 with 16). Lowering it splits tracks more readily. The gate
         and the memory abstain in a frame whose projections contradict the image (a wrong
         calibration: :data:`pedenv.tracking.recall.CAMERA_CHECK`).
@@ -84,13 +84,14 @@ class TrackingConfig:
     ground_gate: float = number(0.0, 0.0, 1000.0)
     memory_s: float = number(0.0, 0.0, 60.0)
 
-    #: Fields saved by earlier versions, now module constants (:func:`pedenv.validation.without_removed`).
-    REMOVED: ClassVar[dict[str, str]] = {
-        "start_score_threshold": "pedenv.tracking.recall.START_SCORE_THRESHOLD = 0.25",
-        "low_score_cost": "pedenv.tracking.tracker.LOW_SCORE_COST = 0.5",
-        "ground_cost_weight": "pedenv.tracking.recall.GROUND_COST_WEIGHT = 1.0",
-        "memory_gate": "pedenv.tracking.recall.MEMORY_GATE = 9.21",
-        "camera_check": "pedenv.tracking.recall.CAMERA_CHECK = 0.34"}
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "start_score_threshold": 0.25,
+        "low_score_cost": 0.5,
+        "ground_cost_weight": 1.0,
+        "memory_gate": 9.21,
+        "camera_check": 0.34}
 
     @property
     def pose_score_threshold(self) -> float | None:
@@ -130,9 +131,10 @@ class KalmanConfig:
     acceleration_std_mps2: float = number(1.0, 0.0, 100.0, low_open=True)
     restart_gate: float = number(0.0, 0.0, 10000.0)
 
-    #: Fields saved by earlier versions, now module constants (:func:`pedenv.validation.without_removed`).
-    REMOVED: ClassVar[dict[str, str]] = {
-        "initial_velocity_std_mps": "pedenv.kalman.INITIAL_VELOCITY_STD_MPS = 2.0"}
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "initial_velocity_std_mps": 2.0}
 
     def __post_init__(self) -> None:
         check_fields("kalman", self)

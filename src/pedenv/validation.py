@@ -10,10 +10,8 @@ in ``config.json``; checks between fields call the ``check_*`` functions themsel
 short line). A boolean is never a number and a number never a boolean; NaN and infinity are
 refused; every range has an upper bound, so no value can make a run's memory or time unbounded.
 
-A settings class may list the fields earlier versions saved and it no longer has in a class
-attribute ``REMOVED`` (field name -> the module constant that holds its value now);
-:func:`without_removed` drops them from a saved section with one warning each, so a
-``config.json`` written before still loads and says what it no longer sets.
+A settings class lists the fields earlier versions saved and it no longer has, now module
+constants, in a class attribute ``RETIRED`` (field name -> its fixed value).
 """
 
 from __future__ import annotations
@@ -21,7 +19,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import reprlib
-import warnings
 from collections.abc import Sequence
 from functools import partial
 from typing import Any
@@ -159,15 +156,3 @@ def check_fields(section: str, settings: Any) -> None:
         if check is not None:
             check(f"{section}.{f.name}", getattr(settings, f.name))
 
-
-def without_removed(section: str, kind: type, values: dict) -> dict:
-    """``values`` (the fields of a saved section ``section`` of class ``kind``) less the fields
-    ``kind.REMOVED`` lists: each is ignored with one warning naming it, the value saved and the
-    constant that holds its value now (a config written by an earlier version still loads; its
-    run uses today's constant). Fields ``kind`` never had are left for the caller to refuse."""
-    removed: dict[str, str] = getattr(kind, "REMOVED", {})
-    gone = [name for name in values if name in removed]
-    for name in gone:
-        warnings.warn(f"{section}.{name} is no longer a setting: the saved {shown(values[name])} is ignored "
-                      f"({removed[name]})", stacklevel=2)
-    return {k: v for k, v in values.items() if k not in removed} if gone else values

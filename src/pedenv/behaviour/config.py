@@ -87,29 +87,30 @@ class BehaviourConfig:
     corridor_front_m: float = number(2.5, 0.0, 20.0)
     conflict_horizon_s: float = number(2.0, 0.1, 10.0)
 
-    #: Fields saved by earlier versions, now module constants (:func:`pedenv.validation.without_removed`).
-    REMOVED: ClassVar[dict[str, str]] = {
-        "person_height_m": "pedenv.behaviour.orientation.PERSON_HEIGHT_M = 1.72",
-        "keypoint_pixel_std": "pedenv.behaviour.orientation.KEYPOINT_PIXEL_STD = 3.0",
-        "min_keypoint_confidence": "pedenv.behaviour.orientation.MIN_KEYPOINT_CONFIDENCE = 0.3",
-        "width_ratio_std": "pedenv.behaviour.orientation.WIDTH_RATIO_STD = 0.25",
-        "face_offset_std": "pedenv.behaviour.orientation.FACE_OFFSET_STD = 0.5",
-        "left_right_swap_probability": "pedenv.behaviour.orientation.LEFT_RIGHT_SWAP_PROBABILITY = 0.1",
-        "walking_direction_std_deg": "pedenv.behaviour.orientation.WALKING_DIRECTION_STD_DEG = 20.0",
-        "min_walking_speed_mps": "pedenv.behaviour.orientation.MIN_WALKING_SPEED_MPS = 0.5",
-        "speed_sigmas": "pedenv.behaviour.motion_state.SPEED_SIGMAS = 1.5",
-        "heading_random_walk_deg": "pedenv.behaviour.estimator.HEADING_RANDOM_WALK_DEG = 45.0",
-        "conflict_step_s": "pedenv.behaviour.estimator.CONFLICT_STEP_S = 0.1",
-        "max_pedestrian_speed_mps": "pedenv.behaviour.estimator.MAX_PEDESTRIAN_SPEED_MPS = 4.0",
-        "ego_window_s": "pedenv.behaviour.ego_path.EGO_WINDOW_S = 0.5",
-        "max_ego_gap_s": "pedenv.behaviour.ego_path.MAX_EGO_GAP_S = 1.0",
-        "max_yaw_rate_radps": "pedenv.behaviour.ego_path.MAX_YAW_RATE_RADPS = 1.0",
-        "max_ego_acceleration_mps2": "pedenv.behaviour.ego_path.MAX_EGO_ACCELERATION_MPS2 = 4.0",
-        "ego_trend_s": "pedenv.behaviour.ego_path.EGO_TREND_S = 1.0",
-        "max_ego_jerk_mps3": "pedenv.behaviour.ego_path.MAX_EGO_JERK_MPS3 = 2.0",
-        "ego_speed_std_mps": "pedenv.behaviour.ego_path.EGO_SPEED_STD_MPS = 0.5",
-        "ego_yaw_rate_std_radps": "pedenv.behaviour.ego_path.EGO_YAW_RATE_STD_RADPS = 0.05",
-        "conflict_probability": "pedenv.behaviour.conflict.CONFLICT_PROBABILITY = 0.3 (was saved, used by nothing)"}
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "person_height_m": 1.72,
+        "keypoint_pixel_std": 3.0,
+        "min_keypoint_confidence": 0.3,
+        "width_ratio_std": 0.25,
+        "face_offset_std": 0.5,
+        "left_right_swap_probability": 0.1,
+        "walking_direction_std_deg": 20.0,
+        "min_walking_speed_mps": 0.5,
+        "speed_sigmas": 1.5,
+        "heading_random_walk_deg": 45.0,
+        "conflict_step_s": 0.1,
+        "max_pedestrian_speed_mps": 4.0,
+        "ego_window_s": 0.5,
+        "max_ego_gap_s": 1.0,
+        "max_yaw_rate_radps": 1.0,
+        "max_ego_acceleration_mps2": 4.0,
+        "ego_trend_s": 1.0,
+        "max_ego_jerk_mps3": 2.0,
+        "ego_speed_std_mps": 0.5,
+        "ego_yaw_rate_std_radps": 0.05,
+        "conflict_probability": 0.3}
 
     def __post_init__(self) -> None:
         check_fields("behaviour", self)
