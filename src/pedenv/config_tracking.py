@@ -57,10 +57,11 @@ class TrackingConfig:
         :data:`pedenv.tracking.recall.GROUND_COST_WEIGHT`) on top of the negative GIoU. Keeps
         two people side by side or crossing apart when their boxes overlap. The projected
         covariance is generous (it holds the road's height and a range bias,
-        :mod:`pedenv.tracking.projection`), so the gate can be tight: the ``fused`` preset uses 4 (5.9 id switches per 100 matches on the first 6 s of the
-        seed-0 terrain scenes, 7.3 with 16). Lowering it splits tracks more readily. The gate
-        and the memory abstain in a frame whose projections contradict the image (a wrong
-        calibration: :data:`pedenv.tracking.recall.CAMERA_CHECK`).
+        :mod:`pedenv.tracking.projection`), so the gate can be tight: the ``fused`` preset
+        uses 4 (5.9 id switches per 100 matches on the first 6 s of the seed-0 terrain
+        scenes, 7.3 with 16). Lowering it splits tracks more readily. The gate and the memory
+        abstain in a frame whose projections contradict the image (a wrong calibration:
+        :data:`pedenv.tracking.recall.CAMERA_CHECK`).
     memory_s: beyond the paper, off (0) by default: a track missed ``max_misses`` times is
         not dropped but remembered this many seconds with its Kalman state; a new
         detection no track took in the image whose foot point lies within
