@@ -3,6 +3,8 @@ shortened value."""
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import math
 
 import pytest
@@ -70,3 +72,31 @@ def test_a_huge_value_is_shown_short(value):
     with pytest.raises(InputError) as info:
         check_number("s.x", value, 0.0, 1.0)
     assert len(str(info.value)) < 100
+
+
+#: Where each section's retired fields live now: the modules that hold their constants.
+RETIRED_HOMES = {
+    "tracking": ("pedenv.tracking.recall", "pedenv.tracking.tracker", "pedenv.config_tracking"),
+    "kalman": ("pedenv.kalman",),
+    "paper": ("pedenv.localization.paper",),
+    "fused": ("pedenv.localization.fused.ground", "pedenv.localization.fused.cue",
+              "pedenv.localization.fused.triangulation", "pedenv.localization.fused.locator"),
+    "behaviour": ("pedenv.behaviour.orientation", "pedenv.behaviour.motion_state", "pedenv.behaviour.estimator",
+                  "pedenv.behaviour.ego_path", "pedenv.behaviour.conflict"),
+}
+
+
+@pytest.mark.parametrize("section", sorted(RETIRED_HOMES))
+def test_each_retired_field_is_a_constant_holding_its_fixed_value(section):
+    """A config saved before may name a retired field at its fixed value: that value is the
+    constant's (imported where it is used, the same everywhere), and the name is a field no more."""
+    from pedenv.config import SECTIONS
+
+    kind = SECTIONS[section]
+    fields = {f.name for f in dataclasses.fields(kind)}
+    modules = [importlib.import_module(m) for m in RETIRED_HOMES[section]]
+    assert kind.RETIRED
+    for name, fixed in kind.RETIRED.items():
+        assert name not in fields, f"{section}.{name} is both a field and retired"
+        values = [getattr(m, name.upper()) for m in modules if hasattr(m, name.upper())]
+        assert set(values) == {fixed}, f"{section}.{name}: {values} in {RETIRED_HOMES[section]}, retired at {fixed}"

@@ -7,8 +7,9 @@ documented range whose upper bound keeps each frame's memory and time bounded).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
-from pedenv.validation import check_choice, check_fields, check_sequence, choice, count, flag, number
+from pedenv.validation import check_choice, check_fields, check_sequence, choice, count, flag, number, sequence
 
 #: Most refinement iterations per frame (``paper.refinement_steps``).
 MAX_REFINEMENT_STEPS = 200
@@ -37,20 +38,16 @@ class PaperConfig:
     refinement_lambda_offset: ``c`` in ``lambda = r + c`` for step ``r`` = 1..steps (the
         paper: 5). Each step scales the distance by ``1 + (h_est / h_orig - 1) / lambda``;
         raising ``c`` makes the refinement move less from the initial estimate.
-    min_parallax_rad: rays closer to parallel than this angle do not intersect; the
-        position then falls back to the height-based distance.
     max_distance_m: triangulated keypoints farther than this from the camera are
         discarded as degenerate, and no position is reported farther than this
         (horizontally) from the camera: the model clamps it as ``fused.max_range_m``.
-    measurement_std_m: standard deviation of one position measurement per axis (the
-        Kalman filter's R), as a fraction of the distance plus this floor; the paper
-        gives none (tuned on the built-in scenes).
-    measurement_std_rel: relative part of the measurement noise (per metre of distance).
+
+    The measurement noise and the parallel-ray guard are constants of
+    :mod:`pedenv.localization.paper` (the paper gives neither).
 
     Accepted values (:mod:`pedenv.validation`): low_confidence_fraction [0, 1);
     person_height_m [0.3, 2.5]; refinement_steps 0..200; refinement_lambda_offset (0, 1000];
-    min_parallax_rad [0, 0.1]; max_distance_m [1, 10000]; measurement_std_m (0, 100];
-    measurement_std_rel [0, 10]; refine true or false.
+    max_distance_m [1, 10000]; refine true or false.
     """
 
     low_confidence_fraction: float = number(0.3, 0.0, 1.0, high_open=True)
@@ -59,10 +56,14 @@ class PaperConfig:
     person_height_m: float = number(1.7, 0.3, 2.5)
     refinement_steps: int = count(15, 0, MAX_REFINEMENT_STEPS)
     refinement_lambda_offset: float = number(5.0, 0.0, 1000.0, low_open=True)
-    min_parallax_rad: float = number(1e-6, 0.0, 0.1)
     max_distance_m: float = number(500.0, 1.0, 10000.0)
-    measurement_std_m: float = number(0.5, 0.0, 100.0, low_open=True)
-    measurement_std_rel: float = number(0.1, 0.0, 10.0)
+
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "min_parallax_rad": 1e-06,
+        "measurement_std_m": 0.5,
+        "measurement_std_rel": 0.1}
 
     def __post_init__(self) -> None:
         check_fields("paper", self)
@@ -89,26 +90,15 @@ class FusedConfig:
     min_keypoint_confidence: keypoints below this confidence are not used by any cue
         (pose networks still guess unseen keypoints, with low confidence). Raising it
         uses fewer, surer keypoints.
-    ankle_height_std_m: how far an ankle may sit above its resting height (feet lifting
-        in the swing phase). Raising it widens the ground cue.
-    road_height_std_m: the road under a pedestrian may lie this far off the vehicle's
-        plane even nearby (kerbs, camber, suspension). Raising it widens the ground cue.
-    road_curvature_std_per_m: spread of the road's curvature (1/m); the road under a
-        pedestrian ``r`` metres away lies about ``0.5 * curvature * r^2`` off the
-        vehicle's plane. Raising it makes the ground cue fade sooner with distance.
     ground_max_distance_m: the ground cue declines beyond this horizontal distance (a
         vehicle-mounted camera: its pitch and height over the road change as it drives).
         A ``static`` camera (``Camera.mount``) has no such limit, see below.
-    static_ground_max_relative_std: a ``static`` camera's ground cue declines where the
-        foot point's own spread along the ray (its pixel noise and the ankle's lift, carried
-        through the ray's cut with the ground) exceeds this share of the range: there the
-        ray grazes the ground, the linearized cut no longer holds and the height prior is
-        sharper. Raising it uses the ground cue farther out.
     static_ground_height_std_m: the ground's unevenness under a pedestrian against a static
         camera's calibrated plane (paving, gutters), metres, per person; a static camera does
         not pitch or bounce, so this and its calibration's own error (the next two) replace
-        ``road_height_std_m`` and ``road_curvature_std_per_m``. Raising it widens its ground
-        cue along the ray.
+        the road's height and curvature spread (``ROAD_HEIGHT_STD_M`` and
+        ``ROAD_CURVATURE_STD_PER_M`` of :mod:`pedenv.localization.fused.ground`). Raising it
+        widens its ground cue along the ray.
     static_camera_tilt_std_deg: how far a static camera's calibrated pitch and roll (each)
         may be off, degrees, per camera. An estimated calibration tilts the ground it cuts by
         ``d`` times its error at ``d`` metres, so the foot point's range errs by about
@@ -139,7 +129,7 @@ class FusedConfig:
         network's lower-ankle height above the 3D boxes' bottom
         (``benchmarks/person_offsets.py --ankle-heights``; KITTI alone 0.026, its median 0.118 m
         against nuScenes' 0.165 m). On a vehicle the road's height under the person
-        (``road_height_std_m``, 0.08) is the larger term and holds it. 0 for skeletons whose
+        (``ROAD_HEIGHT_STD_M``, 0.08) is the larger term and holds it. 0 for skeletons whose
         ankles sit at the anatomical height (the synthetic scenes). Raising it widens a static
         camera's ground cue along the ray, most for a low camera.
     history_length: past observations of a track kept for triangulation. Raising it
@@ -149,30 +139,6 @@ class FusedConfig:
         (7.3 vs 7.7 %), at 6/10 of the triangulation's cost. At most
         :data:`MAX_HISTORY_LENGTH` (100, over 3 s at 30 Hz): each track holds this many
         rows, so the cap bounds the memory per track.
-    min_baseline_m: a past camera centre closer than this to the current one gives no
-        ray for triangulation (the ego stands still).
-    min_parallax_rad: rays closer to parallel than this are left out of triangulation;
-        if none is left the cue declines.
-    pedestrian_speed_std_mps: how fast a pedestrian may have moved since a past
-        observation; widens old rays so a walker does not bias triangulation.
-    outlier_sigma: a ray whose normalized miss distance exceeds this is dropped from
-        triangulation. Raising it keeps more rays.
-    gate_probability: a cue whose disagreement with the other cues exceeds this
-        chi-square quantile (2 dof) is dropped before fusion. Raising it keeps more cues.
-    lateral_std_m: spread of the ground point across the ray beyond pixel noise (body
-        lean, where the feet stand against the body's centre, the keypoints' placement).
-        Raising it widens the covariance across the ray. 0.05 m: the sideways errors of the
-        fused method on the real KITTI and nuScenes persons (RMS 0.051 m at 9-16 m, where the
-        measured keypoint jitter, under 1 px, adds about 0.01 m); the fused covariance
-        across the ray is floored at the sharpest cue's, since all cues share this error.
-        It repeats over a gait cycle and for the person, so it is the per-person part of
-        each cue's covariance: the Kalman filter does not average it away.
-    stance_std_m: spread of a standing foot's ground point about the body's (per axis, metres):
-        a walker's stance foot lies up to half a step (about 0.2 H) ahead of or behind the
-        body, so 0.2 m along the unknown walking direction, about 0.14 m each way; the midpoint
-        of two standing feet counts half of it. It changes with every step (frame-to-frame).
-        Raising it makes the ground cue count less across the ray, where it was the cue
-        whose sideways errors were 2.8x (0-10 m) its variance on the terrain scenes without it.
     keypoint_span_scale: the pose source's eyes-to-ankles span as a share of the span in the
         anatomical table of the height cue (eyes 0.933, ankles 0.046 of body height, upright).
         1.0 takes the table as it is; the real YOLO11n-pose spans 0.823 of the true height on
@@ -189,50 +155,54 @@ class FusedConfig:
         covariance along the ray widened by ``max_range_m**2`` (its range is unknown);
         its ``sources`` ends with ``;clamped``. Raising it lets farther estimates through.
 
+    The cues' model constants (the ankle's lift, the road's height and curvature, a static
+    camera's range limit, the stance, the body's sideways spread, triangulation's baseline,
+    parallax, walker drift and outlier gate, the fusion's gate) are named constants of
+    :mod:`pedenv.localization.fused` beside the code that uses them, each with its source.
+
     Each cue splits its covariance into the part new every frame (pixel noise, gait) and
     the part that repeats for the same person (height prior, road under them, a walker's
     drift); the model filters the first and adds the second to what it reports.
 
     Accepted values (:mod:`pedenv.validation`; metres, pixels and ratios far beyond any real
     camera or person): 1 to 3 cues; person_height_mean_m [0.5, 2.5]; person_height_std_m
-    (0, 0.5]; keypoint_pixel_std (0, 100]; min_keypoint_confidence [0, 1); ankle_height_std_m
-    [0, 1]; road_height_std_m [0, 2]; road_curvature_std_per_m [0, 0.1];
-    ground_max_distance_m [1, 1000]; static_ground_max_relative_std (0, 1];
-    static_ground_height_std_m [0, 1]; static_camera_tilt_std_deg [0, 10];
-    static_camera_height_std_m [0, 5]; ankle_keypoint_offset_m [-0.5, 0.5];
-    ankle_keypoint_offset_std_m [0, 0.5]; history_length 1..100;
-    min_baseline_m [0, 100];
-    min_parallax_rad [0, 0.5]; pedestrian_speed_std_mps [0, 10]; outlier_sigma (0, 100];
-    gate_probability (0, 1); lateral_std_m [0, 5]; stance_std_m [0, 2]; keypoint_span_scale
-    [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].
+    (0, 0.5]; keypoint_pixel_std (0, 100]; min_keypoint_confidence [0, 1);
+    ground_max_distance_m [1, 1000]; static_ground_height_std_m [0, 1];
+    static_camera_tilt_std_deg [0, 10]; static_camera_height_std_m [0, 5];
+    ankle_keypoint_offset_m [-0.5, 0.5]; ankle_keypoint_offset_std_m [0, 0.5]; history_length
+    1..100; keypoint_span_scale [0.5, 1.5]; keypoint_span_std [0, 0.5]; max_range_m [5, 10000].
     """
 
-    cues: tuple[str, ...] = FUSED_CUES
+    cues: tuple[str, ...] = sequence(FUSED_CUES, len(FUSED_CUES), choices=FUSED_CUES)
     person_height_mean_m: float = number(1.72, 0.5, 2.5)
     person_height_std_m: float = number(0.09, 0.0, 0.5, low_open=True)
     keypoint_pixel_std: float = number(3.0, 0.0, 100.0, low_open=True)
     min_keypoint_confidence: float = number(0.3, 0.0, 1.0, high_open=True)
-    ankle_height_std_m: float = number(0.04, 0.0, 1.0)
-    road_height_std_m: float = number(0.08, 0.0, 2.0)
-    road_curvature_std_per_m: float = number(0.008, 0.0, 0.1)
     ground_max_distance_m: float = number(20.0, 1.0, 1000.0)
-    static_ground_max_relative_std: float = number(0.2, 0.0, 1.0, low_open=True)
     static_ground_height_std_m: float = number(0.02, 0.0, 1.0)
     static_camera_tilt_std_deg: float = number(0.2, 0.0, 10.0)
     static_camera_height_std_m: float = number(0.04, 0.0, 5.0)
     ankle_keypoint_offset_m: float = number(0.039, -0.5, 0.5)
     ankle_keypoint_offset_std_m: float = number(0.042, 0.0, 0.5)
     history_length: int = count(6, 1, MAX_HISTORY_LENGTH)
-    min_baseline_m: float = number(0.3, 0.0, 100.0)
-    min_parallax_rad: float = number(0.01, 0.0, 0.5)
-    pedestrian_speed_std_mps: float = number(0.8, 0.0, 10.0)
-    outlier_sigma: float = number(3.0, 0.0, 100.0, low_open=True)
-    gate_probability: float = number(0.999, 0.0, 1.0, low_open=True, high_open=True)
-    lateral_std_m: float = number(0.05, 0.0, 5.0)
-    stance_std_m: float = number(0.14, 0.0, 2.0)
     keypoint_span_scale: float = number(1.0, 0.5, 1.5)
     keypoint_span_std: float = number(0.017, 0.0, 0.5)
     max_range_m: float = number(200.0, 5.0, 10000.0)
+
+    #: Fields earlier versions saved that are now module constants, with their fixed values (the
+    #: constants named in the docstring); a saved config may hold them at these values only.
+    RETIRED: ClassVar[dict[str, object]] = {
+        "ankle_height_std_m": 0.04,
+        "road_height_std_m": 0.08,
+        "road_curvature_std_per_m": 0.008,
+        "static_ground_max_relative_std": 0.2,
+        "stance_std_m": 0.14,
+        "lateral_std_m": 0.05,
+        "min_baseline_m": 0.3,
+        "min_parallax_rad": 0.01,
+        "pedestrian_speed_std_mps": 0.8,
+        "outlier_sigma": 3.0,
+        "gate_probability": 0.999}
 
     def __post_init__(self) -> None:
         cues = [c for c in self.cues.split(",") if c] if isinstance(self.cues, str) else self.cues

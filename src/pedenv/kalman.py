@@ -25,6 +25,10 @@ H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]])
 #: measurement exact along one direction, met by a state that is exact along the same
 #: direction, would make the innovation covariance singular and the gain explode.
 MIN_MEASUREMENT_VARIANCE = 1e-6
+#: Prior spread (m/s, per axis) of a new track's velocity: a walker's speed (1.4 m/s) with
+#: room for a runner's; the filter's first updates replace it. Tuned on the built-in scenes
+#: with the other filter settings; no measurement told other values apart.
+INITIAL_VELOCITY_STD_MPS = 2.0
 
 
 def transition(dt: float, acceleration_std: float) -> tuple[np.ndarray, np.ndarray]:
@@ -117,7 +121,7 @@ def correct(x: np.ndarray, P: np.ndarray, started: np.ndarray, z: np.ndarray, r:
         far[known] = innovation_distance(x[known], P[known], z[known], spread[known]) > config.restart_gate
         fresh |= far
     if fresh.any():
-        x[fresh], P[fresh] = initial_state(z[fresh], r[fresh], config.initial_velocity_std_mps)
+        x[fresh], P[fresh] = initial_state(z[fresh], r[fresh], INITIAL_VELOCITY_STD_MPS)
     step = measured & ~fresh
     if step.any():
         x[step], P[step] = update(x[step], P[step], z[step], r[step])

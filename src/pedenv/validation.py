@@ -9,6 +9,9 @@ in ``config.json``; checks between fields call the ``check_*`` functions themsel
 :func:`shown` (a config value can be a list of a million numbers; the message stays one
 short line). A boolean is never a number and a number never a boolean; NaN and infinity are
 refused; every range has an upper bound, so no value can make a run's memory or time unbounded.
+
+A settings class lists the fields earlier versions saved and it no longer has, now module
+constants, in a class attribute ``RETIRED`` (field name -> its fixed value).
 """
 
 from __future__ import annotations
@@ -129,6 +132,22 @@ def choice(default: str, choices: Sequence[str]) -> str:
     return dataclasses.field(default=default, metadata={CHECK: partial(check_choice, choices=choices)})
 
 
+#: The key of a sequence field's declared range in its dataclass field's metadata
+#: (:func:`sequence`); the class checks the entries itself in its ``__post_init__``.
+SEQUENCE = "pedenv.sequence"
+
+
+def sequence(default: tuple, max_items: int, *, low: float | None = None, high: float | None = None,
+             low_open: bool = False, choices: Sequence[str] | None = None, increasing: bool = False) -> Any:
+    """A settings field holding a tuple of 1 to ``max_items`` entries, each a number in ``[low,
+    high]`` (``low_open``: above ``low``; ``increasing``: strictly increasing) or one of
+    ``choices``. The range is declared for readers (:mod:`pedenv.settings_draw`, the docs); the
+    class checks the entries itself."""
+    return dataclasses.field(default=default, metadata={SEQUENCE: {
+        "max_items": max_items, "low": low, "high": high, "low_open": low_open, "choices": choices,
+        "increasing": increasing}})
+
+
 def check_fields(section: str, settings: Any) -> None:
     """Check every field of the dataclass instance ``settings`` declared with :func:`number`,
     :func:`count`, :func:`flag` or :func:`choice`, in field order, naming it ``section.field``."""
@@ -136,3 +155,4 @@ def check_fields(section: str, settings: Any) -> None:
         check = f.metadata.get(CHECK)
         if check is not None:
             check(f"{section}.{f.name}", getattr(settings, f.name))
+

@@ -1,5 +1,7 @@
 """Config.behaviour: the fused preset turns it on, the paper's method has none; bad values name the field."""
 
+import re
+
 import pytest
 
 from pedenv.behaviour.config import BehaviourConfig
@@ -19,20 +21,23 @@ def test_on_in_fused_off_in_paper_and_round_trips():
     ("orientation_bins", 5, "behaviour.orientation_bins"),
     ("orientation_interval_s", -0.1, "behaviour.orientation_interval_s"),
     ("orientation_interval_s", float("inf"), "behaviour.orientation_interval_s"),
-    ("width_ratio_std", -1.0, "behaviour.width_ratio_std"),
-    ("conflict_probability", 1.0, "behaviour.conflict_probability"),
+    ("available_std_deg", 0.5, "behaviour.available_std_deg"),
+    ("corridor_half_width_m", 0.0, "behaviour.corridor_half_width_m"),
     ("horizons_s", (2.0, 1.0), "behaviour.horizons_s"),
     ("horizons_s", (0.5, float("nan")), "behaviour.horizons_s"),
-    ("walk_exit_mps", 0.9, "walk_exit_mps < walk_enter_mps"),
-    ("conflict_step_s", 0.9, "behaviour.conflict_step_s"),
-    ("max_ego_gap_s", float("nan"), "behaviour.max_ego_gap_s"),
-    ("ego_trend_s", -0.5, "behaviour.ego_trend_s"),
-    ("max_ego_jerk_mps3", 100.0, "behaviour.max_ego_jerk_mps3"),
-    ("max_pedestrian_speed_mps", 0.1, "behaviour.max_pedestrian_speed_mps"),
+    ("walk_exit_mps", 0.9, "behaviour.walk_exit_mps (0.9) must be below behaviour.walk_enter_mps (0.6)"),
+    ("walk_enter_mps", 0.3, "behaviour.walk_exit_mps (0.35) must be below behaviour.walk_enter_mps (0.3)"),
+    ("walk_enter_mps", 2.5, "behaviour.walk_enter_mps (2.5) must not exceed behaviour.run_exit_mps (2.3)"),
+    ("run_exit_mps", 0.5, "behaviour.walk_enter_mps (0.6) must not exceed behaviour.run_exit_mps (0.5)"),
+    ("run_enter_mps", 2.0, "behaviour.run_exit_mps (2.3) must be below behaviour.run_enter_mps (2.0)"),
+    ("conflict_horizon_s", 0.05, "behaviour.conflict_horizon_s"),
 ])
 def test_bad_values_name_the_field(field, value, message):
-    kwargs = {field: value}
-    if field == "conflict_step_s":
-        kwargs["conflict_horizon_s"] = 0.5
-    with pytest.raises(InputError, match=message.replace(".", r"\.").replace("<", "<")):
-        BehaviourConfig(**kwargs)
+    with pytest.raises(InputError, match=re.escape(message)):
+        BehaviourConfig(**{field: value})
+
+
+def test_the_motion_thresholds_may_move_together():
+    """Thresholds that keep their order are accepted wherever they lie in their ranges."""
+    cfg = BehaviourConfig(walk_exit_mps=1.0, walk_enter_mps=1.2, run_exit_mps=1.2, run_enter_mps=4.0)
+    assert (cfg.walk_exit_mps, cfg.run_enter_mps) == (1.0, 4.0)

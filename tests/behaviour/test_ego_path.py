@@ -3,17 +3,16 @@
 import numpy as np
 import pytest
 
-from pedenv.behaviour.config import BehaviourConfig
+from pedenv.behaviour import ego_path
 from pedenv.behaviour.ego_path import EgoHistory, predict_ego_path
 from pedenv.records import EgoPose
 from pedenv.synthetic.ego_motion import integrate_track, smooth_step
 
-CFG = BehaviourConfig(enabled=True)
 TIMES = np.linspace(0.0, 2.0, 21)
 
 
 def _history(poses, dt=0.1):
-    h = EgoHistory(CFG)
+    h = EgoHistory()
     for k, (x, y, yaw) in enumerate(poses):
         h.add(k * dt, EgoPose.from_xy_yaw(x, y, yaw))
     return h
@@ -41,14 +40,14 @@ def test_a_turning_ego_path_follows_the_arc():
 
 def test_a_yaw_rate_spike_is_clipped_and_widens_the_spread():
     m = _history([(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 0.0, 1.2)]).motion()
-    assert m.yaw_rate == CFG.max_yaw_rate_radps and m.yaw_rate_std > CFG.ego_yaw_rate_std_radps + 1.0
+    assert m.yaw_rate == ego_path.MAX_YAW_RATE_RADPS and m.yaw_rate_std > ego_path.EGO_YAW_RATE_STD_RADPS + 1.0
 
 
 def test_a_gap_of_seconds_forgets_the_motion():
     h = _history([(k, 0.0, 0.0) for k in range(6)])
     h.add(10.0, EgoPose.from_xy_yaw(30.0, 0.0, 0.0))
     m = h.motion()
-    assert not m.known and m.speed == 0 and m.speed_std == 5 * CFG.ego_speed_std_mps
+    assert not m.known and m.speed == 0 and m.speed_std == 5 * ego_path.EGO_SPEED_STD_MPS
     path = predict_ego_path(EgoPose.from_xy_yaw(30.0, 0.0, 0.0), m, TIMES)
     assert np.isfinite(path.xy).all() and np.allclose(path.xy, [30.0, 0.0])
 
@@ -62,7 +61,7 @@ def test_an_accelerating_ego_reaches_farther_and_a_braking_one_stops():
     brake = _history([(10 * 0.1 * k - 0.5 * 5.0 * (0.1 * k) ** 2, 0.0, 0.0) for k in range(6)])  # 10 m/s, -5 m/s^2
     m = brake.motion()
     path = predict_ego_path(EgoPose.from_xy_yaw(0.0, 0.0, 0.0), m, TIMES)
-    assert m.acceleration == pytest.approx(-4.0)  # clipped to max_ego_acceleration_mps2
+    assert m.acceleration == pytest.approx(-4.0)  # clipped to MAX_EGO_ACCELERATION_MPS2
     assert path.length == pytest.approx(m.speed**2 / 8.0, abs=0.05) and path.direction == 1.0
 
 
@@ -71,18 +70,18 @@ def _scripted(speed, yaw_rate, now):
     motion fitted from the poses up to ``now`` (s, 10 Hz), its predicted path and its true path
     (21 samples, 0 .. 2 s ahead)."""
     track = integrate_track(np.round(np.arange(0.0, now + 2.0 + 1e-9, 0.1), 6), speed, yaw_rate)
-    h, k = EgoHistory(CFG), int(round(now / 0.1))
+    h, k = EgoHistory(), int(round(now / 0.1))
     for i in range(k + 1):
         h.add(track.times[i], EgoPose.from_xy_yaw(*track.xy[i], track.yaw[i]))
     m = h.motion()
-    path = predict_ego_path(EgoPose.from_xy_yaw(*track.xy[k], track.yaw[k]), m, TIMES, CFG.ego_trend_s,
-                            CFG.max_ego_acceleration_mps2)
+    path = predict_ego_path(EgoPose.from_xy_yaw(*track.xy[k], track.yaw[k]), m, TIMES, ego_path.EGO_TREND_S,
+                            ego_path.MAX_EGO_ACCELERATION_MPS2)
     return m, path, track.xy[k:k + 21]
 
 
 def test_an_ego_starting_from_standstill_is_followed_through_its_jerk():
     # start-from-standstill's profile, 0.5 s into the start: 2.69 m covered in the next 2 s; the
-    # acceleration alone (0.55 m/s^2, as ego_trend_s = 0) reaches 1.38 m, the fit of main before 0.83 m
+    # acceleration alone (0.55 m/s^2, as EGO_TREND_S = 0) reaches 1.38 m, the fit of main before 0.83 m
     m, path, truth = _scripted(lambda t: 11.0 * smooth_step(t, 4.0, 7.0), lambda t: 0.0 * t, 4.5)
     assert m.speed == pytest.approx(0.138, abs=0.005) and m.acceleration == pytest.approx(0.551, abs=0.01)
     assert m.jerk == pytest.approx(1.10, abs=0.02)

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from pedenv.behaviour import estimator
 from pedenv.behaviour import heading_filter as hf
 from pedenv.config import Config
 from pedenv.model import PedestrianEnvironmentModel
@@ -69,7 +70,7 @@ def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
     assert np.allclose(b.predicted_positions[:, 0], state.pedestrians.positions[:, :2])  # standing where reported
 
 
-def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames):
+def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames, monkeypatch):
     # an ego driving along +x at 8 m/s; a pedestrian 12 m ahead and 14 m to its left: a filter saying
     # 10 m/s towards the path has it cross within 1.5 s, at the 4 m/s cap it is still 6 m away at 2 s
     state = PedestrianEnvironmentModel(Config()).update(frames[0])
@@ -81,7 +82,8 @@ def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames)
     P = np.repeat(np.diag([0.01, 0.01, 0.01, 0.01])[None], n, axis=0)
     answers = []
     for cap in (15.0, 4.0):
-        est = PedestrianEnvironmentModel(Config().replace(behaviour={"max_pedestrian_speed_mps": cap})).behaviour
+        monkeypatch.setattr(estimator, "MAX_PEDESTRIAN_SPEED_MPS", cap)
+        est = PedestrianEnvironmentModel(Config()).behaviour
         for k in range(5, 0, -1):
             est.ego.add(t - 0.1 * k, EgoPose.from_xy_yaw(-0.8 * k, 0.0, 0.0))
         b = est.update(now, peds, x, P, np.ones(n, bool), peds.track_ids).behaviour

@@ -35,10 +35,12 @@ def test_update_with_a_vanishing_likelihood_is_flat_not_nan():
     assert np.isfinite(p).all() and np.ptp(p) == 0
 
 
-def test_probability_within_counts_the_cells_near_the_centre():
-    p = _peaked([0.0], kappa=400.0)
-    assert hf.probability_within(p, np.array([0.0]), np.radians(30))[0] > 0.99
-    assert hf.probability_within(p, np.array([np.pi]), np.radians(30))[0] < 0.01
+def test_body_facing_counts_the_cells_near_the_direction_to_the_camera():
+    from pedenv.behaviour.facing import body_facing_from
+
+    p, cells = _peaked([0.0], kappa=400.0), hf.cell_centres(72)
+    assert body_facing_from(p, np.cos(cells)[None], np.cos(np.radians(30)))[0] > 0.99
+    assert body_facing_from(p, np.cos(cells - np.pi)[None], np.cos(np.radians(30)))[0] < 0.01
 
 
 def test_a_shared_time_step_takes_the_kernel_and_agrees_with_the_fourier_path():

@@ -15,8 +15,8 @@ CELLS = hf.cell_centres(CFG.orientation_bins)
 
 def _one_frame(xy, heading, confidences=None):
     rays, conf, feet, origin, focal = seen(xy, heading)
-    cue = skeleton_cue(rays, conf if confidences is None else confidences, feet, origin, focal, CFG)
-    p = hf.update(hf.uniform(len(feet), len(CELLS)), skeleton_likelihood(cue, CELLS, CFG))
+    cue = skeleton_cue(rays, conf if confidences is None else confidences, feet, origin, focal)
+    p = hf.update(hf.uniform(len(feet), len(CELLS)), skeleton_likelihood(cue, CELLS))
     return cue, hf.summary(p, np.radians(CFG.available_std_deg))
 
 
@@ -48,6 +48,6 @@ def test_no_shoulders_or_hips_no_face_means_unavailable():
 def test_walking_direction_is_a_cue_only_when_the_speed_is_clearly_above_zero():
     v = np.array([[1.4, 0.0], [0.1, 0.0], [1.4, 0.0]])
     cov = np.array([np.eye(2) * 0.01, np.eye(2) * 0.01, np.eye(2) * 1.0])
-    like, used = motion_likelihood(v, cov, CELLS, CFG)
+    like, used = motion_likelihood(v, cov, CELLS)
     assert used.tolist() == [True, False, False]
     assert abs(CELLS[like[0].argmax()]) < np.radians(5) and np.ptp(like[1]) == 0

@@ -122,7 +122,8 @@ def test_pedenv_run_far_on_mot17_05_keeps_ids_and_reports_nobody_twice(tmp_path,
 def test_a_guessed_camera_does_not_split_the_fused_tracks_on_mot17_04(tmp_path, monkeypatch, capsys):
     """MOT17-04 looks down from high up; its camera is guessed (30 deg down, 1.5 m up). The
     fused default's ground gate would split nearly every track (210 id switches in 8 frames
-    before tracking.camera_check); the image contradicts that camera, so the boxes decide."""
+    before the camera check, pedenv.tracking.recall.CAMERA_CHECK); the image contradicts that
+    camera, so the boxes decide."""
     matched, switches, duplicates = _run_mot17("MOT17-04-FRCNN", tmp_path, monkeypatch, capsys, pitch_down_deg=30)
     assert duplicates == 0
     # measured: 240 of the boxes matched one to one, no id switch (the paper's tracker: 0 too)

@@ -1,12 +1,14 @@
 """Identities that hold (beyond the paper): hand-made scenes for the two-stage association,
 the projected Kalman gate and the memory of lost tracks."""
 
+from functools import partial
+
 import numpy as np
 import pytest
 
 from pedenv.config import TrackingConfig
 from pedenv.tracking.projection import CameraView, foot_points, pixel_distances
-from pedenv.tracking.recall import EXPECTED_DISTANCE_2DOF, ground_terms
+from pedenv.tracking.recall import EXPECTED_DISTANCE_2DOF, camera_disagrees, ground_terms
 from pedenv.tracking.tracker import Tracker
 
 F, CX, CY, W, H = 1000.0, 640.0, 360.0, 1280, 720
@@ -133,7 +135,7 @@ def test_a_person_hidden_for_n_frames_gets_their_id_back(memory_s, hidden, same_
 
 
 def test_low_score_detections_continue_tracks_but_never_start_one():
-    tracker = Tracker(TrackingConfig(low_score_threshold=0.1, start_score_threshold=0.25))
+    tracker = Tracker(TrackingConfig(low_score_threshold=0.1))
     a, b, c = box(10, 1.0), box(15, -2.0), box(20, 4.0)
     tracker.update(np.stack([a, b]), scores=np.array([0.9, 0.8]))
     step = tracker.update(np.stack([a, b + 2.0, c]), scores=np.array([0.15, 0.05, 0.2]))
@@ -163,9 +165,8 @@ def test_lost_rows_are_carried_with_every_column():
 
 
 @pytest.mark.parametrize("field, value", [
-    ("low_score_threshold", 0.3), ("low_score_threshold", -0.1), ("start_score_threshold", 1.5),
-    ("ground_gate", -1.0), ("ground_cost_weight", 11.0), ("memory_s", -1.0), ("memory_s", 100.0),
-    ("memory_gate", 0.0), ("camera_check", 1.5), ("camera_check", -0.1)])
+    ("low_score_threshold", 0.3), ("low_score_threshold", -0.1), ("ground_gate", -1.0), ("memory_s", -1.0),
+    ("memory_s", 100.0)])
 def test_identity_fields_are_checked(field, value):
     with pytest.raises(ValueError, match=f"tracking.{field}"):
         TrackingConfig(**{field: value})
@@ -190,26 +191,25 @@ def _three_walkers(tracker: Tracker, states: dict, t: float = 0.1):
     return tracker.update(people, view=view(t))
 
 
-def test_a_camera_the_image_contradicts_leaves_the_boxes_to_decide():
+def test_a_camera_the_image_contradicts_leaves_the_boxes_to_decide(monkeypatch):
     """The filters, fed through a wrong calibration, put everyone 2.5x farther than where
     their foot points project; the ground gate would split every track. The unambiguous
     box matches disagree with the camera, so the gate abstains and all keep their ids."""
     wrong = {1: (25, 0, 5.0, 0), 2: (30, 0, 0.0, 0), 3: (35, 0, -5.0, 0)}
     right = {1: (10, 0, 2.0, 0), 2: (12, 0, 0.0, 0), 3: (14, 0, -2.0, 0)}
     for states, check, kept in ((right, 0.5, True), (wrong, 0.5, True), (wrong, 1.0, False)):
-        tracker = Tracker(TrackingConfig(**FUSED, camera_check=check))
+        monkeypatch.setattr("pedenv.tracking.tracker.camera_disagrees", partial(camera_disagrees, max_share=check))
+        tracker = Tracker(TrackingConfig(**FUSED))
         step = _three_walkers(tracker, states)
         assert (list(tracker.ids[step.detection_rows]) == [1, 2, 3]) == kept
         assert tracker.camera_trusted == (states is right or check == 1.0)
 
 
 def test_the_camera_check_needs_three_unambiguous_matches():
-    from pedenv.tracking.recall import camera_disagrees
-
     boxes = np.stack([box(10, 2.0), box(12, 0.0), box(14, -2.0)])
     outside = np.zeros((3, 3), bool)
     rows = np.arange(3)
-    assert camera_disagrees(outside, boxes, boxes, rows, TrackingConfig(camera_check=0.5))
-    assert not camera_disagrees(outside[:2], boxes[:2], boxes, rows, TrackingConfig(camera_check=0.5))
-    assert not camera_disagrees(np.eye(3, dtype=bool), boxes, boxes, rows, TrackingConfig(camera_check=0.5))
-    assert not camera_disagrees(outside, boxes, boxes, rows, TrackingConfig(camera_check=1.0))
+    assert camera_disagrees(outside, boxes, boxes, rows, max_share=0.5)
+    assert not camera_disagrees(outside[:2], boxes[:2], boxes, rows, max_share=0.5)
+    assert not camera_disagrees(np.eye(3, dtype=bool), boxes, boxes, rows, max_share=0.5)
+    assert not camera_disagrees(outside, boxes, boxes, rows, max_share=1.0)

@@ -11,11 +11,30 @@ from functools import lru_cache
 
 import numpy as np
 
-from pedenv.behaviour.config import BehaviourConfig
 from pedenv.records import EgoPose
 
 #: With no motion known (the first frame, after a gap) the spreads are this many times the configured ones.
 UNKNOWN_MOTION_FACTOR = 5.0
+#: The ego's speed and yaw rate are fitted over its poses this far back (s): three to five poses at
+#: 5-10 Hz, enough for the quadratic fit, short enough to follow a start or a turn.
+EGO_WINDOW_S = 0.5
+#: A gap between two frames longer than this (s) forgets the ego's motion (a cut recording).
+MAX_EGO_GAP_S = 1.0
+#: A fitted yaw rate is clipped to this (rad/s; a car turning at walking pace on a 5 m radius
+#: turns at about 0.3), so a pose spike is not followed; its spread widens by the excess.
+MAX_YAW_RATE_RADPS = 1.0
+#: The fitted acceleration (or braking) is clipped to this (m/s^2): about a car's hard braking.
+MAX_EGO_ACCELERATION_MPS2 = 4.0
+#: For this long (s) into the prediction the acceleration changes at its fitted jerk (a start or a
+#: stop still building up), then holds: 0 against 1 s moved each of the behaviour benchmark's
+#: seeds 1-3 by at most 3 conflict events (docs/behaviour.md).
+EGO_TREND_S = 1.0
+#: The fitted jerk is clipped to this (m/s^3): set, not tuned; the built-in start's jerk peaks at 1.1.
+MAX_EGO_JERK_MPS3 = 2.0
+#: Spread (1 sigma) of the ego's speed (m/s) and yaw rate (rad/s) over the horizon: the driver may
+#: brake or steer. Set for the built-in scenes' drivers, not tuned.
+EGO_SPEED_STD_MPS = 0.5
+EGO_YAW_RATE_STD_RADPS = 0.05
 
 
 @dataclass(frozen=True)
@@ -53,13 +72,12 @@ class EgoPath:
 
 
 class EgoHistory:
-    """The ego's recent poses (timestamp, x, y, yaw), at most ``config.ego_window_s`` old; a
-    gap longer than ``config.max_ego_gap_s``, or a time that does not increase, forgets them.
+    """The ego's recent poses (timestamp, x, y, yaw), at most :data:`EGO_WINDOW_S` old; a
+    gap longer than :data:`MAX_EGO_GAP_S`, or a time that does not increase, forgets them.
     Between consecutive poses it keeps ``pairs``: their mid time (s), signed speed (m/s) and yaw
     rate (rad/s), each computed once."""
 
-    def __init__(self, config: BehaviourConfig) -> None:
-        self.config = config
+    def __init__(self) -> None:
         self.poses: list[tuple[float, float, float, float]] = []
         self.pairs: list[tuple[float, float, float]] = []
 
@@ -68,7 +86,7 @@ class EgoHistory:
 
     def add(self, timestamp: float, ego: EgoPose) -> None:
         timestamp = float(timestamp)
-        if self.poses and not 0.0 < timestamp - self.poses[-1][0] <= self.config.max_ego_gap_s:
+        if self.poses and not 0.0 < timestamp - self.poses[-1][0] <= MAX_EGO_GAP_S:
             self.reset()  # a gap, or a time that does not increase: start again
         x, y = ego.translation[:2].tolist()
         cos_yaw, sin_yaw = ego.rotation[:2, 0].tolist()
@@ -77,7 +95,7 @@ class EgoHistory:
             last = self.poses[-1]
             self.pairs.append((0.5 * (last[0] + timestamp), _speed(last, pose), _turn(last, pose)))
         self.poses.append(pose)
-        while len(self.poses) > 2 and timestamp - self.poses[1][0] >= self.config.ego_window_s:
+        while len(self.poses) > 2 and timestamp - self.poses[1][0] >= EGO_WINDOW_S:
             self.poses.pop(0)
             self.pairs.pop(0)
 
@@ -85,20 +103,20 @@ class EgoHistory:
         """Speed, acceleration and jerk, and the yaw rate now, from the window's poses: quadratic
         fits (least squares, in time) of the speeds and yaw rates between consecutive poses,
         evaluated now (a line with 3 poses, the mean with 2). The acceleration is clipped to
-        ``max_ego_acceleration_mps2``, the jerk to ``max_ego_jerk_mps3``; a yaw rate beyond
-        ``max_yaw_rate_radps`` (a spike) is clipped and its spread widened by the excess."""
-        cfg, poses = self.config, self.poses
+        :data:`MAX_EGO_ACCELERATION_MPS2`, the jerk to :data:`MAX_EGO_JERK_MPS3`; a yaw rate beyond
+        :data:`MAX_YAW_RATE_RADPS` (a spike) is clipped and its spread widened by the excess."""
+        poses = self.poses
         if len(poses) < 2 or poses[-1][0] - poses[0][0] <= 1e-6:
-            return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * cfg.ego_speed_std_mps,
-                             UNKNOWN_MOTION_FACTOR * cfg.ego_yaw_rate_std_radps, False)
+            return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * EGO_SPEED_STD_MPS,
+                             UNKNOWN_MOTION_FACTOR * EGO_YAW_RATE_STD_RADPS, False)
         now = poses[-1][0]
         value, slope, bend = _fit_rows(tuple([round(p[0] - now, 6) for p in self.pairs]))
         speeds, rates = [p[1] for p in self.pairs], [p[2] for p in self.pairs]
         speed, rate = _dot(value, speeds), _dot(value, rates)  # a handful of pairs: plain Python, not numpy
-        acceleration = _clip(_dot(slope, speeds), cfg.max_ego_acceleration_mps2)
-        clipped = _clip(rate, cfg.max_yaw_rate_radps)
-        return EgoMotion(speed, clipped, cfg.ego_speed_std_mps, cfg.ego_yaw_rate_std_radps + abs(rate - clipped),
-                         True, acceleration, _clip(2.0 * _dot(bend, speeds), cfg.max_ego_jerk_mps3))
+        acceleration = _clip(_dot(slope, speeds), MAX_EGO_ACCELERATION_MPS2)
+        clipped = _clip(rate, MAX_YAW_RATE_RADPS)
+        return EgoMotion(speed, clipped, EGO_SPEED_STD_MPS, EGO_YAW_RATE_STD_RADPS + abs(rate - clipped),
+                         True, acceleration, _clip(2.0 * _dot(bend, speeds), MAX_EGO_JERK_MPS3))
 
 
 def _clip(value: float, limit: float) -> float:

@@ -16,7 +16,7 @@ import numpy as np
 from pedenv.behaviour import facing, heading_filter, motion_state
 from pedenv.behaviour.config import BehaviourConfig
 from pedenv.behaviour.conflict import conflict_of
-from pedenv.behaviour.ego_path import EgoHistory, EgoPath, predict_ego_path
+from pedenv.behaviour.ego_path import EGO_TREND_S, MAX_EGO_ACCELERATION_MPS2, EgoHistory, EgoPath, predict_ego_path
 from pedenv.behaviour.motion_state import VelocityStats, velocity_stats
 from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
 from pedenv.behaviour.prediction import JointPredictor, PathPredictor
@@ -86,18 +86,18 @@ class BehaviourEstimator:
     def __init__(self, config: BehaviourConfig, acceleration_std: float) -> None:
         self.config = config
         self.acceleration_std = acceleration_std
-        self.ego = EgoHistory(config)
+        self.ego = EgoHistory()
         self.grid = heading_filter.grid(config.orientation_bins)  # the trig and Fourier tables, once
         self.cells = self.grid.cells
-        self.angles = (math.radians(config.heading_random_walk_deg), math.radians(config.available_std_deg),
+        self.angles = (math.radians(HEADING_RANDOM_WALK_DEG), math.radians(config.available_std_deg),
                        math.radians(config.facing_half_angle_deg))  # random walk, available spread, facing
         flat_yaw, flat_std, _ = heading_filter.summary(heading_filter.uniform(1, config.orientation_bins), 1.0)
         self.store = TrackStore(config.orientation_bins, np.array([flat_yaw[0], flat_std[0],
                                                                    self.angles[2] / math.pi, 0.0]))
         self.oriented_at = -math.inf  # when the heading grids were last updated (``orientation_interval_s``)
         self.horizons = np.asarray(config.horizons_s, float)
-        k = int(round(config.conflict_horizon_s / config.conflict_step_s))
-        self.conflict_times = np.linspace(0.0, k * config.conflict_step_s, k + 1)
+        k = int(round(config.conflict_horizon_s / CONFLICT_STEP_S))
+        self.conflict_times = np.linspace(0.0, k * CONFLICT_STEP_S, k + 1)
         self.predictor = JointPredictor(PathPredictor(self.horizons, acceleration_std),  # the path reported
                                         PathPredictor(self.conflict_times, acceleration_std))  # the corridor's steps
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
@@ -131,8 +131,8 @@ class BehaviourEstimator:
                               and np.vdot(P, P) < STATE_LIMIT[1] ** 2):
             x, P = _usable_states(peds, x, P, started)
         self.ego.add(frame.timestamp, frame.ego)
-        path = predict_ego_path(self.ego.poses[-1][1:], self.ego.motion(), self.conflict_times, self.config.ego_trend_s,
-                                self.config.max_ego_acceleration_mps2)
+        path = predict_ego_path(self.ego.poses[-1][1:], self.ego.motion(), self.conflict_times, EGO_TREND_S,
+                                MAX_EGO_ACCELERATION_MPS2)
         self.store.keep(live_ids)
         if len(peds) == 0:
             beh = dataclasses.replace(Behaviour.empty(self.horizons), conflict_horizon=float(self.conflict_times[-1]),
@@ -156,8 +156,8 @@ class BehaviourEstimator:
         state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
         store.state[rows] = state
         ahead, ahead_cov, steps, steps_cov = self.predictor(x, P)
-        if speed.max() > cfg.max_pedestrian_speed_mps:  # the corridor's positions at most that fast
-            scale = np.minimum(cfg.max_pedestrian_speed_mps / np.maximum(speed, 1e-9), 1.0)
+        if speed.max() > MAX_PEDESTRIAN_SPEED_MPS:  # the corridor's positions at most that fast
+            scale = np.minimum(MAX_PEDESTRIAN_SPEED_MPS / np.maximum(speed, 1e-9), 1.0)
             capped = x.copy()
             capped[:, 1::2] *= scale[:, None]
             steps = self.predictor.steps(capped)
@@ -171,7 +171,7 @@ class BehaviourEstimator:
         """Predict the heading grids of the store's ``rows`` (N,) to the frame's time, update them with
         the skeleton cue and the walking direction (``velocity``, N) and keep what they say
         (``TrackStore.held``, ``TrackStore.available``)."""
-        cfg, t, store, g = self.config, frame.timestamp, self.store, self.grid
+        t, store, g = frame.timestamp, self.store, self.grid
         walk, available_std, half = self.angles
         # every row of the store (the live tracks absent from this frame too) is predicted to now, so that
         # all share one time and the next prediction is one matrix product (a wrapped normal's spread
@@ -182,16 +182,28 @@ class BehaviourEstimator:
         cam_to_world = frame.cam_to_world
         rays = keypoint_rays(peds.keypoints[:, CUE_KEYPOINTS], self._inverse_intrinsics(frame), cam_to_world)
         cue = cue_from_rays(rays, peds.confidences, peds.positions, cam_to_world[:3, 3],
-                            float(frame.camera.intrinsics[0, 0]), cfg)
+                            float(frame.camera.intrinsics[0, 0]))
         cos_a = cue.toward @ g.cos_sin
-        moving, _ = walking_likelihood(velocity, g.cos_sin, cfg)
-        p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin, cfg) * moving)
+        moving, _ = walking_likelihood(velocity, g.cos_sin)
+        p = heading_filter.update(p, cue_likelihood(cue, cos_a, cue.right @ g.cos_sin) * moving)
         store.p[rows] = p
         yaw, yaw_std, available = heading_filter.summary(p, available_std)
         store.held[:, rows] = (yaw, yaw_std, facing.body_facing_from(p, cos_a, math.cos(half)),
                                facing.head_facing(cue, half))
         store.available[rows] = available
 
+
+#: How fast an unobserved heading spreads (degrees per square root of a second; a random walk): a
+#: gap of a few seconds leaves it unavailable. Set on the built-in scenes, not tuned.
+HEADING_RANDOM_WALK_DEG = 45.0
+#: Time step (s) of the corridor's prediction: a pedestrian at 1.4 m/s moves 0.14 m per step, well
+#: inside the corridor's 1.5 m half width.
+CONFLICT_STEP_S = 0.1
+#: The corridor's prediction takes a filtered velocity faster than this (m/s) at this speed, in its
+#: direction: a track whose range jumps can show 5-10 m/s, and people rarely run faster. Set for
+#: people, not tuned (3 and 6 m/s moved the conflict precision by under 1 point, docs/behaviour.md);
+#: the reported path is not changed.
+MAX_PEDESTRIAN_SPEED_MPS = 4.0
 
 #: Timestamps this close (s) to ``orientation_interval_s`` after the last orientation count as that far
 #: (frame times are not exact multiples of the frame period).

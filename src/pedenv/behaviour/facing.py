@@ -5,20 +5,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import ndtr
 
-from pedenv.behaviour import heading_filter
 from pedenv.behaviour.orientation import SkeletonCue
 
 
-def body_facing(p: np.ndarray, toward: np.ndarray, half_angle: float) -> np.ndarray:
-    """(N,) probability that the body faces the camera: the heading distribution p (N, B) within
-    ``half_angle`` radians of the direction to the camera ``toward`` (N, 2) world x-y."""
-    return heading_filter.probability_within(p, np.arctan2(toward[:, 1], toward[:, 0]), half_angle)
-
-
 def body_facing_from(p: np.ndarray, cos_a: np.ndarray, cos_half_angle: float) -> np.ndarray:
-    """:func:`body_facing` from ``cos(a)`` (N, B) of each cell (the cosine of its angle to the
-    direction to the camera): the cells within the half angle are those with ``cos(a) >=
-    cos(half_angle)``."""
+    """(N,) probability that the body faces the camera: the share of the heading distribution
+    p (N, B) within the half angle of the direction to the camera, from ``cos(a)`` (N, B) of each
+    cell (the cosine of its angle to that direction): the cells with ``cos(a) >= cos(half_angle)``."""
     return np.minimum((p * (cos_a >= cos_half_angle)).sum(axis=1), 1.0)
 
 

@@ -133,12 +133,5 @@ def summary(p: np.ndarray, available_std_rad: float) -> tuple[np.ndarray, np.nda
     return yaw, std, availability
 
 
-def probability_within(p: np.ndarray, centre: np.ndarray, half_angle: float) -> np.ndarray:
-    """(N,) the probability that the heading lies within ``half_angle`` radians of centre (N,)."""
-    cells = cell_centres(p.shape[1])
-    inside = np.abs(_wrap(cells[None, :] - centre[:, None])) <= half_angle
-    return np.clip((p * inside).sum(axis=1), 0.0, 1.0)
-
-
 def _wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2.0 * np.pi) - np.pi

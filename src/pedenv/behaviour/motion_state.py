@@ -9,8 +9,10 @@ import numpy as np
 from pedenv.behaviour.config import BehaviourConfig
 
 STANDING, WALKING, RUNNING = 0, 1, 2
-#: Names of the motion states, indexed by code.
-MOTION_STATE_NAMES = ("standing", "walking", "running")
+#: A filtered speed counts as above a threshold (``behaviour.walk_enter_mps``, ``run_enter_mps``;
+#: the walking direction's minimum speed) only when it exceeds it by this many of its standard
+#: deviations (1.5: about 93 % one-sided), so a standing person's filter noise does not start a walk.
+SPEED_SIGMAS = 1.5
 
 
 @dataclass(frozen=True)
@@ -66,13 +68,13 @@ def next_state(previous: np.ndarray, speed: np.ndarray, speed_std: np.ndarray, c
     """(N,) int8 states after this frame, from the previous ones (N,) (a new track: standing), the
     speed (N,) m/s and its standard deviation (N,) (finite: the estimator's states are).
 
-    Up a state once the speed exceeds its entry threshold by ``speed_sigmas`` standard
+    Up a state once the speed exceeds its entry threshold by :data:`SPEED_SIGMAS` standard
     deviations; down once the speed falls below the exit threshold. Between the two the
     state holds, so it does not flicker.
     """
     # the state may fall to the number of exit thresholds the speed stays above, and rises to the
     # number of entry thresholds it clearly exceeds (the entries lie above the exits)
-    low = speed - config.speed_sigmas * speed_std
+    low = speed - SPEED_SIGMAS * speed_std
     floor = np.add(low > config.walk_enter_mps, low > config.run_enter_mps, dtype=np.int8)  # entries < low
     ceiling = np.add(speed >= config.walk_exit_mps, speed >= config.run_exit_mps, dtype=np.int8)  # exits <= speed
     return np.maximum(np.minimum(previous, ceiling), floor).astype(np.int8, copy=False)

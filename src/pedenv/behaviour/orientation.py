@@ -18,13 +18,36 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.behaviour.config import BehaviourConfig
-from pedenv.behaviour.motion_state import VelocityStats, velocity_stats
+from pedenv.behaviour.motion_state import SPEED_SIGMAS, VelocityStats, velocity_stats
 from pedenv.body import EAR_FORWARD, HIP_HALF_WIDTH, NOSE_FORWARD, SHOULDER_HALF_WIDTH
 from pedenv.skeleton import CocoKeypoint as KP
 
 #: A cell's likelihood never falls below this share of the best one (an outlier never rules a heading out).
 LIKELIHOOD_FLOOR = 0.02
+#: The body height (metres) the expected shoulder, hip and face widths are scaled from: the adult
+#: mean of the anthropometric tables (:mod:`pedenv.synthetic.population`, the fused height prior).
+PERSON_HEIGHT_M = 1.72
+#: Pixel noise of one keypoint (1 sigma, u and v): turns the widths' pixel noise into the spread
+#: of their ratios; the fused method's prior (``fused.keypoint_pixel_std``) for the same networks.
+KEYPOINT_PIXEL_STD = 3.0
+#: Keypoints below this confidence are not used by the skeleton cue (the fused cues' default).
+MIN_KEYPOINT_CONFIDENCE = 0.3
+#: Spread of the apparent shoulder (hip) width as a share of the width expected at the person's
+#: range, beyond pixel noise (body shape, arms, a twisted torso); set on the built-in scenes'
+#: rendered skeletons and checked on the real KITTI persons (``benchmarks/behaviour_real.py``).
+WIDTH_RATIO_STD = 0.25
+#: Spread of the nose's sideways offset from the ears (or shoulders) as a share of the offset in
+#: full profile (head turns against the body, the keypoints' placement); set with the width's.
+FACE_OFFSET_STD = 0.5
+#: How often the pose network swaps a person's left and right: the weight of the mirrored angle in
+#: the width's likelihood, so front and back stay open until the face or the walk decides.
+LEFT_RIGHT_SWAP_PROBABILITY = 0.1
+#: How far (degrees, 1 sigma) the body may face away from its walking direction (sidesteps,
+#: looking around while walking).
+WALKING_DIRECTION_STD_DEG = 20.0
+#: The walking direction is a cue only above this filtered speed (m/s), below a slow walk
+#: (about 1.4 m/s), where a standing person's filter noise would point it anywhere.
+MIN_WALKING_SPEED_MPS = 0.5
 
 
 @dataclass(frozen=True)
@@ -59,13 +82,6 @@ _HALF_WIDTHS = np.array([SHOULDER_HALF_WIDTH, HIP_HALF_WIDTH])
 _AXES = (np.array([[0, 1], [1, 0]]), np.array([[-1.0, -1.0], [-1.0, 1.0]]))  # toward -> [bearing, right] columns
 
 
-def viewing_axes(positions: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``toward`` (N, 2) and ``right`` (N, 2) unit vectors of people at positions (N, 3) world,
-    metres, seen from a camera at ``origin`` (3,) (see the module docstring)."""
-    toward, _ = _toward(positions, origin)
-    return toward, toward[:, ::-1] * _AXES[1][1]
-
-
 def _toward(positions: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``toward`` (N, 2) unit and the ground distance (N,) metres from the camera."""
     d = origin[:2] - positions[:, :2]
@@ -77,18 +93,18 @@ def _toward(positions: np.ndarray, origin: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def skeleton_cue(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarray, origin: np.ndarray,
-                 focal_px: float, config: BehaviourConfig) -> SkeletonCue:
+                 focal_px: float) -> SkeletonCue:
     """The skeleton cue of N people.
 
     rays: (N, 17, 3) unit viewing rays of the keypoints, world frame. confidences: (N, 17).
     positions: (N, 3) the people's ground points, world, metres. origin: (3,) camera centre.
     focal_px: the camera's focal length in pixels (turns pixel noise into metres).
     """
-    return cue_from_rays(rays[:, CUE_KEYPOINTS], confidences, positions, origin, focal_px, config)
+    return cue_from_rays(rays[:, CUE_KEYPOINTS], confidences, positions, origin, focal_px)
 
 
 def cue_from_rays(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarray, origin: np.ndarray,
-                  focal_px: float, config: BehaviourConfig) -> SkeletonCue:
+                  focal_px: float) -> SkeletonCue:
     """:func:`skeleton_cue` from the viewing rays (N, 7, 3), world frame, of the
     :data:`CUE_KEYPOINTS` only (the others are not needed; the rays need not be unit vectors);
     confidences (N, 17) of all keypoints."""
@@ -101,37 +117,36 @@ def cue_from_rays(rays: np.ndarray, confidences: np.ndarray, positions: np.ndarr
     # the sideways offset (metres, N x 7) where the ray meets the person's range, less the camera's
     # own (which cancels in every difference taken below)
     lateral = (rng[:, None] / np.maximum(along, 0.05)) * proj[..., 1]
-    ok = (confidences[:, CUE_KEYPOINTS] >= config.min_keypoint_confidence) & (along > 0.05)
-    pixel_m = config.keypoint_pixel_std * rng / focal_px  # one keypoint's noise in metres at the range
-    width_m = (2.0 * config.person_height_m) * _HALF_WIDTHS  # shoulders, hips
+    ok = (confidences[:, CUE_KEYPOINTS] >= MIN_KEYPOINT_CONFIDENCE) & (along > 0.05)
+    pixel_m = KEYPOINT_PIXEL_STD * rng / focal_px  # one keypoint's noise in metres at the range
+    width_m = (2.0 * PERSON_HEIGHT_M) * _HALF_WIDTHS  # shoulders, hips
     both = ok[:, 0:2] & ok[:, 2:4]
     ratios = np.where(both, (lateral[:, 0:2] - lateral[:, 2:4]) / width_m, 0.0)
-    weights = np.where(both, 1.0 / (config.width_ratio_std**2 + 2.0 * (pixel_m[:, None] / width_m) ** 2), 0.0)
+    weights = np.where(both, 1.0 / (WIDTH_RATIO_STD**2 + 2.0 * (pixel_m[:, None] / width_m) ** 2), 0.0)
     w = weights[:, 0] + weights[:, 1]  # (a reduction over a last axis of 2 is slow)
     width_ok = w > 0
     weighted = ratios * weights
     w_safe = np.maximum(w, 1e-12)
     width = np.minimum(np.maximum((weighted[:, 0] + weighted[:, 1]) / w_safe, -1.2), 1.2)
     width_std = np.where(width_ok, 1.0 / np.sqrt(w_safe), 1.0)
-    face, face_std, face_ok = _face_offset(lateral, ok, pixel_m, config)
+    face, face_std, face_ok = _face_offset(lateral, ok, pixel_m)
     seen = np.minimum(np.minimum(confidences[:, KP.NOSE], confidences[:, KP.LEFT_EYE]), confidences[:, KP.RIGHT_EYE])
     face_seen = np.minimum(np.fmax(seen, 0.0), 1.0)  # NaN -> 0
     return SkeletonCue(toward, toward[:, ::-1] * _AXES[1][1], width, width_std, width_ok, face, face_std, face_ok,
                        face_seen)
 
 
-def _face_offset(lateral: np.ndarray, ok: np.ndarray, pixel_m: np.ndarray,
-                 config: BehaviourConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _face_offset(lateral: np.ndarray, ok: np.ndarray, pixel_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The nose's sideways offset ratio (N,) from the ears' midpoint (both ears seen) or else
     the shoulders' midpoint, its spread (N,) and where it exists (N,) bool. lateral, ok: (N, 7)
     in the order of :data:`CUE_KEYPOINTS`."""
-    h = config.person_height_m
+    h = PERSON_HEIGHT_M
     ears = ok[:, 5] & ok[:, 6]
     face_ok = ok[:, 4] & (ears | (ok[:, 0] & ok[:, 2]))
     mid = 0.5 * np.where(ears, lateral[:, 5] + lateral[:, 6], lateral[:, 0] + lateral[:, 2])
     full = np.where(ears, (NOSE_FORWARD - EAR_FORWARD) * h, NOSE_FORWARD * h)  # the offset in full profile, metres
     face = np.where(face_ok, np.minimum(np.maximum((lateral[:, 4] - mid) / full, -1.5), 1.5), 0.0)
-    std = np.sqrt(config.face_offset_std**2 + 1.5 * (pixel_m / full) ** 2)
+    std = np.sqrt(FACE_OFFSET_STD**2 + 1.5 * (pixel_m / full) ** 2)
     return face, std, face_ok
 
 
@@ -143,19 +158,19 @@ def keypoint_rays(keypoints: np.ndarray, inverse_intrinsics: np.ndarray, cam_to_
     return keypoints @ m[:, :2].T + m[:, 2]
 
 
-def skeleton_likelihood(cue: SkeletonCue, cells: np.ndarray, config: BehaviourConfig) -> np.ndarray:
+def skeleton_likelihood(cue: SkeletonCue, cells: np.ndarray) -> np.ndarray:
     """(N, B) likelihood of the heading cells ``cells`` (B,) radians, world, from the skeleton cue.
 
     The width ratio constrains ``cos(a)`` (a mixture with the mirrored ratio for a swap of
     left and right), the face offset ``sin(a)``; a row with neither is flat (all ones).
     """
     cos_sin = np.stack([np.cos(cells), np.sin(cells)])
-    return cue_likelihood(cue, cue.toward @ cos_sin, cue.right @ cos_sin, config)
+    return cue_likelihood(cue, cue.toward @ cos_sin, cue.right @ cos_sin)
 
 
-def cue_likelihood(cue: SkeletonCue, cos_a: np.ndarray, sin_a: np.ndarray, config: BehaviourConfig) -> np.ndarray:
+def cue_likelihood(cue: SkeletonCue, cos_a: np.ndarray, sin_a: np.ndarray) -> np.ndarray:
     """:func:`skeleton_likelihood` from ``cos(a)`` and ``sin(a)`` (N, B) of each cell."""
-    p = config.left_right_swap_probability
+    p = LEFT_RIGHT_SWAP_PROBABILITY
     k = np.where(cue.width_ok, -0.5 / cue.width_std**2, 0.0)[:, None]  # a row without the cue: exp(0)
     width = cue.width[:, None]
     a, b, c = cos_a - width, cos_a + width, sin_a - cue.face[:, None]
@@ -165,25 +180,25 @@ def cue_likelihood(cue: SkeletonCue, cos_a: np.ndarray, sin_a: np.ndarray, confi
     return _floored(like)
 
 
-def motion_likelihood(velocities: np.ndarray, velocity_covariances: np.ndarray, cells: np.ndarray,
-                      config: BehaviourConfig) -> tuple[np.ndarray, np.ndarray]:
+def motion_likelihood(velocities: np.ndarray, velocity_covariances: np.ndarray, cells: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
     """(N, B) likelihood of the cells from the walking direction, and (N,) bool where it is a cue.
 
     velocities: (N, 2) world x-y, m/s; velocity_covariances: (N, 2, 2) (m/s)^2. The walking
-    direction counts once the speed is above ``min_walking_speed_mps`` and ``speed_sigmas``
-    standard deviations; its spread is the direction's own plus ``walking_direction_std_deg``.
+    direction counts once the speed is above :data:`MIN_WALKING_SPEED_MPS` and
+    :data:`~pedenv.behaviour.motion_state.SPEED_SIGMAS` standard deviations; its spread is the
+    direction's own plus :data:`WALKING_DIRECTION_STD_DEG`.
     """
     v = velocity_stats(velocities, velocity_covariances)
-    return walking_likelihood(v, np.stack([np.cos(cells), np.sin(cells)]), config)
+    return walking_likelihood(v, np.stack([np.cos(cells), np.sin(cells)]))
 
 
-def walking_likelihood(v: VelocityStats, cos_sin: np.ndarray, config: BehaviourConfig
-                       ) -> tuple[np.ndarray, np.ndarray]:
+def walking_likelihood(v: VelocityStats, cos_sin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`motion_likelihood` from the velocities' :class:`VelocityStats` and the cells'
     cosines and sines (2, B)."""
     speed = v.speed
-    use = (speed > config.min_walking_speed_mps) & (speed > config.speed_sigmas * np.sqrt(np.maximum(v.var_along, 0.0)))
-    spread = math.radians(config.walking_direction_std_deg) ** 2 + v.var_across() / np.maximum(speed, 1e-9) ** 2
+    use = (speed > MIN_WALKING_SPEED_MPS) & (speed > SPEED_SIGMAS * np.sqrt(np.maximum(v.var_along, 0.0)))
+    spread = math.radians(WALKING_DIRECTION_STD_DEG) ** 2 + v.var_across() / np.maximum(speed, 1e-9) ** 2
     kappa = np.where(use, np.minimum(1.0 / np.maximum(spread, 1e-6), 1e4), 0.0)[:, None]  # unused: exp(0)
     return _floored(np.exp(kappa * (v.unit() @ cos_sin - 1.0))), use
 

@@ -100,8 +100,8 @@ def real_orientation(samples: Path, detections: Path, config: Config) -> list[di
         origin = frame.cam_to_world[:3, 3]
         positions = np.column_stack([xy, np.full(len(xy), frame.ego.translation[2])])
         rays = pixel_rays(det.keypoints, frame.camera.intrinsics, frame.cam_to_world)
-        cue = skeleton_cue(rays, det.confidences, positions, origin, float(frame.camera.intrinsics[0, 0]), cfg)
-        p = heading_filter.update(heading_filter.uniform(len(det), len(cells)), skeleton_likelihood(cue, cells, cfg))
+        cue = skeleton_cue(rays, det.confidences, positions, origin, float(frame.camera.intrinsics[0, 0]))
+        p = heading_filter.update(heading_filter.uniform(len(det), len(cells)), skeleton_likelihood(cue, cells))
         yaw, std, available = heading_filter.summary(p, np.radians(cfg.available_std_deg))
         camera_yaw = np.arctan2(cue.toward[:, 1], cue.toward[:, 0])
         for d, g in pairs:

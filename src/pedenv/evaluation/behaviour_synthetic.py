@@ -22,6 +22,7 @@ import time
 import numpy as np
 
 from pedenv.behaviour.config import BehaviourConfig
+from pedenv.behaviour.conflict import CONFLICT_PROBABILITY
 from pedenv.config import Config
 from pedenv.geometry import wrap_angle
 from pedenv.model import PedestrianEnvironmentModel
@@ -105,7 +106,7 @@ def run_scene(scene: Scene, seed: int, profile: str | None, config: Config, rows
             if ego_future:
                 entry = true_entry(ego_xy, float(scene.frames[k + step].ego.yaw), ped_path[gid], cfg)
                 row.update(true_event=entry >= 0, true_time=entry / 10.0 if entry >= 0 else None,
-                           predicted_event=bool(b.conflict_probability[d] >= cfg.conflict_probability),
+                           predicted_event=bool(b.conflict_probability[d] >= CONFLICT_PROBABILITY),
                            predicted_time=float(b.conflict_time[d]),
                            turn_ahead=bool(rates[k] < STRAIGHT_RADPS and rates[k:k + step + 1].max() > TURNING_RADPS))
             rows.append(row)

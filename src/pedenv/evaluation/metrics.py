@@ -77,10 +77,6 @@ def calibration(mahalanobis: np.ndarray) -> dict:
             "within_2sigma": float(np.mean(m <= SIGMA_LEVELS[1])), "mean_nees": float(np.mean(m**2))}
 
 
-#: The mean NEES of a calibrated 2D position estimate (the dimension).
-NEES_IDEAL_2D = 2.0
-
-
 @dataclass(frozen=True)
 class Metrics:
     """Everything ``metrics.json`` holds."""

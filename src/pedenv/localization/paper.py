@@ -29,6 +29,16 @@ from pedenv.tracking.table import ColumnGroup
 TRIANGULATION = "triangulation"
 HEIGHT_FIRST = "height:first-observation"
 HEIGHT_PARALLEL = "height:no-intersection"
+#: Rays closer to parallel than this angle (radians) do not intersect: the position falls back
+#: to the height-based distance. A numerical guard against dividing by ``sin`` of the angle,
+#: not a tuned value (the paper gives none).
+MIN_PARALLAX_RAD = 1e-6
+#: One position measurement's standard deviation per axis (the Kalman filter's R) is
+#: ``MEASUREMENT_STD_M + MEASUREMENT_STD_REL * distance`` metres. The paper gives none: set on
+#: the built-in scenes with the filter's other settings (the paper's relative errors, about
+#: 16 %, make 0.1 per metre the right order).
+MEASUREMENT_STD_M = 0.5
+MEASUREMENT_STD_REL = 0.1
 
 
 @dataclass(frozen=True)
@@ -102,7 +112,7 @@ def initial_positions(rays: np.ndarray, origin: np.ndarray, prev_rays: np.ndarra
     Returns ``(centres (N, 3), ok (N,) bool)``; rows with ``ok`` False are undefined.
     """
     s, t, mid, parallel = closest_points(origin, rays, prev_origins[:, None, :], prev_rays,
-                                         min_sin=np.sin(config.min_parallax_rad))
+                                         min_sin=np.sin(MIN_PARALLAX_RAD))
     with np.errstate(invalid="ignore"):
         valid = usable & ~parallel & (s > 0) & (t > 0) & (s < config.max_distance_m) & (t < config.max_distance_m)
     keep = keep_most_confident(valid, confidences, config.low_confidence_fraction)
@@ -253,8 +263,8 @@ class PaperLocator:
 
     Its memory (``columns``) is each track's previous observation (:class:`PaperMemory`).
     Its measurement covariance is isotropic:
-    ``(measurement_std_m + measurement_std_rel * distance)^2`` per axis
-    (:class:`~pedenv.config.PaperConfig`); the paper gives none.
+    ``(MEASUREMENT_STD_M + MEASUREMENT_STD_REL * distance)^2`` per axis
+    (:data:`MEASUREMENT_STD_M`, :data:`MEASUREMENT_STD_REL`); the paper gives none.
     """
 
     #: A person with no seen keypoint cannot be placed (the box alone put them 479-500 m
@@ -275,6 +285,6 @@ class PaperLocator:
                                  camera, cfg)
         mem.rays[rows], mem.centre_rays[rows], mem.confidences[rows] = geo.rays, geo.centre_rays, det.confidences
         mem.origins[rows], mem.seen[rows] = geo.origin, True
-        var = (cfg.measurement_std_m + cfg.measurement_std_rel * est.distances) ** 2
+        var = (MEASUREMENT_STD_M + MEASUREMENT_STD_REL * est.distances) ** 2
         skeleton = keypoints_on_plane(geo.rays, geo.origin, est.directions, est.distances)
         return Measurement(est.positions, var[:, None, None] * np.eye(2), est.sources, skeleton)

@@ -27,6 +27,11 @@ from pedenv.tracking.table import TrackTable
 
 #: Weight of the newest displacement in a track's image velocity (exponential smoothing).
 MOTION_SMOOTHING = 0.5
+#: What a low-band detection (``tracking.low_score_threshold``) adds to the association cost
+#: (GIoU lies in [-1, 1]): a sure detection wins a track over a weak one that overlaps it up to
+#: 0.5 GIoU better; a weak one still takes a track no sure detection overlaps. Set with the
+#: two-band association on KITTI 0016 (frame 7), not tuned further.
+LOW_SCORE_COST = 0.5
 
 
 class IdCounter:
@@ -122,7 +127,7 @@ class Tracker:
         if view is not None and memory and self.camera_trusted and len(fresh) and len(remembered) + len(free):
             # the remembered tracks and the live ones the image left without a detection
             candidates = np.concatenate([free, remembered])
-            m = recall_remembered(view, boxes[fresh], self.table.filter, candidates, cfg.memory_gate)
+            m = recall_remembered(view, boxes[fresh], self.table.filter, candidates)
             pairs.append(np.column_stack([fresh[m[:, 0]], candidates[m[:, 1]]]))
             fresh = np.delete(fresh, m[:, 0])
             free = free[~np.isin(free, candidates[m[:, 1]])]
@@ -193,13 +198,13 @@ class Tracker:
         stage = np.concatenate([first, second])  # one assignment; the low band pays its cost
         live = np.flatnonzero(~tr.lost)
         allowed, extra = ground_terms(boxes, self.table.filter, view, cfg)
-        self.camera_trusted = allowed is None or not camera_disagrees(allowed[first], boxes[first], tr.boxes, live, cfg)
+        self.camera_trusted = allowed is None or not camera_disagrees(allowed[first], boxes[first], tr.boxes, live)
         if not self.camera_trusted:  # a wrong calibration: the gate abstains, the boxes decide
             allowed, extra = None, None
         sub = np.ix_(stage, live)
         extra = None if extra is None else extra[sub]
         if len(second):
-            band = np.repeat([0.0, cfg.low_score_cost], [len(first), len(second)])[:, None]
+            band = np.repeat([0.0, LOW_SCORE_COST], [len(first), len(second)])[:, None]
             extra = np.broadcast_to((0.0 if extra is None else extra) + band, (len(stage), len(live)))
         m, free_rows, unmatched = associate(boxes[stage], tr.boxes[live], cfg.giou_threshold, cfg.max_height_ratio,
                                             None if allowed is None else allowed[sub], extra)

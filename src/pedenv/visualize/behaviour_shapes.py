@@ -15,7 +15,7 @@ HEADING_ARROW_M = 1.2
 #: Colours (RGB 0-255): heading, predicted path, conflict.
 HEADING_RGB, PATH_RGB, CONFLICT_RGB = (250, 170, 20), (120, 60, 200), (230, 20, 20)
 #: A pedestrian is drawn in conflict when its probability reaches this (the estimator's own threshold
-#: is ``Config.behaviour.conflict_probability``; the state carries only the probability).
+#: is :data:`pedenv.behaviour.conflict.CONFLICT_PROBABILITY`; the state carries only the probability).
 CONFLICT_DRAW_PROBABILITY = 0.5
 
 

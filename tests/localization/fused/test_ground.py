@@ -3,6 +3,7 @@ import pytest
 
 from pedenv.config import FusedConfig
 from pedenv.geometry import pixel_rays
+from pedenv.localization.fused import ground as ground_module
 from pedenv.localization.fused.ground import ground_cue, plane_intersection
 from pedenv.skeleton import ANKLE_KEYPOINTS
 from pedenv.skeleton import CocoKeypoint as KP
@@ -15,6 +16,13 @@ FAR = FusedConfig(ground_max_distance_m=60.0, ankle_keypoint_offset_m=0.0)
 
 def run_ground(frame, config=FAR, noise_px=None):
     return ground_cue(frame, skeletons_of(frame, config, noise_px), config)
+
+
+def set_model(monkeypatch, **constants):
+    """The ground cue's model constants (``ROAD_HEIGHT_STD_M=0.0``, ...) changed for one test."""
+    for name, value in constants.items():
+        assert hasattr(ground_module, name), name
+        monkeypatch.setattr(ground_module, name, value)
 
 
 @pytest.mark.parametrize("pitch, roll", [(0.0, 0.0), (0.03, 0.0), (-0.03, 0.02)])
@@ -39,17 +47,10 @@ def test_ground_variance_grows_fast_with_distance():
     assert np.all(along > across)  # wide along the ray, tight across it
 
 
-def test_pixel_jacobian_matches_finite_differences():
-    config = FusedConfig(
-        ground_max_distance_m=60.0,
-        road_height_std_m=0.0,
-        road_curvature_std_per_m=0.0,
-        ankle_height_std_m=0.0,
-        lateral_std_m=0.0,
-        stance_std_m=0.0,
-        keypoint_pixel_std=1.0,
-        ankle_keypoint_offset_m=0.0,
-    )
+def test_pixel_jacobian_matches_finite_differences(monkeypatch):
+    set_model(monkeypatch, ROAD_HEIGHT_STD_M=0.0, ROAD_CURVATURE_STD_PER_M=0.0, ANKLE_HEIGHT_STD_M=0.0,
+              LATERAL_STD_M=0.0, STANCE_STD_M=0.0)
+    config = FusedConfig(ground_max_distance_m=60.0, keypoint_pixel_std=1.0, ankle_keypoint_offset_m=0.0)
     frame = make_frame(np.array([[15.0, 2.0, 0.0]]), pitch=0.02, roll=0.01)
     cue = run_ground(frame, config, noise_px=1.0)
     kp = frame.detections.keypoints[0, list(ANKLE_KEYPOINTS)]
@@ -68,32 +69,36 @@ def test_pixel_jacobian_matches_finite_differences():
     assert np.allclose(cue.bias_covariances, 0.0)  # no road spread: nothing repeats per person
 
 
-def test_the_road_height_is_the_per_person_part():
-    cue = run_ground(make_frame(np.array([[12.0, 2.0, 0.0]])), FusedConfig(road_height_std_m=0.2, lateral_std_m=0.0))
+def test_the_road_height_is_the_per_person_part(monkeypatch):
+    set_model(monkeypatch, ROAD_HEIGHT_STD_M=0.2, LATERAL_STD_M=0.0)
+    cue = run_ground(make_frame(np.array([[12.0, 2.0, 0.0]])), FusedConfig())
     vals, vecs = np.linalg.eigh(cue.bias_covariances[0])
     assert vals[0] < 1e-9 * vals[1]  # along the ray only
     assert abs(vecs[:, 1] @ np.array([12.0, 0.5]) / np.hypot(12.0, 0.5)) > 0.99
 
 
-def test_where_the_feet_stand_against_the_body_is_the_per_person_part():
+def test_where_the_feet_stand_against_the_body_is_the_per_person_part(monkeypatch):
     """The lateral spread (lean, stance) repeats over a gait cycle: the filter must not
     average it away, so it is per-person, not frame-to-frame (near people's sideways
     errors were 1.8x their reported variance on the terrain scenes with it frame-to-frame)."""
     frame = make_frame(np.array([[12.0, 2.0, 0.0]]))
-    plain = run_ground(frame, FusedConfig(road_height_std_m=0.0, road_curvature_std_per_m=0.0, lateral_std_m=0.0))
-    lateral = run_ground(frame, FusedConfig(road_height_std_m=0.0, road_curvature_std_per_m=0.0, lateral_std_m=0.05))
+    set_model(monkeypatch, ROAD_HEIGHT_STD_M=0.0, ROAD_CURVATURE_STD_PER_M=0.0, LATERAL_STD_M=0.0)
+    plain = run_ground(frame, FusedConfig())
+    set_model(monkeypatch, LATERAL_STD_M=0.05)
+    lateral = run_ground(frame, FusedConfig())
     np.testing.assert_allclose(lateral.covariances, plain.covariances)
     np.testing.assert_allclose(lateral.bias_covariances[0], 0.05**2 * np.eye(2), atol=1e-12)
 
 
 @pytest.mark.parametrize("hidden, share", [((), 0.25), ((KP.LEFT_ANKLE,), 1.0)])
-def test_a_lone_standing_foot_may_lie_half_a_step_from_the_body(hidden, share):
-    """Frame to frame, the ground point of one standing foot spreads by stance_std_m each way
+def test_a_lone_standing_foot_may_lie_half_a_step_from_the_body(hidden, share, monkeypatch):
+    """Frame to frame, the ground point of one standing foot spreads by STANCE_STD_M each way
     about the body's; the midpoint of two standing feet by half of it."""
     frame = make_frame(np.array([[12.0, 2.0, 0.0]]), hidden=hidden)
-    base = FusedConfig(stance_std_m=0.0, ankle_height_std_m=0.0)
-    plain = run_ground(frame, base)
-    stance = run_ground(frame, FusedConfig(stance_std_m=0.14, ankle_height_std_m=0.0))
+    set_model(monkeypatch, STANCE_STD_M=0.0, ANKLE_HEIGHT_STD_M=0.0)
+    plain = run_ground(frame, FusedConfig())
+    set_model(monkeypatch, STANCE_STD_M=0.14)
+    stance = run_ground(frame, FusedConfig())
     np.testing.assert_allclose(stance.covariances[0] - plain.covariances[0], share * 0.14**2 * np.eye(2), atol=1e-12)
     np.testing.assert_allclose(stance.bias_covariances, plain.bias_covariances)
 

@@ -61,8 +61,7 @@ def test_bad_input_never_gives_nan():
     ({"cues": ()}, "at least one"),
     ({"person_height_std_m": 0.0}, "person_height_std_m"),
     ({"history_length": 0}, "history_length"),
-    ({"gate_probability": 1.0}, "gate_probability"),
-    ({"stance_std_m": -0.1}, "fused.stance_std_m"),
+    ({"keypoint_span_std": -0.1}, "fused.keypoint_span_std"),
 ])
 def test_config_is_range_checked(values, message):
     with pytest.raises(ValueError, match=message):

@@ -9,6 +9,8 @@ import pytest
 from pedenv.config import FusedConfig
 from pedenv.errors import InputError
 from pedenv.geometry import invert_transform, project
+from pedenv.localization.fused import ground as ground_module
+from pedenv.localization.fused.cue import LATERAL_STD_M
 from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER
 from pedenv.localization.fused.ground import ankle_height, box_bottom_ranges, ground_cue, static_ground_variance
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -56,11 +58,11 @@ def test_static_variance_is_the_foot_points_alone():
     # the per-person part along the ray holds the ground's unevenness only, not the road's height and curvature
     assert static.bias_covariances[0, 0, 0] < vehicle.bias_covariances[0, 0, 0]
     no_ground = run(static_frame("static"), dataclasses.replace(config, static_ground_height_std_m=0.0))
-    np.testing.assert_allclose(no_ground.bias_covariances[:, 1, 1], config.lateral_std_m**2, rtol=0.05)
+    np.testing.assert_allclose(no_ground.bias_covariances[:, 1, 1], LATERAL_STD_M**2, rtol=0.05)
     along = np.sqrt(static.covariances[:, 0, 0] + static.bias_covariances[:, 0, 0]) / RANGES
     # near, the stance (0.14 m) dominates; beyond, the pixel noise's r sigma / h grows with range
     assert np.all(np.diff(along[1:]) > 0)
-    assert along[-1] <= config.static_ground_max_relative_std
+    assert along[-1] <= ground_module.STATIC_GROUND_MAX_RELATIVE_STD
 
 
 @pytest.mark.parametrize("noise_px, limit, valid", [
@@ -71,9 +73,10 @@ def test_static_variance_is_the_foot_points_alone():
     (3.0, 0.015, [True, True, False, False]),
     (3.0, 0.01, [True, False, False, False]),
 ])
-def test_static_range_follows_the_foot_points_variance(noise_px, limit, valid):
+def test_static_range_follows_the_foot_points_variance(noise_px, limit, valid, monkeypatch):
     # 6 m up: the pixel noise alone spreads the cut by about r^2 sigma / (f h), 1.6 % of 120 m at 1 px
-    cue = run(static_frame("static"), FusedConfig(static_ground_max_relative_std=limit), noise_px)
+    monkeypatch.setattr(ground_module, "STATIC_GROUND_MAX_RELATIVE_STD", limit)
+    cue = run(static_frame("static"), FusedConfig(), noise_px)
     assert cue.valid.tolist() == valid
     assert all(r == "beyond-range" for r in cue.reason_names[~cue.valid])
 
@@ -134,7 +137,7 @@ def test_ankle_offset_spread_widens_only_the_static_ground(mount):
     spread = run(frame, dataclasses.replace(EXACT, ankle_keypoint_offset_std_m=0.042))
     added = np.trace(spread.bias_covariances - flat.bias_covariances, axis1=1, axis2=2)
     np.testing.assert_allclose(spread.positions, flat.positions)
-    if mount == "vehicle":  # the road's height under the person (road_height_std_m) holds it there
+    if mount == "vehicle":  # the road's height under the person (ROAD_HEIGHT_STD_M) holds it there
         np.testing.assert_allclose(added, 0.0, atol=1e-12)
         return
     # a person's ankle keypoint 0.042 m off the offset moves the cut by 0.042 r / (h - ankle) along the ray

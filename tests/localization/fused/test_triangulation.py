@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from pedenv.config import FusedConfig
+from pedenv.localization.fused import triangulation
 from pedenv.localization.fused.history import TrackHistory, ray_terms
 from pedenv.localization.fused.triangulation import RaysNow, triangulate, triangulation_cue
 
@@ -32,15 +33,22 @@ def run(observations, config=DEFAULT_FUSED, start=None, tri=False):
     begin = now.origin + (r[:, None] / now.horizontal)[..., None] * now.rays
     terms, _ = ray_terms(now.rays, now.origin)
     result = triangulate(RaysNow(now.rays, terms, now.usable, now.origin, t, now.angle_std), begin, np.ones(n, bool),
-                         hist.of(rows), config)
-    return result if tri else triangulation_cue(result, now, config)
+                         hist.of(rows))
+    return result if tri else triangulation_cue(result, now)
 
 
 def total(cue):
     return cue.covariances + cue.bias_covariances
 
 
-def test_standing_pedestrians_from_a_driving_pitched_ego():
+def still_walkers(monkeypatch, lateral=True):
+    """The cue's model with no walker drift (and, ``lateral`` False, no sideways body spread)."""
+    monkeypatch.setattr(triangulation, "PEDESTRIAN_SPEED_STD_MPS", 0.0)
+    if not lateral:
+        monkeypatch.setattr(triangulation, "LATERAL_STD_M", 0.0)
+
+
+def test_standing_pedestrians_from_a_driving_pitched_ego(monkeypatch):
     ground = np.array([[25.0, 4.0, 0.3], [30.0, -6.0, -0.2]])
     obs = observe(ground, ego_xs=np.arange(6) * 1.4, times=np.arange(6) * 0.1, pitch=0.02)
     cue = run(obs, start=ground[:, :2] * 1.05)
@@ -49,7 +57,8 @@ def test_standing_pedestrians_from_a_driving_pitched_ego():
     ranges = np.linalg.norm(ground[:, :2] - [7.0, 0.0], axis=1)
     # a pedestrian who may have walked (default) leaves the range loose, one known to stand does not
     sd_walk = np.sqrt(np.linalg.eigvalsh(total(cue))[:, 1])
-    still = run(obs, FusedConfig(pedestrian_speed_std_mps=0.0, lateral_std_m=0.0), start=ground[:, :2])
+    still_walkers(monkeypatch, lateral=False)
+    still = run(obs, start=ground[:, :2])
     sd_still = np.sqrt(np.linalg.eigvalsh(total(still))[:, 1])
     assert np.all(sd_still < 0.06 * ranges)
     assert np.all(sd_walk > 2 * sd_still)
@@ -58,9 +67,10 @@ def test_standing_pedestrians_from_a_driving_pitched_ego():
     assert np.all(np.linalg.eigvalsh(cue.bias_covariances)[:, 1] > np.linalg.eigvalsh(cue.covariances)[:, 1])
 
 
-def test_more_baseline_tightens_the_estimate():
+def test_more_baseline_tightens_the_estimate(monkeypatch):
     ground = np.array([[30.0, 5.0, 0.0]])
-    still = FusedConfig(pedestrian_speed_std_mps=0.0, history_length=10)
+    still_walkers(monkeypatch)
+    still = FusedConfig(history_length=10)
     short = run(observe(ground, ego_xs=[0.0, 2.5], times=[0.0, 0.1]), still, start=ground[:, :2])
     long = run(observe(ground, ego_xs=np.linspace(0.0, 5.0, 8), times=np.arange(8) * 0.1), still, start=ground[:, :2])
     assert short.valid[0] and long.valid[0]
@@ -71,7 +81,8 @@ def test_a_possible_walker_leaves_the_range_as_loose_as_the_drift_over_the_paral
     # the drift of a walker moves all past rays together: more rays do not average it out
     ground = np.array([[30.0, 5.0, 0.0]])
     obs = observe(ground, ego_xs=np.linspace(0.0, 5.0, 8), times=np.arange(8) * 0.1)
-    cue = run(obs, FusedConfig(pedestrian_speed_std_mps=0.8, history_length=10), start=ground[:, :2])
+    assert triangulation.PEDESTRIAN_SPEED_STD_MPS == 0.8
+    cue = run(obs, FusedConfig(history_length=10), start=ground[:, :2])
     ray_now = ground[0, :2] - [5.0, 0.0]
     ray_then = ground[0, :2] - [0.0, 0.0]
     sin = abs(np.cross(ray_now, ray_then)) / (np.linalg.norm(ray_now) * np.linalg.norm(ray_then))
@@ -101,19 +112,19 @@ def test_triangulation_declines(ego_xs, times, reason):
     assert not cue.valid[0] and cue.reason_names[0] == reason
 
 
-def test_no_parallax_straight_ahead():
+def test_no_parallax_straight_ahead(monkeypatch):
     # a pedestrian straight ahead on the ego's line of travel: the rays stay parallel
-    config = FusedConfig(min_parallax_rad=0.05)
+    monkeypatch.setattr(triangulation, "MIN_PARALLAX_RAD", 0.05)
     ground = np.array([[40.0, 0.0, 0.0]])
-    cue = run(observe(ground, ego_xs=[0.0, 1.0], times=[0.0, 0.1]), config, start=ground[:, :2])
+    cue = run(observe(ground, ego_xs=[0.0, 1.0], times=[0.0, 0.1]), start=ground[:, :2])
     assert not cue.valid[0] and cue.reason_names[0] == "no-parallax"
 
 
-def test_every_keypoint_of_a_standing_person_is_triangulated():
+def test_every_keypoint_of_a_standing_person_is_triangulated(monkeypatch):
     ground = np.array([[15.0, 4.0, 0.0]])
     frames = [make_frame(ground, ego_xyz=(x, 0.0, 0.0), timestamp=0.1 * i) for i, x in enumerate(np.arange(6) * 0.8)]
-    tri = run([(skeletons_of(f), f.timestamp) for f in frames], FusedConfig(pedestrian_speed_std_mps=0.0),
-              start=ground[:, :2], tri=True)
+    still_walkers(monkeypatch)
+    tri = run([(skeletons_of(f), f.timestamp) for f in frames], start=ground[:, :2], tri=True)
     from fused_frames import upright_skeletons
     assert tri.good.all()
     np.testing.assert_allclose(tri.points, upright_skeletons(ground, [1.72]), atol=0.02)

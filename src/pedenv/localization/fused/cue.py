@@ -24,6 +24,14 @@ from pedenv.skeleton import ANKLE_KEYPOINTS
 REASONS = ("", "no-ankles", "camera-below-road", "above-horizon", "beyond-range", "no-keypoints", "short-extent",
            "inconsistent", "no-history", "no-baseline", "no-parallax", "unplaced", "degenerate")
 REASON_CODE = {name: code for code, name in enumerate(REASONS)}
+#: Spread (metres, 1 sigma) of a person's ground point across the ray beyond pixel noise
+#: (body lean, where the feet stand against the body's centre, the keypoints' placement): the
+#: fused method's sideways errors on the real KITTI and nuScenes persons (RMS 0.051 m at 9-16 m,
+#: where the measured keypoint jitter, under 1 px, adds about 0.01 m). It repeats over a gait
+#: cycle and for the person, so every cue adds it to its per-person covariance (the Kalman
+#: filter does not average it away); the fused covariance across the ray is floored at the
+#: sharpest cue's, since all cues share it.
+LATERAL_STD_M = 0.05
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ lift, the stance, the body's spread, ``static_ground_height_std_m``) plus the ca
 own error (an estimated camera's height and tilt, ``static_camera_height_std_m`` and
 ``static_camera_tilt_std_deg``: a tilt error moves the cut by ``r^2 / h`` times it) and declines
 ``beyond-range`` only where that variance along the ray exceeds
-``static_ground_max_relative_std`` of the range, where the ray grazes the ground and the
+:data:`STATIC_GROUND_MAX_RELATIVE_STD` of the range, where the ray grazes the ground and the
 linearized intersection no longer holds.
 """
 
@@ -33,7 +33,7 @@ import numpy as np
 
 from pedenv.config import FusedConfig
 from pedenv.geometry import inverse_intrinsics
-from pedenv.localization.fused.cue import CueEstimate, FrameSkeletons, first_reason, symmetric_2x2
+from pedenv.localization.fused.cue import LATERAL_STD_M, CueEstimate, FrameSkeletons, first_reason, symmetric_2x2
 from pedenv.localization.fused.height import KEYPOINT_HEIGHT_FRACTION, LONE_ANKLE_FRACTION_STD
 from pedenv.records import Frame
 from pedenv.skeleton import ANKLE_KEYPOINTS
@@ -44,6 +44,27 @@ MIN_GRAZING_SINE = 1e-4
 #: Below this |n . g| (n the road normal, g the unnormalized pixel ray) the Jacobian is
 #: not evaluated (the ray runs along the road).
 MIN_NORMAL_DOT = 1e-12
+#: How far (metres, 1 sigma) a stance ankle may sit above its resting height: the foot's
+#: roll-off in the swing phase lifts the heel a few centimetres (gait tables).
+ANKLE_HEIGHT_STD_M = 0.04
+#: How far (metres, 1 sigma) the road under a pedestrian may lie off the vehicle's own plane
+#: even nearby: kerbs (10-15 cm), camber and the suspension's pitch.
+ROAD_HEIGHT_STD_M = 0.08
+#: Spread of the road's curvature (1/m): the road ``r`` metres away lies about
+#: ``0.5 * curvature * r^2`` off the vehicle's plane (rolling terrain; the built-in terrain
+#: scenes' hills), so the ground cue fades with distance.
+ROAD_CURVATURE_STD_PER_M = 0.008
+#: A ``static`` camera's ground cue declines where the foot point's own spread along the ray
+#: (pixel noise and the ankle's lift through the ray's cut with the ground) exceeds this share
+#: of the range: the ray grazes the ground, the linearized cut no longer holds and the height
+#: prior is sharper there (set on the static synthetic scenes).
+STATIC_GROUND_MAX_RELATIVE_STD = 0.2
+#: Spread (metres, 1 sigma) of a standing foot's ground point about the body's, per axis: a
+#: walker's stance foot lies up to half a step (about 0.2 of body height) ahead of or behind
+#: the body, 0.2 m along the unknown walking direction, about 0.14 m each way (geometry of the
+#: gait); the midpoint of two standing feet counts half of it. Without it the ground cue's
+#: sideways errors were 2.8x (0-10 m) its variance on the terrain scenes.
+STANCE_STD_M = 0.14
 
 
 @overload
@@ -169,18 +190,18 @@ class AnkleHits:
         ju, jv = pixel_jacobians(frame, rays, normal, cam_height)
         pixel_var = (skeletons.noise * float(frame.camera.intrinsics[0, 0])) ** 2  # px^2
         lift_std = np.where(skeletons.lone, LONE_ANKLE_FRACTION_STD * config.person_height_mean_m,
-                            config.ankle_height_std_m)
+                            ANKLE_HEIGHT_STD_M)
         return cls(rays, xy, sine, cam_height, hits, ranges, ju, jv, pixel_var, lift_std)
 
     def near(self, static: bool, config: FusedConfig) -> np.ndarray:
         """(N, 2) bool, hits close enough to trust: within ``ground_max_distance_m``, or for
         a ``static`` camera where the foot point's own spread (pixels and lift) stays within
-        ``static_ground_max_relative_std`` of the range."""
+        :data:`STATIC_GROUND_MAX_RELATIVE_STD` of the range."""
         if not static:
             return self.hits & (self.ranges <= config.ground_max_distance_m)
         spread = (self.pixel_var[:, None] * (self.ju**2 + self.jv**2).sum(-1)
                   + (self.lift_std[:, None] / np.where(self.hits, self.sine, 1.0)) ** 2)
-        return self.hits & (spread <= (config.static_ground_max_relative_std * self.ranges) ** 2)
+        return self.hits & (spread <= (STATIC_GROUND_MAX_RELATIVE_STD * self.ranges) ** 2)
 
 
 def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
@@ -188,7 +209,7 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
 
     skeletons: the frame's rays (world) and stance ankles. The frame-to-frame covariance
     holds the pixel noise, the ankle's lift and where the foot stands against the body
-    (``stance_std_m``, it changes with each step); the per-person part the road's unknown
+    (:data:`STANCE_STD_M`, it changes with each step); the per-person part the road's unknown
     height under the pedestrian and the body's lateral spread.
     Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
     """
@@ -206,14 +227,13 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
     xy = (weight[..., None] * np.where(near[..., None], ankles.xy, 0.0)).sum(axis=1)
     # a height error dz of the contact point moves it along the ray by dz / sine
     along = (weight[..., None] * ankles.rays[..., :2] / np.where(near, ankles.sine, 1.0)[..., None]).sum(axis=1)
-    frame_cov = frame_covariance(ankles, near, weight, along, config)
+    frame_cov = frame_covariance(ankles, near, weight, along)
     r = np.sqrt((xy[:, 0] - skeletons.origin[0]) ** 2 + (xy[:, 1] - skeletons.origin[1]) ** 2)
     bias = person_covariance(r, along, frame.camera.static, config)
     return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)
 
 
-def frame_covariance(ankles: AnkleHits, near: np.ndarray, weight: np.ndarray, along: np.ndarray,
-                     config: FusedConfig) -> np.ndarray:
+def frame_covariance(ankles: AnkleHits, near: np.ndarray, weight: np.ndarray, along: np.ndarray) -> np.ndarray:
     """(N, 2, 2) m^2, the part of the ground point's error new every frame: the pixel noise,
     the ankle's lift (it changes with the gait) and where the foot stands against the body.
 
@@ -229,7 +249,7 @@ def frame_covariance(ankles: AnkleHits, near: np.ndarray, weight: np.ndarray, al
     lift = ankles.lift_std**2
     # a standing foot lies up to half a step ahead of or behind the body (walking direction
     # unknown: the same each way); the midpoint of two standing feet half as far
-    stance = config.stance_std_m**2 / near.sum(axis=1).clip(1) ** 2
+    stance = STANCE_STD_M**2 / near.sum(axis=1).clip(1) ** 2
     return symmetric_2x2(pxx + lift * ax * ax + stance, pxy + lift * ax * ay, pyy + lift * ay * ay + stance)
 
 
@@ -243,6 +263,6 @@ def person_covariance(ranges: np.ndarray, along: np.ndarray, static: bool, confi
     if static:
         road = static_ground_variance(ranges, config)
     else:
-        road = (config.road_height_std_m + 0.5 * config.road_curvature_std_per_m * ranges**2) ** 2
-    ax, ay, lat = along[:, 0], along[:, 1], config.lateral_std_m**2
+        road = (ROAD_HEIGHT_STD_M + 0.5 * ROAD_CURVATURE_STD_PER_M * ranges**2) ** 2
+    ax, ay, lat = along[:, 0], along[:, 1], LATERAL_STD_M**2
     return symmetric_2x2(road * ax * ax + lat, road * ax * ay, road * ay * ay + lat)

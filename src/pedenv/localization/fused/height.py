@@ -20,6 +20,7 @@ import numpy as np
 from pedenv.body import STANDING
 from pedenv.config import FusedConfig
 from pedenv.localization.fused.cue import (
+    LATERAL_STD_M,
     CueEstimate,
     FrameSkeletons,
     first_reason,
@@ -161,4 +162,4 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     s2 = scale**2
     across = (scale * skeletons.noise) ** 2  # the body's own sideways spread is the person's
     return CueEstimate(NAME, xy, range_bearing_covariance(bearing, frame_rel * s2, across),
-                       range_bearing_covariance(bearing, bias_rel * s2, config.lateral_std_m**2), good, reasons)
+                       range_bearing_covariance(bearing, bias_rel * s2, LATERAL_STD_M**2), good, reasons)

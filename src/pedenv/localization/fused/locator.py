@@ -35,6 +35,10 @@ from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray
 from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
 
+#: A cue whose disagreement with the others exceeds this chi-square quantile (2 dof) is
+#: dropped before fusion: 0.999, so a cue within its own covariance is kept but for one
+#: frame in a thousand.
+GATE_PROBABILITY = 0.999
 #: A pedestrian no cue can place is guessed from its box with this relative spread.
 BOX_RELATIVE_STD = 0.5
 #: The part of it that changes from frame to frame: a box's height moves with the pose and
@@ -141,11 +145,11 @@ class FusedLocator:
         depth = ((last_skel - origin) * rays).sum(-1)
         start = origin + np.where(placed[:, None], np.maximum(depth, MIN_ALONG), 1.0)[..., None] * rays
         now = RaysNow(rays, terms, usable, origin, frame.timestamp, skel.noise)
-        tri = triangulate(now, start, placed, h.of(rows), cfg)
+        tri = triangulate(now, start, placed, h.of(rows))
         h.push(rows, rays, terms, dots, usable, origin, frame.timestamp)
         if "triangulation" in cfg.cues:
-            cues.append(triangulation_cue(tri, skel, cfg))
-        fused = fuse_cues(cues, cfg.gate_probability, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
+            cues.append(triangulation_cue(tri, skel))
+        fused = fuse_cues(cues, GATE_PROBABILITY, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
         sources = CueSources.of(cues, fused, ~fused.valid).spell()
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances

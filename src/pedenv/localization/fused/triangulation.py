@@ -7,7 +7,7 @@ The weighted normal equations give ``p`` and its covariance ``A^-1``, which is w
 the ray when the rays are close to parallel: the estimate weighs itself by the parallax
 it has. Past rays with too little baseline or parallax are left out. Outliers: the start
 is the track's last fused range along the current ray; past rays that miss it by more
-than ``outlier_sigma`` times their spread plus ``pedestrian_speed_std * age`` (the person
+than :data:`OUTLIER_SIGMA` times their spread plus ``pedestrian_speed_std * age`` (the person
 may have walked since) are dropped before the least squares. With the ego standing still
 no past ray is left and the cue declines.
 
@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.config import FusedConfig
 from pedenv.localization.fused.cue import (
+    LATERAL_STD_M,
     REASON_CODE,
     CueEstimate,
     FrameSkeletons,
@@ -41,8 +41,19 @@ MIN_CONDITION = 1e-12
 MIN_RANGE_M = 0.5
 #: Variance floor of a ray's miss distance (m^2), so a ray through the start keeps a finite weight.
 MIN_RAY_VARIANCE = 1e-6
-#: Floor of a kept past ray's squared sine of parallax (it is at least ``min_parallax_rad``).
+#: Floor of a kept past ray's squared sine of parallax (it is at least :data:`MIN_PARALLAX_RAD`).
 MIN_SINE2 = 1e-12
+#: A past camera centre closer than this (metres) to the current one gives no ray: the ego
+#: stands still (the keypoints' pixel noise then dominates any parallax).
+MIN_BASELINE_M = 0.3
+#: Past rays closer to parallel than this (radians) with the current one are left out.
+MIN_PARALLAX_RAD = 0.01
+#: How fast (m/s, 1 sigma) a pedestrian may have moved since a past observation: widens old
+#: rays so a walker does not bias the cue (about half a walking speed; built-in scenes).
+PEDESTRIAN_SPEED_STD_MPS = 0.8
+#: A past ray whose miss of the start exceeds this many of its standard deviations is dropped
+#: (3 sigma: a Gaussian ray is kept 99.7 % of the time).
+OUTLIER_SIGMA = 3.0
 
 
 @dataclass(frozen=True)
@@ -99,8 +110,7 @@ class RaysNow:
     angle_std: float | np.ndarray
 
 
-def triangulate(now: RaysNow, start: np.ndarray, has_start: np.ndarray, past: HistoryView,
-                config: FusedConfig) -> Triangulated:
+def triangulate(now: RaysNow, start: np.ndarray, has_start: np.ndarray, past: HistoryView) -> Triangulated:
     """Triangulate N pedestrians' K keypoints from their rays now and in the past.
 
     start: (N, K, 3) world, metres, where each keypoint is believed to be (outlier test);
@@ -109,31 +119,31 @@ def triangulate(now: RaysNow, start: np.ndarray, has_start: np.ndarray, past: Hi
     ``no-baseline``, ``unplaced``, ``no-parallax``, ``degenerate``.
     """
     n, k = now.usable.shape
-    moved = past.filled & (((past.centres - now.origin) ** 2).sum(-1) >= config.min_baseline_m**2)  # (N, L)
+    moved = past.filled & (((past.centres - now.origin) ** 2).sum(-1) >= MIN_BASELINE_M**2)  # (N, L)
     both = np.empty((n, k, 3, 2))
     both[..., 0], both[..., 1] = now.rays, start
     dots = past.rays @ both  # (N, K, L, 2): each past ray . the current ray, . the start
     cos = dots[..., 0]
     candidate = (moved[:, None, :] & past.usable & (now.usable & has_start[:, None])[..., None]
-                 & (cos <= np.cos(config.min_parallax_rad)))
+                 & (cos <= np.cos(MIN_PARALLAX_RAD)))
     nothing = ~candidate.any(axis=(1, 2))
     reasons = first_reason([(~past.filled.any(axis=1), "no-history"), (~moved.any(axis=1), "no-baseline"),
                             (~has_start, "unplaced"), (nothing, "no-parallax")], n)
     if nothing.all():
         return Triangulated(np.zeros((n, k, 3)), np.zeros((n, k, 3)), np.zeros((n, k)), np.zeros((n, k), bool), reasons)
     age = now.time - past.times  # (N, L)
-    keep, weight, w_now, any_kept = ray_weights(now, start, past, candidate, dots[..., 1], age, config)
+    keep, weight, w_now, any_kept = ray_weights(now, start, past, candidate, dots[..., 1], age)
     summed = (weight[..., None, :] @ past.terms)[..., 0, :] + w_now[..., None] * now.terms
     points, cov, ok = _solve_3x3(summed)
     ahead = ((points - now.origin) * now.rays).sum(-1) > MIN_RANGE_M
     good = ok & ahead & any_kept
-    drift_var = walker_drift(keep, cos, age, good, config.pedestrian_speed_std_mps)
+    drift_var = walker_drift(keep, cos, age, good, PEDESTRIAN_SPEED_STD_MPS)
     reasons = np.where((reasons == 0) & ~good.any(axis=1), REASON_CODE["degenerate"], reasons)
     return Triangulated(points, cov, drift_var, good, reasons)
 
 
 def ray_weights(now: RaysNow, start: np.ndarray, past: HistoryView, candidate: np.ndarray, start_dots: np.ndarray,
-                age: np.ndarray, config: FusedConfig) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                age: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The past rays that pass the outlier test and the least-squares weights.
 
     candidate: (N, K, L) bool, past rays with baseline and parallax. start_dots: (N, K, L)
@@ -146,8 +156,8 @@ def ray_weights(now: RaysNow, start: np.ndarray, past: HistoryView, candidate: n
     along = start_dots - past.dots
     angle_var = np.broadcast_to(np.asarray(now.angle_std, float) ** 2, (n,))[:, None]
     pixel_var = reach2 * angle_var[..., None] + MIN_RAY_VARIANCE
-    var = pixel_var + ((config.pedestrian_speed_std_mps * age) ** 2)[:, None, :]
-    keep = candidate & (reach2 - along**2 <= config.outlier_sigma**2 * var)
+    var = pixel_var + ((PEDESTRIAN_SPEED_STD_MPS * age) ** 2)[:, None, :]
+    keep = candidate & (reach2 - along**2 <= OUTLIER_SIGMA**2 * var)
     weight = np.where(keep, 1.0 / pixel_var, 0.0)
     any_kept = weight.sum(axis=-1) > 0  # (N, K) the current ray needs a past ray besides it
     reach_now2 = ((start - now.origin) ** 2).sum(-1)
@@ -170,7 +180,7 @@ def walker_drift(keep: np.ndarray, cos: np.ndarray, age: np.ndarray, good: np.nd
     return np.where(good & torso.any(1)[:, None], speed_std**2 * person, np.where(good, np.inf, 0.0))
 
 
-def triangulation_cue(tri: Triangulated, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
+def triangulation_cue(tri: Triangulated, skeletons: FrameSkeletons) -> CueEstimate:
     """Ground point of N pedestrians: the mean x-y of their triangulated torso keypoints.
 
     tri: the triangulation of all 17 keypoints (:func:`triangulate`). The keypoints share
@@ -184,7 +194,7 @@ def triangulation_cue(tri: Triangulated, skeletons: FrameSkeletons, config: Fuse
     share = good / np.maximum(count, 1)[:, None]  # (N, 4)
     xy = (share[..., None] * np.where(good[..., None], tri.points[:, TORSO_KEYPOINTS, :2], 0.0)).sum(axis=1)
     cov = (share[..., None] * np.where(good[..., None], tri.covariances[:, TORSO_KEYPOINTS], 0.0)).sum(axis=1)
-    lat = config.lateral_std_m**2  # the body's own spread about its ground point: the person's
+    lat = LATERAL_STD_M**2  # the body's own spread about its ground point: the person's
     frame_cov = symmetric_2x2(cov[:, 0], cov[:, 1], cov[:, 2])
     drift = (share * tri.drift_var[:, TORSO_KEYPOINTS]).sum(axis=1)
     bearing = horizontal_bearing((share[..., None] * skeletons.rays[:, TORSO_KEYPOINTS]).sum(axis=1))
