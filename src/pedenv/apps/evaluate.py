@@ -81,8 +81,13 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
 
 
 def evaluation_info(dataset: Dataset, backend: PoseBackend, config: Config, names: Sequence[str]) -> dict:
-    """The ``info`` of ``metrics.json``: dataset, pose backend, method and scenes."""
-    return {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method, "scenes": list(names)}
+    """The ``info`` of ``metrics.json``: dataset, pose backend, method and scenes; where the dataset
+    says what its figures are (``perception``, e.g. skeletons rendered from labels), that too."""
+    info = {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method, "scenes": list(names)}
+    perception = getattr(dataset, "perception", None)
+    if perception:
+        info["perception"] = perception
+    return info
 
 
 def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,
