@@ -75,7 +75,8 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
             hooks = SceneHooks(on_frame=on_frame, pairs=pairs, progress=partial(_advance, bar, task))
             results.append(evaluate_scene(name, frames, config=config, backend=backend, model_factory=model_factory,
                                           hooks=hooks))
-    result = merge_scene_results(results, evaluation_info(dataset, backend, config, names))
+    result = merge_scene_results(results, evaluation_info(dataset, backend, config, names),
+                                 config.behaviour.conflict_probability)
     result.extras["files"] = sinks.files + ([pairs.path] if pairs else [])
     return result
 

@@ -91,12 +91,7 @@ class KittiDrivesDataset:
         from_vehicle = np.linalg.inv(to_vehicle)
         world_from_cam0 = to_vehicle @ drive.poses  # (F, 4, 4): the world is the vehicle frame at frame 0
         people = drive.labels.of_type("Pedestrian")
-        ground = np.einsum("nij,nj->ni", world_from_cam0[people.frame], np.c_[people.locations, np.ones(len(people))])
-        speed, walked = track_motion(people.track_id, people.frame, ground[:, :2], FRAME_RATE_HZ)
-        forward = np.c_[np.cos(people.rotation_y), np.zeros(len(people)), -np.sin(people.rotation_y)]
-        forward = np.einsum("nij,nj->ni", world_from_cam0[people.frame, :3, :3], forward)
-        heading = np.arctan2(forward[:, 1], forward[:, 0])
-        skeletons = render_skeletons(ground[:, :3], heading, people.dimensions[:, 0], speed, walked, people.track_id)
+        ground, skeletons = _people_in_world(people, world_from_cam0)
         crc = zlib.crc32(scene.encode())
         for frame in range(len(drive.poses)):
             image = drive.image_dir / f"{frame:06d}.png"
@@ -105,20 +100,35 @@ class KittiDrivesDataset:
             rows = np.flatnonzero(people.frame == frame)
             vehicle = world_from_cam0[frame] @ from_vehicle
             ego = EgoPose(vehicle[:3, 3].copy(), vehicle[:3, :3].copy())
-            cam0_from_world = np.linalg.inv(world_from_cam0[frame])
-            pts = np.c_[skeletons[rows].reshape(-1, 3), np.ones(17 * len(rows))] @ cam0_from_world.T
-            uv = drive.calib.project(pts[:, :3]).reshape(-1, 17, 2)
-            inside = ((uv[..., 0] >= 0) & (uv[..., 0] < drive.width) & (uv[..., 1] >= 0) & (uv[..., 1] < drive.height)
-                      & (pts[:, 2].reshape(-1, 17) > 0.5))
             rng = np.random.default_rng([self.seed & 0xFFFFFFFF, crc, frame, 7])
-            seen = occlusion_visibility(inside, people.occluded[rows], rng)
-            uv = np.nan_to_num(uv)
+            uv, seen = _seen(drive, np.linalg.inv(world_from_cam0[frame]), skeletons[rows], people.occluded[rows], rng)
             boxes = people.boxes[rows] if self.images_only else np.clip(
                 boxes_from_keypoints(uv, np.ones(uv.shape[:2], bool)), 0.0, [drive.width, drive.height] * 2)
-            truth = GroundTruth(people.track_id[rows], ground[rows, :3], boxes.astype(float), keypoints=uv, visible=seen, heights=people.dimensions[rows, 0],
-                                keypoints_3d=skeletons[rows])
+            truth = GroundTruth(people.track_id[rows], ground[rows], boxes.astype(float), keypoints=uv, visible=seen,
+                                heights=people.dimensions[rows, 0], keypoints_3d=skeletons[rows])
             yield Frame(frame, frame / FRAME_RATE_HZ, camera, ego, ground_truth=truth,
                         image_path=image if image.is_file() else None, scene=scene)
+
+
+def _people_in_world(people: kitti.KittiLabels, world_from_cam0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Ground points (N, 3) and rendered skeletons (N, 17, 3), world, metres, of the N labelled rows."""
+    ground = np.einsum("nij,nj->ni", world_from_cam0[people.frame], np.c_[people.locations, np.ones(len(people))])
+    speed, walked = track_motion(people.track_id, people.frame, ground[:, :2], FRAME_RATE_HZ)
+    forward = np.c_[np.cos(people.rotation_y), np.zeros(len(people)), -np.sin(people.rotation_y)]  # KITTI's yaw
+    forward = np.einsum("nij,nj->ni", world_from_cam0[people.frame, :3, :3], forward)
+    heading = np.arctan2(forward[:, 1], forward[:, 0])
+    skeletons = render_skeletons(ground[:, :3], heading, people.dimensions[:, 0], speed, walked, people.track_id)
+    return ground[:, :3], skeletons
+
+
+def _seen(drive: Drive, cam0_from_world: np.ndarray, skeletons: np.ndarray, occluded: np.ndarray,
+          rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The skeletons (N, 17, 3) world projected into image_02: pixels (N, 17, 2) and seen (N, 17)."""
+    pts = np.c_[skeletons.reshape(-1, 3), np.ones(17 * len(skeletons))] @ cam0_from_world.T
+    uv = np.nan_to_num(drive.calib.project(pts[:, :3]).reshape(-1, 17, 2))
+    inside = ((uv[..., 0] >= 0) & (uv[..., 0] < drive.width) & (uv[..., 1] >= 0) & (uv[..., 1] < drive.height)
+              & (pts[:, 2].reshape(-1, 17) > 0.5))
+    return uv, occlusion_visibility(inside, occluded, rng)
 
 
 class Drive:

@@ -32,7 +32,7 @@ SMOOTH_HALF_WINDOW = 3
 OCCLUDED_DETECTION = (1.0, 0.9, 0.6, 0.6)
 #: Keypoints hidden by each ``occluded`` flag: partly, the legs below the knees' tops; largely
 #: (or unknown), everything below the shoulders but the elbows.
-_LEGS = [KP.LEFT_KNEE, KP.RIGHT_KNEE, KP.LEFT_ANKLE, KP.RIGHT_ANKLE]
+_LEGS: list[int] = [KP.LEFT_KNEE, KP.RIGHT_KNEE, KP.LEFT_ANKLE, KP.RIGHT_ANKLE]
 HIDDEN_BY_OCCLUSION: tuple[list[int], ...] = (
     [], _LEGS, _LEGS + [KP.LEFT_HIP, KP.RIGHT_HIP, KP.LEFT_WRIST, KP.RIGHT_WRIST], _LEGS + [KP.LEFT_HIP, KP.RIGHT_HIP])
 #: A person with fewer keypoints than this inside the image (truncated at the border) is missed.
