@@ -58,7 +58,7 @@ def test_every_frame_with_the_labelled_world_and_rendered_skeletons(tmp_path):
     height_px = np.ptp(gt.keypoints[0, :, 1])
     assert 721.5 * 1.75 * 0.85 / 15.0 < height_px < 721.5 * 1.75 / 15.0  # eyes to ankles of a 1.75 m person
     ankles_v = gt.keypoints[0, 15:, 1].max()
-    assert ankles_v == pytest.approx(172.9 + 721.5 * 1.57 / 15.0, abs=3.0)  # ankles 8 cm up  # feet on the labelled ground point
+    assert ankles_v == pytest.approx(172.9 + 721.5 * 1.57 / 15.0, abs=3.0)  # ankles 8 cm above the ground point
 
 
 def test_evaluation_labels_its_figures_and_scores_behaviour(tmp_path):
@@ -100,7 +100,7 @@ BAD_LABELS = [
     (lambda ls: [label_line(0, 1, 0.0, 1e300)] + ls[1:], r"0000.txt:1: location must lie within"),
     (lambda ls: [label_line(0, 1, 0.0, 20.0, box=(640, 120, 600, 220))] + ls[1:], r"0000.txt:1: box \[x1 y1 x2 y2\]"),
     (lambda ls: [label_line(0, 1, 0.0, 20.0, box=(0, 0, 1e300, 9))] + ls[1:], r"0000.txt:1: box \[x1 y1 x2 y2\]"),
-    (lambda ls: [], r"label_02/0000.txt: no label lines"),
+    (lambda _: [], r"label_02/0000.txt: no label lines"),
 ]
 
 
