@@ -195,3 +195,29 @@ def behaviour_summary(samples: list[BehaviourSamples], threshold: float) -> dict
                            "unknown": int(sum(s.conflict_unknown for s in samples)),
                            "partial_future": int(sum(s.conflict_partial for s in samples))}
     return out
+
+
+#: The prefix of a scene's behaviour samples among a checkpoint's arrays (:mod:`pedenv.apps.scene_checkpoint`).
+ARRAY_PREFIX = "behaviour_samples."
+_LISTS = ("state_reported", "state_labelled", "conflict_probability", "conflict_labelled")
+
+
+def samples_to_arrays(samples: BehaviourSamples) -> dict[str, np.ndarray]:
+    """``samples`` as named plain arrays (no pickle), for a scene's checkpoint."""
+    out = {f"{ARRAY_PREFIX}fde.{k}": np.asarray(v, np.float64) for k, v in samples.fde.items()}
+    out.update({f"{ARRAY_PREFIX}{k}": np.asarray(getattr(samples, k), np.float64) for k in _LISTS})
+    out[f"{ARRAY_PREFIX}counts"] = np.array([samples.conflict_unknown, samples.conflict_partial], np.int64)
+    return out
+
+
+def samples_from_arrays(arrays: dict[str, np.ndarray]) -> BehaviourSamples | None:
+    """The samples :func:`samples_to_arrays` wrote, or None when ``arrays`` hold none."""
+    if f"{ARRAY_PREFIX}counts" not in arrays:
+        return None
+    start = f"{ARRAY_PREFIX}fde."
+    fde = {k[len(start):]: np.asarray(v, np.float64).tolist() for k, v in arrays.items() if k.startswith(start)}
+    lists = {k: np.asarray(arrays[f"{ARRAY_PREFIX}{k}"], np.float64).tolist() for k in _LISTS}
+    unknown, partial = (int(c) for c in np.asarray(arrays[f"{ARRAY_PREFIX}counts"], np.int64)[:2])
+    return BehaviourSamples(fde, [int(s) for s in lists["state_reported"]], [int(s) for s in lists["state_labelled"]],
+                            lists["conflict_probability"], [bool(c) for c in lists["conflict_labelled"]], unknown,
+                            partial)
