@@ -43,6 +43,8 @@ from pedenv.validation import check_number
 
 #: What every figure on these drives is, in metrics.json and the printed title.
 PERCEPTION_NOTE = "real motion, modelled perception (skeletons rendered from the labels' 3D boxes)"
+#: Where the ego poses come from (``ego_poses``): ORB-SLAM3's stereo trajectory first, or GPS/IMU (OXTS) first.
+EGO_POSE_SOURCES = ("orbslam3", "oxts")
 PERCEPTION_NOTE_IMAGES = "real motion, real perception (the pose network on image_02)"
 
 
@@ -62,12 +64,15 @@ class KittiDrivesDataset:
     default_pose_backend = "detector-model:yolo11n-pose-far"
 
     def __init__(self, data_root: str | Path, camera_height_m: float = 1.65, seed: int = 0,
-                 images_only: bool = False) -> None:
+                 images_only: bool = False, ego_poses: str = "orbslam3") -> None:
         check_number("camera_height_m", camera_height_m, 0.1, 10.0)
+        if ego_poses not in EGO_POSE_SOURCES:
+            raise InputError(f"ego_poses must be one of {', '.join(EGO_POSE_SOURCES)}, got {ego_poses!r}")
         self.training = training_dir(Path(data_root))
         self.camera_height_m = float(camera_height_m)
         self.seed = int(seed)
         self.images_only = bool(images_only)
+        self.ego_poses = ego_poses
 
     @property
     def perception(self) -> str:
@@ -75,7 +80,8 @@ class KittiDrivesDataset:
 
     def with_images_only(self) -> KittiDrivesDataset:
         """The same drives, only the frames with an image (for the real pose network)."""
-        return KittiDrivesDataset(self.training, self.camera_height_m, self.seed, images_only=True)
+        return KittiDrivesDataset(self.training, self.camera_height_m, self.seed, images_only=True,
+                                  ego_poses=self.ego_poses)
 
     def scene_names(self) -> list[str]:
         return sorted(p.stem for p in (self.training / "label_02").glob("*.txt"))
@@ -83,7 +89,7 @@ class KittiDrivesDataset:
     def frames(self, scene: str) -> Iterator[Frame]:
         if scene not in self.scene_names():
             raise InputError(f"{self.training}: no sequence {scene!r}; found {', '.join(self.scene_names())}")
-        drive = read_drive(self.training, scene)
+        drive = read_drive(self.training, scene, oxts_first=self.ego_poses == "oxts")
         to_vehicle = cam0_to_vehicle(self.camera_height_m)
         cam2 = np.eye(4)
         cam2[:3, 3] = drive.calib.cam2_position
@@ -141,8 +147,9 @@ class Drive:
         self.width, self.height = size
 
 
-def read_drive(training: Path, name: str) -> Drive:
-    """Read sequence ``name``: every check of the module doc, each naming its file."""
+def read_drive(training: Path, name: str, oxts_first: bool = False) -> Drive:
+    """Read sequence ``name``: every check of the module doc, each naming its file. The poses: ORB-SLAM3's
+    where there are both (OXTS's with ``oxts_first``), else the one there is."""
     calib = kitti.read_calib(training / "calib" / f"{name}.txt")
     label_file = training / "label_02" / f"{name}.txt"
     labels = kitti.read_labels(label_file)
@@ -150,7 +157,7 @@ def read_drive(training: Path, name: str) -> Drive:
         raise InputError(f"{label_file}: no label lines (an empty sequence)")
     trajectory = training / "ego_poses_orbslam3" / name / "CameraTrajectory.txt"
     oxts = training / "oxts" / f"{name}.txt"
-    if trajectory.is_file():
+    if trajectory.is_file() and not (oxts_first and oxts.is_file()):
         poses, pose_file = kitti.read_camera_trajectory(trajectory), trajectory
     elif oxts.is_file():
         poses, pose_file = read_oxts_camera_poses(oxts, calib), oxts
