@@ -187,3 +187,15 @@ def test_a_person_crossing_close_ahead_enters_the_real_corridor(tmp_path):
     # from frame 11 and the corridor (2 s of travel + 2.5 m) reaches 20 m ahead of the start from frame 15
     assert conflict["count"] == 17 and conflict["unknown"] == 16 and conflict["labelled_entries"] == 7
     assert conflict["recall"] == 1.0 and conflict["precision"] == pytest.approx(0.875, abs=0.13)  # 7 of 8 measured
+
+
+def test_gps_imu_poses_where_both_exist():
+    """0000 has ORB-SLAM3 and GPS/IMU: 73.9 and 69.4 m of path (the data's README); a bad source is refused."""
+    from pedenv.datasets.kitti_drives import KittiDrivesDataset
+
+    for source, metres in (("orbslam3", 73.9), ("oxts", 69.4)):
+        frames = list(KittiDrivesDataset(DRIVES, ego_poses=source).frames("0000"))
+        steps = np.diff([f.ego.translation for f in frames], axis=0)
+        assert np.linalg.norm(steps, axis=1).sum() == pytest.approx(metres, abs=0.5)
+    with pytest.raises(InputError, match="ego_poses must be one of orbslam3, oxts"):
+        KittiDrivesDataset(DRIVES, ego_poses="gps")
