@@ -75,14 +75,20 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
             hooks = SceneHooks(on_frame=on_frame, pairs=pairs, progress=partial(_advance, bar, task))
             results.append(evaluate_scene(name, frames, config=config, backend=backend, model_factory=model_factory,
                                           hooks=hooks))
-    result = merge_scene_results(results, evaluation_info(dataset, backend, config, names))
+    result = merge_scene_results(results, evaluation_info(dataset, backend, config, names),
+                                 config.behaviour.conflict_probability)
     result.extras["files"] = sinks.files + ([pairs.path] if pairs else [])
     return result
 
 
 def evaluation_info(dataset: Dataset, backend: PoseBackend, config: Config, names: Sequence[str]) -> dict:
-    """The ``info`` of ``metrics.json``: dataset, pose backend, method and scenes."""
-    return {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method, "scenes": list(names)}
+    """The ``info`` of ``metrics.json``: dataset, pose backend, method and scenes; where the dataset
+    says what its figures are (``perception``, e.g. skeletons rendered from labels), that too."""
+    info = {"dataset": dataset.name, "pose_backend": backend.name, "method": config.method, "scenes": list(names)}
+    perception = getattr(dataset, "perception", None)
+    if perception:
+        info["perception"] = perception
+    return info
 
 
 def evaluate_dataset(dataset: Dataset, *, scenes: Sequence[str] | None = None, config: Config | None = None,

@@ -66,6 +66,8 @@ def evaluate_command(*, dataset: DatasetChoice, output: OutputOptions, flags: Ou
     and the per-frame outputs with tasks.
     """
     data = dataset.open()
+    if pose.backend == "onnx" and hasattr(data, "with_images_only"):
+        data = data.with_images_only()  # whole drives: the real network where a frame has its image
     cfg = method.load(allow_both=True)
     cfg, backend = onnx_backend(data, cfg, pose)
     executor.check_serial()

@@ -29,6 +29,7 @@ import numpy as np
 
 from pedenv.apps.scene_result import SceneResult
 from pedenv.errors import InputError
+from pedenv.evaluation.behaviour import samples_from_arrays, samples_to_arrays
 from pedenv.evaluation.metrics import ErrorSamples
 from pedenv.records import Camera, Detections, EgoPose, Frame, GroundTruth
 from pedenv.stage_timer import StageTimer
@@ -64,6 +65,8 @@ def save_checkpoint(path: Path, result: SceneResult, run: dict) -> None:
         arrays[f"tracking.{i}.Type"] = events["Type"].astype(str).to_numpy(str)
         for col in ("OId", "HId", "D"):
             arrays[f"tracking.{i}.{col}"] = events[col].to_numpy(np.float64)
+    if result.behaviour is not None:
+        arrays.update(samples_to_arrays(result.behaviour))
     busiest = None
     if result.busiest is not None:
         busiest = _busiest_arrays(*result.busiest, arrays)
@@ -155,7 +158,7 @@ def _rebuild(meta: dict, arrays: dict[str, np.ndarray]) -> SceneResult:
     timer = StageTimer(**{k: meta["timer"][k] for k in ("tracking_s", "frames", "position_s", "pedestrians")})
     busiest = None if meta["busiest"] is None else _busiest(meta["busiest"], arrays)
     return SceneResult(meta["scene"], samples, tracking, timer, int(meta["frames"]), busiest,
-                       int(meta["busiest_count"]))
+                       int(meta["busiest_count"]), behaviour=samples_from_arrays(arrays))
 
 
 def _events(arrays: dict[str, np.ndarray], i: int) -> pd.DataFrame:

@@ -18,6 +18,7 @@ import numpy as np
 
 from pedenv.config import Config
 from pedenv.errors import InputError
+from pedenv.evaluation.behaviour import BehaviourRecorder, BehaviourSamples, behaviour_summary
 from pedenv.evaluation.matching import match_one_to_one, match_to_ground_truth, position_errors
 from pedenv.evaluation.metrics import ErrorSamples, Metrics
 from pedenv.evaluation.result import EvaluationResult
@@ -46,6 +47,8 @@ class SceneResult:
     (empty without ground-truth ids). timer: the scene's stage wall times. frames: frames run.
     busiest: (state, frame) of the labelled frame with the most settled matched tracks, and
     that count (-1: no labelled frame). lines: the JSON Lines of every frame when collected.
+    behaviour: the behaviour cues scored against the labelled future
+    (:mod:`pedenv.evaluation.behaviour`; None without labelled frames).
     """
 
     name: str
@@ -56,6 +59,7 @@ class SceneResult:
     busiest: tuple[EnvironmentState, Frame] | None = None
     busiest_count: int = -1
     lines: list[str] | None = None
+    behaviour: BehaviourSamples | None = None
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,7 @@ def evaluate_scene(name: str, frames: Iterable[Frame], *, config: Config, backen
     model = model_factory(config)
     backend = with_redetection(backend, model, config.redetect)  # missed tracks searched in crops (fused)
     tracking = TrackingAccumulator()
+    behaviour = BehaviourRecorder(config.behaviour)
     result = SceneResult(name, timer=model.timer, lines=[] if hooks.collect_lines else None)
     for frame in frames:
         frame = replace(frame, detections=backend(frame))
@@ -95,20 +100,34 @@ def evaluate_scene(name: str, frames: Iterable[Frame], *, config: Config, backen
             result.lines.append(environment_line(state))
         if frame.ground_truth is not None:
             n = score_frame(frame, state, result.samples, tracking, hooks.pairs)
+            behaviour.add(frame, state)
             if n > result.busiest_count:
                 result.busiest, result.busiest_count = (state, frame), n
         result.frames += 1
         if hooks.progress is not None:
             hooks.progress(result.frames)
     result.tracking = dict(tracking.scenes)
+    result.behaviour = behaviour.finish() if behaviour.pairs else None
     return result
 
 
-def merge_scene_results(results: Sequence[SceneResult], info: dict) -> EvaluationResult:
+def _behaviour(results: Sequence[SceneResult], threshold: float) -> dict | None:
+    """``metrics.json``'s ``behaviour``: over all scenes, then per scene; None when nothing was scored."""
+    scored = [(r.name, r.behaviour) for r in results if r.behaviour is not None]
+    if not scored:
+        return None
+    summary = behaviour_summary([b for _, b in scored], threshold)
+    summary["scenes"] = {name: behaviour_summary([b], threshold) for name, b in scored}
+    return summary
+
+
+def merge_scene_results(results: Sequence[SceneResult], info: dict,
+                        conflict_threshold: float = Config().behaviour.conflict_probability) -> EvaluationResult:
     """The evaluation over ``results`` in their order (scene order), as one serial run gives it.
 
     Busiest frame: the first frame, in scene order, with the most settled tracks. Stage
     timings: the wall times summed over scenes, divided by the frames and pedestrians.
+    ``conflict_threshold``: the conflict probability the behaviour figures flag at.
     """
     tracking = TrackingAccumulator()
     timer = StageTimer()
@@ -122,7 +141,8 @@ def merge_scene_results(results: Sequence[SceneResult], info: dict) -> Evaluatio
         if r.busiest_count > busiest_count:
             busiest, busiest_count = r.busiest, r.busiest_count
     samples = {r.name: r.samples for r in results}
-    metrics = Metrics.from_samples(samples, tracking.summary(), timer.per_stage_ms(), info)
+    metrics = Metrics.from_samples(samples, tracking.summary(), timer.per_stage_ms(), info,
+                                   behaviour=_behaviour(results, conflict_threshold))
     return EvaluationResult(metrics, samples, busiest)
 
 

@@ -162,6 +162,9 @@ def _print_evaluation(outcome: EvaluateOutcome, dataset: str) -> None:
         _print_result(outcome.metrics, f"{dataset}: {info['pose_backend']} skeletons, method {info['method']}")
     if outcome.ablation is not None:
         _out.print(outcome.ablation)
+    infos = [r.metrics.info for r in outcome.methods.values()] + ([outcome.metrics.info] if outcome.metrics else [])
+    if infos and infos[0].get("perception"):
+        _out.print(f"figures: {infos[0]['perception']}", highlight=False)
     _out.print(f"outputs: {outcome.output}", highlight=False)
 
 

@@ -35,6 +35,7 @@ DATASETS: dict[str, str] = {
     "nuscenes": "pedenv.datasets.nuscenes:NuScenesDataset",
     "carla": "pedenv.datasets.carla:CarlaDataset",
     "kitti": "pedenv.datasets.kitti:KittiTrackingDataset",
+    "kitti-tracking": "pedenv.datasets.kitti_drives:KittiDrivesDataset",
 }
 
 #: Format name of ``pedenv simulate --format`` -> "module:function(scenes, output_dir)".

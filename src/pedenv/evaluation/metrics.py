@@ -88,10 +88,11 @@ class Metrics:
     error_by_distance: list[dict]
     calibration: dict
     info: dict
+    behaviour: dict | None = None  # the behaviour cues against the labelled future (evaluation.behaviour)
 
     @classmethod
     def from_samples(cls, per_scene: dict[str, ErrorSamples], tracking: dict | None, timing_ms: dict,
-                     info: dict) -> Metrics:
+                     info: dict, behaviour: dict | None = None) -> Metrics:
         arrays = {name: s.arrays() for name, s in per_scene.items()}
         every = {k: np.concatenate([a[k] for a in arrays.values()]) if arrays else np.zeros(0)
                  for k in ("abs_err", "rel_err", "distance", "mahalanobis")}
@@ -100,10 +101,11 @@ class Metrics:
             scenes=[(name, ErrorSummary.of(a["abs_err"], a["rel_err"])) for name, a in arrays.items()],
             tracking=tracking, timing_ms=timing_ms,
             error_by_distance=error_by_distance(every["distance"], every["abs_err"], every["rel_err"]),
-            calibration=calibration(every["mahalanobis"]), info=info,
+            calibration=calibration(every["mahalanobis"]), info=info, behaviour=behaviour,
         )
 
     def to_dict(self) -> dict:
+        behaviour = {} if self.behaviour is None else {"behaviour": self.behaviour}
         return {
             "overall": asdict(self.overall),
             "scenes": [{"name": name, **asdict(s)} for name, s in self.scenes],
@@ -112,6 +114,7 @@ class Metrics:
             "calibration": self.calibration,
             "error_by_distance": self.error_by_distance,
             "info": self.info,
+            **behaviour,
         }
 
     def save(self, path: str | Path) -> None:

@@ -15,7 +15,8 @@ The model imitates a YOLO-pose style network from each frame's exact skeletons:
   person's ankles or body centre consistently off, and tracks do not average that away;
 * per-keypoint confidences are high for large persons, lower for small ones, near the
   image border and on wrists and ankles, and low for unseen keypoints;
-* a few small skeleton-shaped false positives appear (``false_positives_per_frame``).
+* a few small skeleton-shaped false positives appear (``false_positives_per_frame``);
+* a person none of whose keypoints is seen is detected ``unseen_detection`` times as often.
 
 The numbers come from a named profile (:mod:`pedenv.synthetic.detector_profiles`): the
 hand-set ``default``, or values fitted to a real network on real images.
@@ -98,7 +99,8 @@ class DetectorModel:
             kp, seen = gt.keypoints, gt.visible
         n = kp.shape[0]
         height = np.ptp(kp[..., 1], axis=1) if n else np.zeros(0)
-        detected = rng.random(n) < self.detection_probability(height)
+        hidden = ~seen.any(axis=1) if n else np.zeros(0, bool)  # wholly hidden persons
+        detected = rng.random(n) < self.detection_probability(height) * np.where(hidden, p.unseen_detection, 1.0)
 
         sigma = np.repeat(self.noise_std_px(height)[:, None], kp.shape[1], axis=1)
         sigma[:, _EXTREMITIES] *= p.extremity_noise_factor

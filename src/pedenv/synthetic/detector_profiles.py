@@ -53,7 +53,8 @@ DEFAULT_PROFILE = "default"
 
 _DEFAULT = {"noise_px_large": 1.5, "noise_px_small": 3.5, "extremity_noise_factor": 1.3, "unseen_noise_factor": 3.0,
             "half_detection_height_px": 25.0, "detection_slope_px": 14.0, "false_positives_per_frame": 0.05,
-            "box_noise_fraction": 0.03, "box_min_confidence": 0.3, "person_offset_u": 0.0, "person_offset_v": 0.0}
+            "box_noise_fraction": 0.03, "box_min_confidence": 0.3, "person_offset_u": 0.0, "person_offset_v": 0.0,
+            "unseen_detection": 1.0}
 
 #: Profile name -> parameter values (read-only).
 PROFILES = MappingProxyType({
@@ -69,7 +70,8 @@ PROFILES = MappingProxyType({
     "yolo11n-pose-far": MappingProxyType({
         **_DEFAULT,
         "half_detection_height_px": 47.0, "detection_slope_px": 11.0, "false_positives_per_frame": 0.3125,
-        "noise_px_small": 0.356, "noise_px_large": 0.665, "person_offset_u": 0.0336, "person_offset_v": 0.0196}),
+        "noise_px_small": 0.356, "noise_px_large": 0.665, "person_offset_u": 0.0336, "person_offset_v": 0.0196,
+        "unseen_detection": 0.0}),
     "yolo11n-pose-native": MappingProxyType({
         **_DEFAULT,
         "half_detection_height_px": 88.7, "detection_slope_px": 12.4, "false_positives_per_frame": 0.125,
@@ -89,7 +91,7 @@ _RANGES = {"noise_px_large": (0.0, 50.0), "noise_px_small": (0.0, 50.0), "extrem
            "unseen_noise_factor": (1.0, 20.0), "half_detection_height_px": (0.0, 1000.0),
            "detection_slope_px": (0.1, 500.0), "false_positives_per_frame": (0.0, 20.0),
            "box_noise_fraction": (0.0, 1.0), "box_min_confidence": (0.0, 1.0), "person_offset_u": (0.0, 0.5),
-           "person_offset_v": (0.0, 0.5)}
+           "person_offset_v": (0.0, 0.5), "unseen_detection": (0.0, 1.0)}
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,10 @@ class DetectorParameters:
         skeleton offset, sideways and vertical, as shares of the person's keypoint extent
         [0, 0.5] (0 in the hand-set profile). Raising them makes each track's bias, which no
         filter averages away, larger.
+    unseen_detection: the detection probability of a person none of whose keypoints is seen (wholly
+        hidden) relative to a visible one of that size [0, 1]: 1 in the hand-set profile (its
+        guesses), 0 in ``yolo11n-pose-far`` (a network finds nobody it cannot see; the renderer
+        from labels, :mod:`pedenv.synthetic.labelled`, hides the persons an occlusion flag misses).
     """
 
     noise_px_large: float
@@ -128,6 +134,7 @@ class DetectorParameters:
     box_min_confidence: float
     person_offset_u: float
     person_offset_v: float
+    unseen_detection: float
 
     def __post_init__(self) -> None:
         for name, (low, high) in _RANGES.items():
