@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.apps.progress import progress_bar
 from pedenv.apps.scene_result import SceneHooks, evaluate_scene, merge_scene_results
+from pedenv.behaviour.conflict import CONFLICT_PROBABILITY
 from pedenv.config import Config
 from pedenv.datasets import Dataset
 from pedenv.errors import InputError
@@ -76,7 +77,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
             results.append(evaluate_scene(name, frames, config=config, backend=backend, model_factory=model_factory,
                                           hooks=hooks))
     result = merge_scene_results(results, evaluation_info(dataset, backend, config, names),
-                                 config.behaviour.conflict_probability)
+                                 CONFLICT_PROBABILITY)
     result.extras["files"] = sinks.files + ([pairs.path] if pairs else [])
     return result
 

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pedenv.behaviour.conflict import CONFLICT_PROBABILITY
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.evaluation.behaviour import BehaviourRecorder, BehaviourSamples, behaviour_summary
@@ -122,7 +123,7 @@ def _behaviour(results: Sequence[SceneResult], threshold: float) -> dict | None:
 
 
 def merge_scene_results(results: Sequence[SceneResult], info: dict,
-                        conflict_threshold: float = Config().behaviour.conflict_probability) -> EvaluationResult:
+                        conflict_threshold: float = CONFLICT_PROBABILITY) -> EvaluationResult:
     """The evaluation over ``results`` in their order (scene order), as one serial run gives it.
 
     Busiest frame: the first frame, in scene order, with the most settled tracks. Stage

@@ -9,6 +9,8 @@ import numpy as np
 from pedenv.behaviour.config import BehaviourConfig
 
 STANDING, WALKING, RUNNING = 0, 1, 2
+#: Names of the motion states, indexed by code (the confusion tables of ``evaluation.behaviour``).
+MOTION_STATE_NAMES = ("standing", "walking", "running")
 #: A filtered speed counts as above a threshold (``behaviour.walk_enter_mps``, ``run_enter_mps``;
 #: the walking direction's minimum speed) only when it exceeds it by this many of its standard
 #: deviations (1.5: about 93 % one-sided), so a standing person's filter noise does not start a walk.

@@ -14,7 +14,7 @@ scene has ended, against where that labelled person really is later:
 - conflict within ``conflict_horizon_s``: whether the labelled person enters the corridor
   (``corridor_half_width_m`` either side) of the ego's real path over the horizon, extended
   ``corridor_front_m`` ahead, against ``conflict_probability`` at or above the shipped
-  threshold (``behaviour.conflict_probability``): recall and precision. A person who stops being
+  threshold (``behaviour.conflict.CONFLICT_PROBABILITY``): recall and precision. A person who stops being
   labelled before the horizon (out of view: passed beside or behind the car) is judged on the
   labelled part (counted as ``partial_future``); one with no later label at all, or whose ego
   poses end before the horizon, is not scored (``unknown``).
