@@ -10,8 +10,8 @@ Topics and frames are found when there is one obvious choice (:func:`choose_topi
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -123,6 +123,8 @@ def load_bag_recording(path: str | Path, options: BagOptions | None = None, name
             raise InputError(f"{path}: topic {topics.camera_info_topic} message {info_msg[0]}: {exc}") from None
         frames_total = bag.topics[topics.image_topic].count
         shortfall = [bag.counts_differ] if bag.counts_differ else []
+        if bag.counts_differ:
+            warnings.warn(bag.counts_differ, stacklevel=2)
     moving = any(f in tree.dynamic for f in tree.chain(model.frame_id.lstrip("/")))
     use_odometry = topics.odometry_topic is not None and (opts.odometry_topic is not None or not moving)
     odom_world = odom_vehicle = None

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import shutil
 import tempfile
-import warnings
 from collections.abc import Callable
 from contextlib import ExitStack
 from pathlib import Path
@@ -30,6 +29,9 @@ from pedenv.errors import InputError
 #: multiple of its own size: zstd compresses camera images and CDR about 2 to 4 times, so 10 leaves
 #: room for dark or static footage while a bomb (1000 times and more) is refused before its disk is used.
 MAX_FILE_DECOMPRESSION_RATIO = 10
+#: The temporary space a file-compressed rosbag2 always gets, bytes (a small bag's database
+#: holds its schema and indexes, more than 10 times its compressed size).
+MIN_TEMPORARY_BYTES = 64 * 2**20
 
 
 class BombError(Exception):
@@ -130,7 +132,7 @@ def decompressed_copy(folder: Path, info: dict, stack: ExitStack) -> Path:
     names = [Path(str(p)).name for p in info.get("relative_file_paths") or []]
     files = [folder / n for n in names]
     own = sum(f.stat().st_size for f in files if f.is_file())
-    budget = MAX_FILE_DECOMPRESSION_RATIO * max(own, 1)
+    budget = max(MAX_FILE_DECOMPRESSION_RATIO * own, MIN_TEMPORARY_BYTES)
     tmp = Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="pedenv-bag-")))
     free = shutil.disk_usage(tmp).free
     if budget > free:
@@ -147,8 +149,9 @@ def decompressed_copy(folder: Path, info: dict, stack: ExitStack) -> Path:
                     if budget < 0:
                         raise InputError(
                             f"{folder}: {file.name} decompresses to more than {MAX_FILE_DECOMPRESSION_RATIO} times "
-                            f"the bag's {own} bytes (pedenv.recordings.bag_bounds.MAX_FILE_DECOMPRESSION_RATIO) or "
-                            "than the free temporary disk: a decompression bomb, or decompress the bag yourself")
+                            f"the bag's {own} bytes (at least {MIN_TEMPORARY_BYTES // 2**20} MiB; "
+                            "pedenv.recordings.bag_bounds.MAX_FILE_DECOMPRESSION_RATIO) or than the free temporary "
+                            "disk: a decompression bomb, or decompress the bag yourself")
                     dst.write(block)
         except (zstd.ZstdError, EOFError) as exc:
             raise InputError(f"{folder}: {file.name} is not a whole zstd file: {exc}") from None
@@ -161,8 +164,8 @@ def decompressed_copy(folder: Path, info: dict, stack: ExitStack) -> Path:
 
 def check_counts(path: Path, reader: Any) -> str | None:
     """``metadata.yaml``'s counts and types against what a rosbag2's storage holds: InputError for a
-    count that is no whole number or a type that disagrees; for counts that disagree, a warning
-    (returned too) and the storage's counts put in ``reader.connections``."""
+    count that is no whole number or a type that disagrees; for counts that disagree, the line to
+    warn with (returned) and the storage's counts put in ``reader.connections``."""
     storage: dict[str, tuple[set[str], int]] = {}
     for s in getattr(reader, "storages", []):
         for c in s.connections:
@@ -183,7 +186,5 @@ def check_counts(path: Path, reader: Any) -> str | None:
             reader.connections[i] = conn._replace(msgcount=held)
     if not lost:
         return None
-    text = (f"{path}: the storage holds fewer or more messages than metadata.yaml counts ({'; '.join(lost)}): "
+    return (f"{path}: the storage holds fewer or more messages than metadata.yaml counts ({'; '.join(lost)}): "
             "messages lost or the metadata edited; reading what the storage holds")
-    warnings.warn(text, stacklevel=3)
-    return text

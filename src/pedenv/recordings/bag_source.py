@@ -15,8 +15,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeAlias
 
 from pedenv.errors import InputError, require_extra
-from pedenv.recordings.bag_bounds import (BombError, check_chunks, check_counts, decompressed_copy,
-                                          install_mcap_bounds, message_decompress, read_metadata)
+from pedenv.recordings.bag_bounds import (
+    BombError,
+    check_chunks,
+    check_counts,
+    decompressed_copy,
+    install_mcap_bounds,
+    message_decompress,
+    read_metadata,
+)
 
 if TYPE_CHECKING:
     from pedenv.recordings.bag_stream import StreamingMcap
@@ -134,11 +141,12 @@ class BagSource:
     def _check_sizes(self, reader: Any) -> None:
         """The bounds of :mod:`pedenv.recordings.bag_bounds` a bag's index and metadata allow checking
         before a message is read; ``compression_mode: message`` is decompressed here (bounded), not by the reader."""
-        check_chunks(self.path, [reader, *getattr(reader, "storages", [])], self.max_message_bytes)
-        if self.kind == "rosbag2" and hasattr(reader, "storages"):
-            self.counts_differ = check_counts(self.path, reader)
-            if reader.metadata.compression_mode == "message":
-                reader.metadata = reader.metadata._replace(compression_mode=None)
+        inner = getattr(reader, "storage", reader)  # rosbags' Reader of a rosbag2 folder wraps its DirectoryReader
+        check_chunks(self.path, [inner, *getattr(inner, "storages", [])], self.max_message_bytes)
+        if self.kind == "rosbag2" and hasattr(inner, "storages"):
+            self.counts_differ = check_counts(self.path, inner)
+            if inner.metadata.compression_mode == "message":
+                inner.metadata = inner.metadata._replace(compression_mode=None)
                 self.zstd_messages = True
 
     def _summaries(self) -> dict[str, TopicSummary]:
