@@ -250,3 +250,16 @@ def test_a_bomb_is_one_line_from_pedenv_run(tmp_path, monkeypatch, capsys):
     assert code == 2 and "Traceback" not in out + err
     assert err.splitlines()[-1] == (f"error: {bag}: topic {INFO_TOPIC} message 0: CameraInfo image size 20000x20000 "
                                     "is above the limit of 64 megapixels (pedenv.images.MAX_IMAGE_PIXELS)")
+
+
+@pytest.mark.parametrize("storage, compression", [("mcap-file", "chunks"), ("sqlite3", "message")])
+def test_inspect_bag_takes_the_rates_from_the_indexes(tmp_path, monkeypatch, capsys, storage, compression):
+    """Nothing decompressed for the topic list: the MCAP message indexes, a sqlite3 query."""
+    from pedenv.recordings.bag_source import BagSource
+
+    bag = tiny_bag(tmp_path / ("a.mcap" if storage == "mcap-file" else "a"), storage=storage, compression=compression)
+    monkeypatch.setattr(BagSource, "log_spans", None)  # reading every message is not needed
+    code, out, _ = pedenv(monkeypatch, capsys, "inspect-bag", bag)
+    assert code == 0
+    assert "  /camera/image_raw    sensor_msgs/Image  3 msgs  10.00 Hz" in out.splitlines()
+    assert "  /tf                  tf2_msgs/TFMessage  7 msgs  20.00 Hz" in out.splitlines()

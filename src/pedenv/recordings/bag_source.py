@@ -138,6 +138,11 @@ class BagSource:
     def __exit__(self, *exc: object) -> None:
         self._stack.close()
 
+    @property
+    def reader(self) -> Any:
+        """The ``rosbags`` reader (or :class:`~pedenv.recordings.bag_stream.StreamingMcap`) of the open bag."""
+        return self._reader
+
     def _check_sizes(self, reader: Any) -> None:
         """The bounds of :mod:`pedenv.recordings.bag_bounds` a bag's index and metadata allow checking
         before a message is read; ``compression_mode: message`` is decompressed here (bounded), not by the reader."""
