@@ -31,7 +31,7 @@ from pedenv.errors import InputError
 MAX_FILE_DECOMPRESSION_RATIO = 10
 #: The temporary space a file-compressed rosbag2 always gets, bytes (a small bag's database
 #: holds its schema and indexes, more than 10 times its compressed size).
-MIN_TEMPORARY_BYTES = 64 * 2**20
+MIN_TEMPORARY_BYTES = 16 * 2**20
 
 
 class BombError(Exception):
