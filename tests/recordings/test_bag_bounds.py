@@ -263,3 +263,34 @@ def test_inspect_bag_takes_the_rates_from_the_indexes(tmp_path, monkeypatch, cap
     assert code == 0
     assert "  /camera/image_raw    sensor_msgs/Image  3 msgs  10.00 Hz" in out.splitlines()
     assert "  /tf                  tf2_msgs/TFMessage  7 msgs  20.00 Hz" in out.splitlines()
+
+
+@pytest.mark.parametrize("fmt", ["BZ2", "LZ4"])
+def test_a_compressed_ros1_chunk_is_bounded(tmp_path, fmt):
+    """ROS 1 chunks do not keep their uncompressed size in rosbags: each is cut at max_message_bytes."""
+    from rosbags.rosbag1 import Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC)
+    t = store.types
+    header = t["std_msgs/msg/Header"](seq=0, stamp=t["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+                                      frame_id="camera_optical")
+    roi = t["sensor_msgs/msg/RegionOfInterest"](x_offset=0, y_offset=0, height=0, width=0, do_rectify=False)
+    info = t["sensor_msgs/msg/CameraInfo"](header=header, height=48, width=64, distortion_model="plumb_bob",
+                                           D=np.zeros(5), K=np.array(K).ravel(), R=np.eye(3).ravel(),
+                                           P=np.zeros(12), binning_x=0, binning_y=0, roi=roi)
+    zeros = t["sensor_msgs/msg/Image"](header=header, height=900, width=1000, encoding="rgb8", is_bigendian=0,
+                                       step=3000, data=np.zeros(2_700_000, np.uint8))
+    bag = tmp_path / "a.bag"
+    writer = Writer(bag)
+    writer.set_compression(getattr(Writer.CompressionFormat, fmt))
+    writer.chunk_threshold = 2**23  # one chunk holding both messages
+    with writer:
+        for topic, kind, msg in ((INFO_TOPIC, "sensor_msgs/msg/CameraInfo", info),
+                                 (IMAGE_TOPIC, "sensor_msgs/msg/Image", zeros)):
+            conn = writer.add_connection(topic, kind, typestore=store)
+            writer.write(conn, 1, store.serialize_ros1(msg, kind))
+    assert re.fullmatch(rf"{re.escape(str(bag))}: first chunk: a {fmt.lower()} chunk of \d+ bytes "
+                        r"decompresses to more than bag.max_message_bytes \(1048576\); a decompression bomb or a "
+                        "corrupt chunk", _error(bag, BagOptions(max_message_bytes=2**20)))
+    assert "has no transform" in _error(bag)  # within the default bound the chunk is read (this bag has no /tf)

@@ -3,6 +3,7 @@
 A few megabytes of zstd can hold gigabytes of zeros. Every size is therefore read from the
 bag's own records first and checked, and every decompression is cut at the size announced:
 
+- ROS 1 chunks (bz2, lz4): each decompressed to at most ``bag.max_message_bytes``.
 - MCAP chunks: each chunk's uncompressed size (its index record) and the chunks open at once
   (the reader merges chunks that overlap in time) must stay within ``bag.max_message_bytes``;
   a chunk that decompresses to more than it announced is refused at that size.
@@ -64,15 +65,37 @@ def bounded_decompress(data: bytes, compression: str, size: int, limit: int) -> 
     return raw
 
 
-def install_mcap_bounds(limit: int) -> None:
-    """Make the ``rosbags`` MCAP reader decompress its chunks through :func:`bounded_decompress`
-    (its own decompressors take the announced size but do not hold to it)."""
+def install_bounds(limit: int) -> None:
+    """Make the ``rosbags`` readers decompress through bounded decompressors: MCAP chunks within
+    their announced size and ``limit`` (:func:`bounded_decompress`; rosbags' own take the size but
+    do not hold to it), ROS 1 chunks (whose size rosbags does not keep) within ``limit``. Called
+    before each bag is opened (ROS 1 keeps the decompressor of each chunk it indexes)."""
+    from rosbags.rosbag1 import reader as ros1
     from rosbags.rosbag2 import storage_mcap
 
     def make(compression: str) -> Callable[[bytes, int], bytes]:
         return lambda data, size: bounded_decompress(data, compression, size, limit)
 
     storage_mcap.DECOMPRESSORS.update({"zstd": make("zstd"), "lz4": make("lz4")})
+    ros1.decompressors.update({"bz2": lambda data: _ros1_chunk(data, "bz2", limit),
+                               "lz4": lambda data: _ros1_chunk(data, "lz4", limit)})
+
+
+def _ros1_chunk(data: bytes, compression: str, limit: int) -> bytes:
+    """A ROS 1 chunk (bz2 or lz4) decompressed, refused beyond ``limit`` bytes."""
+    if compression == "bz2":
+        import bz2
+
+        decompressor: Any = bz2.BZ2Decompressor()
+    else:
+        import lz4.frame
+
+        decompressor = lz4.frame.LZ4FrameDecompressor()
+    raw = decompressor.decompress(data, max_length=limit + 1)
+    if len(raw) > limit:
+        raise BombError(f"a {compression} chunk of {len(data)} bytes decompresses to more than bag.max_message_bytes "
+                        f"({limit}); a decompression bomb or a corrupt chunk")
+    return raw
 
 
 def check_chunks(path: Path, readers: list[Any], limit: int) -> None:

@@ -20,7 +20,7 @@ from pedenv.recordings.bag_bounds import (
     check_chunks,
     check_counts,
     decompressed_copy,
-    install_mcap_bounds,
+    install_bounds,
     message_decompress,
     read_metadata,
 )
@@ -106,7 +106,7 @@ class BagSource:
         from rosbags.rosbag2.storage_mcap import McapReader
 
         opener: Any = {"ros1": Reader1, "rosbag2": Reader2, "mcap": McapReader}[self.kind]
-        install_mcap_bounds(self.max_message_bytes)
+        install_bounds(self.max_message_bytes)
         try:
             folder = self.path
             if self.kind == "rosbag2" and str(read_metadata(folder).get("compression_mode", "")).lower() == "file":
@@ -174,7 +174,7 @@ class BagSource:
         counts = dict.fromkeys(topics, 0)
         if not conns:
             return
-        last = {"topic": "?", "index": -1}
+        last: dict[str, Any] = {"topic": "?", "index": -1}
         stream = self._reader.messages(connections=conns)
         try:
             for conn, log_ns, raw in stream:
@@ -185,7 +185,8 @@ class BagSource:
         except InputError:
             raise
         except BombError as exc:
-            raise InputError(f"{self.path}: after topic {last['topic']} message {last['index']}: {exc}") from None
+            after = f"after topic {last['topic']} message {last['index']}" if last["index"] >= 0 else "first chunk"
+            raise InputError(f"{self.path}: {after}: {exc}") from None
         except Exception as exc:  # noqa: BLE001 - the container itself is damaged past this point
             raise InputError(f"{self.path}: damaged or truncated after topic {last['topic']} message "
                              f"{last['index']}: {_why(exc)}") from None
