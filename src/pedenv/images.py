@@ -102,3 +102,9 @@ def _checked_size(path: str | Path, data: BinaryIO) -> tuple[int, int]:
         raise InputError(f"{path}: the image is {width}x{height} pixels, above the limit of "
                          f"{MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)")
     return width, height
+
+
+def encoded_image_size(name: str, data: bytes) -> tuple[int, int]:
+    """(width, height) pixels of an encoded image held in memory (PNG, JPEG, ...) from its header,
+    without decoding it; InputError naming ``name`` when it is unreadable or above :data:`MAX_IMAGE_PIXELS`."""
+    return _checked_size(name, io.BytesIO(data))

@@ -1,10 +1,12 @@
 """The serial and Ray executors: results per item, failures per item, one cached object per process."""
 
 import os
+import resource
 import socket
 
 import pytest
 
+from pedenv.apps import executors
 from pedenv.apps.executors import RayExecutor, SerialExecutor, check_reachable, create_executor
 from pedenv.errors import InputError
 
@@ -116,7 +118,22 @@ def test_an_unreachable_or_malformed_address_is_one_clear_error(address, message
     ("serial", {"address": "10.0.0.1:6379"}, "--address applies to --executor ray"),
     ("ray", {"workers": 0}, r"workers must be an integer in \[1, 1024\]"),
     ("ray", {"workers": 100_000_000}, r"workers must be an integer in \[1, 1024\], got 100000000"),
+    ("ray", {"object_store_memory": 10}, r"--object-store-memory must be at least 78643200 bytes \(Ray's minimum\), "
+                                         "got 10"),
 ])
 def test_create_executor_refuses_bad_options(name, options, message):
     with pytest.raises(InputError, match=message):
         create_executor(name, **options)
+
+
+def test_the_object_store_fits_the_machine_and_an_address_space_limit(monkeypatch):
+    """Ray's own default store is 30 % of memory, mapped at start: under ``ulimit -v`` that broke the start."""
+    low, high = executors.OBJECT_STORE_RANGE
+    assert low <= executors.default_object_store_bytes() <= high
+    monkeypatch.setattr(resource, "getrlimit", lambda _: (8_000_000 * 1024, resource.RLIM_INFINITY))
+    assert executors.default_object_store_bytes() <= 2_048_000_000  # a quarter of the 8 GB limit
+    executors.check_object_store(executors.default_object_store_bytes())
+    with pytest.raises(InputError) as info:
+        create_executor("ray", object_store_memory=4 * 2**30)
+    assert str(info.value) == ("a Ray object store of 4.00 GiB does not fit the address-space limit (ulimit -v) of "
+                               "7.63 GiB: give --object-store-memory at most 2048000000 bytes, or raise the limit")

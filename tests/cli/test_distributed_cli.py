@@ -47,6 +47,8 @@ def test_an_unreachable_ray_address_is_one_line_and_nothing_runs(monkeypatch, ca
     (["--executor", "dask"], "unknown executor 'dask'; valid: serial, ray"),
     (["--address", "10.0.0.1:6379"], "--address and --workers apply to --executor ray"),
     (["--workers", "2"], "--address and --workers apply to --executor ray"),
+    (["--executor", "ray", "--object-store-memory", "10"],
+     "--object-store-memory must be at least 78643200 bytes (Ray's minimum), got 10"),
     (["--executor", "ray", "--method", "both"], "--method both run in the serial in-process evaluation only"),
     (["--resume", "--parquet"], "--parquet run in the serial in-process evaluation only"),
 ])

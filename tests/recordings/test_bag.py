@@ -13,7 +13,7 @@ from pedenv.recordings.footage_writer import write_kitti_recording, write_mot17_
 
 from shared_paths import REAL_SAMPLES
 
-pytest.importorskip("rosbags", reason="the ros extra")
+pytestmark = pytest.mark.ros  # the ros extra (rosbags, mcap)
 
 KITTI = REAL_SAMPLES / "kitti" / "tracking_mini" / "training"
 MOT17 = REAL_SAMPLES / "mot17" / "MOT17-09-FRCNN"

@@ -10,7 +10,7 @@ from pedenv.recordings.footage_writer import write_kitti_recording
 from cli_in_process import pedenv
 from shared_paths import REAL_SAMPLES
 
-pytest.importorskip("rosbags", reason="the ros extra")
+pytestmark = pytest.mark.ros  # the ros extra (rosbags, mcap)
 
 
 @pytest.fixture(scope="module")

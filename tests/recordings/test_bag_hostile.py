@@ -12,7 +12,7 @@ from pedenv.recordings.bag_topics import BagOptions
 
 from shared_paths import REAL_SAMPLES
 
-pytest.importorskip("rosbags", reason="the ros extra")
+pytestmark = pytest.mark.ros  # the ros extra (rosbags, mcap)
 
 
 @pytest.fixture(scope="module")

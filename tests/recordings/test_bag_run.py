@@ -12,8 +12,7 @@ from pedenv.recordings.footage_writer import write_mot17_recording
 from cli_in_process import pedenv
 from shared_paths import REAL_SAMPLES
 
-pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model, pytest.mark.slow]
-pytest.importorskip("rosbags", reason="the ros extra")
+pytestmark = [pytest.mark.ultralytics, pytest.mark.onnx_model, pytest.mark.slow, pytest.mark.ros]
 
 NAMES = {"ros1": "images.bag", "mcap-file": "images.mcap"}
 

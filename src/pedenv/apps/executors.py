@@ -16,15 +16,23 @@ The Ray executor uses Ray's own machinery: one remote task per item with ``max_r
 finished items and ``ray.util.queue.Queue`` for frame counts. Without an address it
 starts a local Ray with ``workers`` CPUs and shuts it down on the way out, Ctrl-C
 included, so no Ray process it started outlives the run; with ``address`` it joins a
-running cluster (``ray start --head``) and only disconnects.
+running cluster (``ray start --head``) and only disconnects. A local Ray's object store is
+sized to the machine (:func:`default_object_store_bytes`) and checked against an address-space
+limit (``ulimit -v``) before Ray starts; a start that fails or does not finish within
+:data:`RAY_START_TIMEOUT_S` is one line, and every Ray process it left is stopped.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import resource
+import signal
 import socket
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
 from typing import Any
 
 from pedenv.errors import InputError, require_extra
@@ -38,7 +46,46 @@ REPORT_INTERVAL_S = 0.5
 #: Seconds to wait for a TCP connection to a cluster's address before calling it unreachable.
 CONNECT_TIMEOUT_S = 5.0
 
+#: Seconds a local Ray may take to start (10 to 30 s on two busy cores) before the start is
+#: given up as hung, with one error line.
+RAY_START_TIMEOUT_S = 120
+#: Bounds of a local Ray's object store, bytes: Ray's own minimum (75 MiB) and the most pedenv asks
+#: for by default. pedenv puts in the store only the shared settings and each item's result
+#: (kilobytes to a few megabytes a scene).
+OBJECT_STORE_RANGE = (75 * 2**20, 2 * 2**30)
+#: Share of an address-space limit (``ulimit -v``) the object store may take: Ray maps it whole,
+#: and the driver's own libraries, threads and heap need the rest.
+MAX_STORE_SHARE_OF_ADDRESS_SPACE = 0.25
+
 Outcome = tuple[Any, Any, BaseException | None]
+
+
+def default_object_store_bytes() -> int:
+    """A local Ray's object store when none is given: 10 % of the machine's memory, within
+    :data:`OBJECT_STORE_RANGE` and :data:`MAX_STORE_SHARE_OF_ADDRESS_SPACE` of an address-space
+    limit (Ray's own default, 30 % of memory, is mapped from the start and counts against ``ulimit -v``)."""
+    try:
+        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError):
+        memory = 8 * 2**30
+    low, high = OBJECT_STORE_RANGE
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if limit != resource.RLIM_INFINITY:
+        high = min(high, int(MAX_STORE_SHARE_OF_ADDRESS_SPACE * limit))
+    return int(max(min(memory // 10, high), low))
+
+
+def check_object_store(size: int) -> None:
+    """InputError when ``size`` (bytes) is outside Ray's minimum or does not fit the process's
+    address-space limit (``ulimit -v``) with room for the rest of the driver."""
+    if isinstance(size, bool) or not isinstance(size, int) or size < OBJECT_STORE_RANGE[0]:
+        raise InputError(f"--object-store-memory must be at least {OBJECT_STORE_RANGE[0]} bytes (Ray's minimum), "
+                         f"got {size!r}")
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if limit != resource.RLIM_INFINITY and size > MAX_STORE_SHARE_OF_ADDRESS_SPACE * limit:
+        raise InputError(f"a Ray object store of {size / 2**30:.2f} GiB does not fit the address-space limit "
+                         f"(ulimit -v) of {limit / 2**30:.2f} GiB: give --object-store-memory at most "
+                         f"{int(MAX_STORE_SHARE_OF_ADDRESS_SPACE * limit)} bytes, or raise the limit")
 
 
 class TaskContext:
@@ -90,7 +137,7 @@ class RayExecutor:
 
     workers: CPUs of the local Ray, or the most items in flight on a cluster (default: all
     its CPUs). max_retries: Ray's retries of an item whose worker died. object_store_memory:
-    bytes of the local Ray's object store (None: Ray's default).
+    bytes of the local Ray's object store (None: :func:`default_object_store_bytes`).
     """
 
     name = "ray"
@@ -103,6 +150,8 @@ class RayExecutor:
         if isinstance(max_retries, bool) or not isinstance(max_retries, int) or max_retries < 0:
             raise InputError(f"max_retries must be an integer >= 0, got {max_retries!r}")
         self.address, self.workers, self.max_retries = address, workers, max_retries
+        if object_store_memory is not None and address is None:
+            check_object_store(object_store_memory)
         self.object_store_memory = object_store_memory
         self._started = False
 
@@ -117,15 +166,21 @@ class RayExecutor:
         options: dict[str, Any] = {"include_dashboard": False, "log_to_driver": False}
         if self.address is None:
             options["num_cpus"] = self.workers or os.cpu_count() or 1
-            if self.object_store_memory:
-                options["object_store_memory"] = self.object_store_memory
+            options["object_store_memory"] = self.object_store_memory or default_object_store_bytes()
+            check_object_store(options["object_store_memory"])  # the default against ulimit -v
         try:
-            ray.init(address=self.address, **options)
+            with _deadline(RAY_START_TIMEOUT_S):
+                ray.init(address=self.address, **options)
         except ConnectionError as exc:
-            ray.shutdown()
+            _stop_ray(ray)
             raise InputError(f"cannot join the Ray cluster at {self.address}: {exc}") from None
+        except TimeoutError:
+            _stop_ray(ray)
+            where = f"the Ray cluster at {self.address}" if self.address else "a local Ray"
+            raise InputError(f"{where} did not start within {RAY_START_TIMEOUT_S} s (too little memory or "
+                             "address space for it? ulimit -v, --object-store-memory); it was stopped") from None
         except BaseException:  # Ctrl-C while Ray starts: stop what has started
-            ray.shutdown()
+            _stop_ray(ray)
             raise
         self._started = True
         return self
@@ -170,6 +225,75 @@ class RayExecutor:
                 ray.cancel(ref, force=True)
             if queue is not None:
                 queue.shutdown()
+
+
+class _deadline:
+    """Raises TimeoutError in the main thread after ``seconds`` (SIGALRM; elsewhere: no deadline)."""
+
+    def __init__(self, seconds: int) -> None:
+        self.seconds = seconds
+        self.armed = threading.current_thread() is threading.main_thread() and hasattr(signal, "SIGALRM")
+
+    def __enter__(self) -> None:
+        if self.armed:
+            self.previous = signal.signal(signal.SIGALRM, self._expire)
+            signal.alarm(self.seconds)
+
+    def _expire(self, *_: object) -> None:
+        raise TimeoutError
+
+    def __exit__(self, *exc: object) -> None:
+        if self.armed:
+            signal.alarm(0)
+            signal.signal(signal.SIGALRM, self.previous)
+
+
+def _stop_ray(ray: Any) -> None:
+    """Shut Ray down and end any process this one started that is still alive (a start cut short
+    leaves Ray's GCS server and raylet behind)."""
+    children = _descendants(os.getpid())
+    try:
+        ray.shutdown()
+    finally:
+        _end(children)
+
+
+def _end(pids: list[int]) -> None:
+    """SIGTERM to the processes ``pids`` still alive, SIGKILL to those alive 5 s later."""
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        alive = [pid for pid in pids if _alive(pid)]
+        for pid in alive:
+            with contextlib.suppress(OSError):
+                os.kill(pid, sig)
+        for _ in range(50):
+            if not any(_alive(pid) for pid in alive):
+                break
+            time.sleep(0.1)
+
+
+def _descendants(pid: int) -> list[int]:
+    """The process ids below ``pid`` (children, theirs, ...), from ``/proc`` (Linux; elsewhere none)."""
+    parents: dict[int, list[int]] = {}
+    for entry in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = entry.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        parents.setdefault(int(fields[1]), []).append(int(entry.parent.name))
+    found, todo = [], [pid]
+    while todo:
+        for child in parents.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return stat.rsplit(")", 1)[1].split()[0] != "Z"  # a zombie has ended
 
 
 def _cause(exc: BaseException) -> BaseException:

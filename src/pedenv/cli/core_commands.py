@@ -16,6 +16,7 @@ from pedenv.cli.options import (
     Device,
     Executor,
     Mcap,
+    ObjectStore,
     Overwrite,
     Parquet,
     RerunOption,
@@ -127,6 +128,7 @@ def evaluate(
     executor: Executor = "serial",
     address: Address = None,
     workers: Workers = None,
+    object_store_memory: ObjectStore = None,
     resume: Resume = False,
     device: Device = "auto",
 ) -> None:
@@ -141,7 +143,8 @@ def evaluate(
         pose=PoseOptions(pose_backend, detection=detection, device=device),
         method=MethodOptions(config, method, refine=False if no_refinement else None,
                              initial_estimate=initial_estimate, cues=split_names(cues)),
-        executor=ExecutorOptions(executor, address=address, workers=workers, resume=resume),
+        executor=ExecutorOptions(executor, address=address, workers=workers, resume=resume,
+                                 object_store_memory=object_store_memory),
         ablation=ablation)
     _print_evaluation(outcome, dataset)
 

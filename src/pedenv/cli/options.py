@@ -47,6 +47,9 @@ Address = Annotated[str | None, typer.Option(
     "--address", help="Ray cluster HOST:PORT (`ray start --head`); default: a local Ray.")]
 Workers = Annotated[int | None, typer.Option(
     "--workers", help="Ray: CPUs of the local Ray, or most tasks at once on a cluster.")]
+ObjectStore = Annotated[int | None, typer.Option(
+    "--object-store-memory", help="Ray: bytes of the local Ray's object store (default: a tenth of memory, at most "
+                                  "2 GiB).")]
 Resume = Annotated[bool, typer.Option(
     "--resume", help="Keep the scenes (or --manifest recordings) an earlier run in --output completed; run the "
                      "rest.")]

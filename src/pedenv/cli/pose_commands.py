@@ -16,6 +16,7 @@ from pedenv.cli.options import (
     Device,
     Executor,
     Mcap,
+    ObjectStore,
     Overwrite,
     Parquet,
     PoseInputSize,
@@ -123,6 +124,7 @@ def run(
     executor: Executor = "serial",
     address: Address = None,
     workers: Workers = None,
+    object_store_memory: ObjectStore = None,
     resume: Resume = False,
     bag: Path | None = typer.Option(
         None, "--bag", help="A ROS bag instead of images + calibration + ego poses: rosbag2 folder, .mcap or .bag."),
@@ -155,7 +157,8 @@ def run(
         flags=OutputFlags(parquet=parquet, rerun=rerun, mcap=mcap, ros=ros_out, live=live_port if live else None),
         pose=PoseOptions(pose_backend, pose_model, pose_input_size, detection, device),
         method=MethodOptions(config, method), manifest=manifest, realtime=realtime,
-        executor=ExecutorOptions(executor, address=address, workers=workers, resume=resume))
+        executor=ExecutorOptions(executor, address=address, workers=workers, resume=resume,
+                                 object_store_memory=object_store_memory))
     if outcome.manifest:
         _print_manifest(outcome.summary, output)
         return

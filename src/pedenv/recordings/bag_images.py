@@ -12,7 +12,9 @@ import cv2
 import numpy as np
 
 from pedenv.errors import InputError
+from pedenv.images import encoded_image_size
 from pedenv.recordings.bag_source import RosMessage
+from pedenv.recordings.calibration_fields import camera_problem
 
 IMAGE_TYPE = "sensor_msgs/msg/Image"
 COMPRESSED_TYPE = "sensor_msgs/msg/CompressedImage"
@@ -31,15 +33,26 @@ _TO_RGB = {"bgr8": cv2.COLOR_BGR2RGB, "8UC3": cv2.COLOR_BGR2RGB, "rgba8": cv2.CO
            "bayer_gbrg8": cv2.COLOR_BayerGR2RGB, "bayer_grbg8": cv2.COLOR_BayerGB2RGB,
            "yuv422": cv2.COLOR_YUV2RGB_UYVY, "uyvy": cv2.COLOR_YUV2RGB_UYVY,
            "yuv422_yuy2": cv2.COLOR_YUV2RGB_YUY2, "yuyv": cv2.COLOR_YUV2RGB_YUY2}
-DISTORTION_MODELS = ("plumb_bob", "rational_polynomial", "equidistant")
+#: The distortion models read, with the number of coefficients ROS defines for each.
+DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8, "equidistant": 4}
+#: Largest distortion coefficient in size: calibrated lenses, fisheyes included, stay below about
+#: 10 (OpenCV's rational model's k4..k6 reach a few tens); far beyond it the undistortion maps
+#: every pixel off the image (black frames).
+MAX_DISTORTION_COEFFICIENT = 100.0
+#: Encodings whose two-pixel groups need an even width (YUV 4:2:2 packs U and V per pixel pair).
+PAIRED_ENCODINGS = ("yuv422", "uyvy", "yuv422_yuy2", "yuyv")
 
 
-def image_rgb(msg: RosMessage, msgtype: str) -> np.ndarray:
-    """(H, W, 3) uint8 RGB of an Image or CompressedImage message; InputError says what is wrong."""
+def image_rgb(msg: RosMessage, msgtype: str, size: tuple[int, int]) -> np.ndarray:
+    """(H, W, 3) uint8 RGB of an Image or CompressedImage message whose camera is ``size``
+    (width, height) pixels; InputError says what is wrong. The size is checked before decoding
+    (a compressed image's from its header, as image files are: :func:`pedenv.images.encoded_image_size`)."""
     if msgtype == COMPRESSED_TYPE:
         fmt = str(msg.format).lower()
         if "compresseddepth" in fmt.replace(" ", ""):
             raise InputError(f"compressed depth images ({msg.format!r}) are not camera images")
+        data = np.asarray(msg.data, np.uint8)
+        _check_size(encoded_image_size("the compressed image", data.tobytes()), size)
         bgr = cv2.imdecode(np.asarray(msg.data, np.uint8), cv2.IMREAD_COLOR) if len(msg.data) else None
         if bgr is None:
             raise InputError(f"the compressed image (format {msg.format!r}, {len(msg.data)} bytes) cannot be decoded")
@@ -49,6 +62,9 @@ def image_rgb(msg: RosMessage, msgtype: str) -> np.ndarray:
         raise InputError(f"unknown image encoding {encoding!r} (known: {', '.join(ENCODINGS)})")
     channels, depth = ENCODINGS[encoding]
     h, w, step = int(msg.height), int(msg.width), int(msg.step)
+    _check_size((w, h), size)
+    if encoding in PAIRED_ENCODINGS and w % 2:
+        raise InputError(f"a {encoding} image needs an even width (pixels come in pairs), got {w}")
     data = np.asarray(msg.data, np.uint8)
     if h <= 0 or w <= 0 or step < w * channels * depth or len(data) != h * step:
         raise InputError(f"image fields disagree: {w}x{h} {encoding}, step {step}, {len(data)} data bytes "
@@ -60,6 +76,11 @@ def image_rgb(msg: RosMessage, msgtype: str) -> np.ndarray:
     else:
         pixels = np.ascontiguousarray(rows.reshape(h, w, channels) if channels > 1 else rows.reshape(h, w))
     return pixels if encoding == "rgb8" else cv2.cvtColor(pixels, _TO_RGB[encoding])
+
+
+def _check_size(got: tuple[int, int], size: tuple[int, int]) -> None:
+    if got != size:
+        raise InputError(f"the image is {got[0]}x{got[1]} pixels, the CameraInfo says {size[0]}x{size[1]}")
 
 
 @dataclass(frozen=True)
@@ -94,11 +115,17 @@ def camera_model(msg: RosMessage) -> CameraModel:
         raise InputError(f"the distortion coefficients are not finite: {d.tolist()}")
     if np.any(d) and model not in DISTORTION_MODELS:
         raise InputError(f"unknown distortion model {model!r} (known: {', '.join(DISTORTION_MODELS)})")
-    if model == "equidistant" and np.any(d) and len(d) != 4:
-        raise InputError(f"the equidistant model takes 4 coefficients, got {len(d)}")
-    if int(msg.width) <= 0 or int(msg.height) <= 0:
-        raise InputError(f"image size {msg.width}x{msg.height} is not positive")
-    return CameraModel(k, int(msg.width), int(msg.height), model, d, str(msg.header.frame_id))
+    if np.any(d) and len(d) != DISTORTION_MODELS[model]:
+        raise InputError(f"the {model} model takes {DISTORTION_MODELS[model]} coefficients (field d), got {len(d)}")
+    if np.any(np.abs(d) > MAX_DISTORTION_COEFFICIENT):
+        i = int(np.argmax(np.abs(d)))
+        raise InputError(f"distortion coefficient d[{i}] = {d[i]:g} is beyond {MAX_DISTORTION_COEFFICIENT:g} in size "
+                         "(pedenv.recordings.bag_images.MAX_DISTORTION_COEFFICIENT)")
+    width, height = int(msg.width), int(msg.height)
+    problem = camera_problem(k, width, height)
+    if problem is not None:
+        raise InputError(f"CameraInfo {problem}")
+    return CameraModel(k, width, height, model, d, str(msg.header.frame_id))
 
 
 class Undistorter:

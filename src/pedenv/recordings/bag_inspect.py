@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import struct
+from dataclasses import replace
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.recordings.bag import load_bag_recording
@@ -17,7 +22,10 @@ def inspect_bag(path: str | Path, options: BagOptions | None = None) -> dict:
     ``run_error`` (the one line it would fail with)."""
     opts = options or BagOptions()
     with BagSource(path, max_message_bytes=opts.max_message_bytes) as bag:
-        topics = bag.log_spans()
+        spans = index_spans(bag.reader)
+        topics = bag.log_spans() if spans is None else {
+            name: replace(t, first_ns=spans.get(name, (0, 0))[0], last_ns=spans.get(name, (0, 0))[1])
+            for name, t in bag.topics.items()}
         tree = TransformTree(str(path))
         for m in bag.messages(bag.topics_of(TF_TYPE), to_the_cut=True):
             tree.add(m.msg, static=m.topic.endswith("tf_static"), topic=m.topic, index=m.index)
@@ -42,6 +50,53 @@ def inspect_bag(path: str | Path, options: BagOptions | None = None) -> dict:
                       "frames": len(rec), "image_size": [rec.camera.width, rec.camera.height],
                       "distortion": rec.camera_model.model if rec.camera_model.distorted else "none"}
     return summary
+
+
+def index_spans(reader: Any) -> dict[str, tuple[int, int]] | None:
+    """Each topic's first and last receive time (ns) from the bag's indexes, nothing decompressed:
+    MCAP message indexes, ROS 1 index records, a sqlite3 query; None for a bag without them
+    (an MCAP file without a summary: its messages are read)."""
+    from rosbags.rosbag1 import Reader as Reader1
+    from rosbags.rosbag2.storage_mcap import McapReader
+    from rosbags.rosbag2.storage_sqlite3 import Sqlite3Reader
+
+    inner = getattr(reader, "storage", reader)
+    parts = [*getattr(inner, "storages", []), *([inner] if not hasattr(inner, "storages") else [])]
+    spans: dict[str, tuple[int, int]] = {}
+    for part in parts:
+        if isinstance(part, Reader1):
+            found = {c.topic: (ix[0].time, ix[-1].time) for c in part.connections if (ix := part.indexes.get(c.id))}
+        elif isinstance(part, McapReader) and part.chunks:
+            found = _mcap_spans(part)
+        elif isinstance(part, Sqlite3Reader) and part.dbconn is not None:
+            topics = {c.id: c.topic for c in part.connections}
+            rows = part.dbconn.cursor().execute("SELECT topic_id, MIN(timestamp), MAX(timestamp) FROM messages "
+                                                "GROUP BY topic_id")
+            found = {topics[t]: (int(lo), int(hi)) for t, lo, hi in rows if t in topics}
+        else:
+            return None
+        for topic, (lo, hi) in found.items():
+            old = spans.get(topic, (lo, hi))
+            spans[topic] = (min(old[0], lo), max(old[1], hi))
+    return spans
+
+
+def _mcap_spans(reader: Any) -> dict[str, tuple[int, int]]:
+    """First and last log time per topic from the message index records after each MCAP chunk."""
+    topics = {c.id: c.topic for c in reader.connections}
+    spans: dict[str, tuple[int, int]] = {}
+    bio = reader.bio
+    for chunk in reader.chunks:
+        for channel, offset in chunk.message_index_offsets.items():
+            bio.seek(offset)
+            op, _, _, size = struct.unpack("<BQHI", bio.read(15))
+            if op != 0x07 or channel not in topics or size < 16 or size % 16:
+                continue
+            stamps = np.frombuffer(bio.read(size), "<u8")[::2]  # (log time, offset) pairs, in any order
+            times = (int(stamps.min()), int(stamps.max()))
+            old = spans.get(topics[channel], times)
+            spans[topics[channel]] = (min(old[0], times[0]), max(old[1], times[1]))
+    return spans
 
 
 def format_inspection(summary: dict) -> str:

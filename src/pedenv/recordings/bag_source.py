@@ -15,14 +15,25 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeAlias
 
 from pedenv.errors import InputError, require_extra
+from pedenv.recordings.bag_bounds import (
+    BombError,
+    check_chunks,
+    check_counts,
+    decompressed_copy,
+    install_bounds,
+    message_decompress,
+    read_metadata,
+)
 
 if TYPE_CHECKING:
     from pedenv.recordings.bag_stream import StreamingMcap
 
-#: A message larger than this (bytes) is refused as corrupt before it is decoded: an 8K
-#: RGB image is 100 MB, so 512 MiB only stops a size field that lies or a runaway
-#: message that would exhaust memory. Raising it admits larger messages.
-MAX_MESSAGE_BYTES = 512 * 2**20
+#: A message larger than this (bytes) is refused as corrupt before it is decoded, and so is a
+#: compressed MCAP chunk (or chunks read at once) announcing more (:mod:`pedenv.recordings.bag_bounds`):
+#: an image at pedenv's pixel limit (64 MP, :data:`pedenv.images.MAX_IMAGE_PIXELS`) is 256 MB in
+#: rgba8 (an 8K RGB image 100 MB), so 256 MiB only stops a size field that lies, a runaway message
+#: or a decompression bomb, and keeps a bag's reading within 1 GB. Raising it admits larger messages.
+MAX_MESSAGE_BYTES = 256 * 2**20
 #: A decoded ROS message or a rosbags connection or typestore: rosbags builds its message classes
 #: at run time and mypy does not follow it (pyproject), so these are ``Any``, named for the reader.
 RosMessage: TypeAlias = Any
@@ -85,6 +96,9 @@ class BagSource:
         self._stack = ExitStack()
         self._reader: Any = None
         self.is_ros1 = self.kind == "ros1"
+        self.zstd_messages = False
+        #: The warning line when the storage holds other counts than metadata.yaml (None: they agree).
+        self.counts_differ: str | None = None
 
     def __enter__(self) -> BagSource:
         from rosbags.rosbag1 import Reader as Reader1
@@ -92,19 +106,28 @@ class BagSource:
         from rosbags.rosbag2.storage_mcap import McapReader
 
         opener: Any = {"ros1": Reader1, "rosbag2": Reader2, "mcap": McapReader}[self.kind]
+        install_bounds(self.max_message_bytes)
         try:
+            folder = self.path
+            if self.kind == "rosbag2" and str(read_metadata(folder).get("compression_mode", "")).lower() == "file":
+                folder = decompressed_copy(folder, read_metadata(folder), self._stack)
             try:
-                reader = opener(self.path)
+                reader = opener(folder)
                 reader.open()
             except Exception:
-                reader = _cut_mcap(self.path)  # a recording cut short: the messages before the cut
+                reader = _cut_mcap(folder, self.max_message_bytes)  # a recording cut short: the messages before it
                 if reader is None:
                     raise
             self._stack.callback(reader.close)
             self._reader = reader
+            self._check_sizes(reader)
             self.typestore = _typestore(reader.connections, self.is_ros1)
-        except InputError:
+        except (InputError, KeyboardInterrupt):
+            self._stack.close()
             raise
+        except BombError as exc:
+            self._stack.close()
+            raise InputError(f"{self.path}: {exc}") from None
         except Exception as exc:  # noqa: BLE001 - any library failure is a damaged bag
             self._stack.close()
             raise InputError(f"{self.path}: cannot open the bag (truncated or damaged?): {_why(exc)}") from None
@@ -114,6 +137,22 @@ class BagSource:
 
     def __exit__(self, *exc: object) -> None:
         self._stack.close()
+
+    @property
+    def reader(self) -> Any:
+        """The ``rosbags`` reader (or :class:`~pedenv.recordings.bag_stream.StreamingMcap`) of the open bag."""
+        return self._reader
+
+    def _check_sizes(self, reader: Any) -> None:
+        """The bounds of :mod:`pedenv.recordings.bag_bounds` a bag's index and metadata allow checking
+        before a message is read; ``compression_mode: message`` is decompressed here (bounded), not by the reader."""
+        inner = getattr(reader, "storage", reader)  # rosbags' Reader of a rosbag2 folder wraps its DirectoryReader
+        check_chunks(self.path, [inner, *getattr(inner, "storages", [])], self.max_message_bytes)
+        if self.kind == "rosbag2" and hasattr(inner, "storages"):
+            self.counts_differ = check_counts(self.path, inner)
+            if inner.metadata.compression_mode == "message":
+                inner.metadata = inner.metadata._replace(compression_mode=None)
+                self.zstd_messages = True
 
     def _summaries(self) -> dict[str, TopicSummary]:
         topics: dict[str, TopicSummary] = {}
@@ -135,7 +174,7 @@ class BagSource:
         counts = dict.fromkeys(topics, 0)
         if not conns:
             return
-        last = {"topic": "?", "index": -1}
+        last: dict[str, Any] = {"topic": "?", "index": -1}
         stream = self._reader.messages(connections=conns)
         try:
             for conn, log_ns, raw in stream:
@@ -145,6 +184,9 @@ class BagSource:
                 yield BagMessage(conn.topic, index, int(log_ns), self._decode(conn, index, raw))
         except InputError:
             raise
+        except BombError as exc:
+            after = f"after topic {last['topic']} message {last['index']}" if last["index"] >= 0 else "first chunk"
+            raise InputError(f"{self.path}: {after}: {exc}") from None
         except Exception as exc:  # noqa: BLE001 - the container itself is damaged past this point
             raise InputError(f"{self.path}: damaged or truncated after topic {last['topic']} message "
                              f"{last['index']}: {_why(exc)}") from None
@@ -168,6 +210,8 @@ class BagSource:
 
     def _decode(self, conn: RosConnection, index: int, raw: bytes) -> RosMessage:
         where = f"{self.path}: topic {conn.topic} message {index}"
+        if self.zstd_messages:
+            raw = message_decompress(where, raw, self.max_message_bytes)
         if len(raw) > self.max_message_bytes:
             raise InputError(f"{where}: {len(raw)} bytes, more than bag.max_message_bytes "
                              f"({self.max_message_bytes}); a corrupt size field or a runaway message")
@@ -180,7 +224,7 @@ class BagSource:
                              f"message's {len(raw)} bytes?): {_why(exc)}") from None
 
 
-def _cut_mcap(path: Path) -> StreamingMcap | None:
+def _cut_mcap(path: Path, limit: int) -> StreamingMcap | None:
     """A :class:`~pedenv.recordings.bag_stream.StreamingMcap` of the MCAP file at ``path`` (or the one
     MCAP file of a rosbag2 folder) that holds channels, or None."""
     from pedenv.recordings.bag_stream import StreamingMcap
@@ -191,7 +235,7 @@ def _cut_mcap(path: Path) -> StreamingMcap | None:
     with files[0].open("rb") as f:
         if f.read(8) != b"\x89MCAP0\r\n":
             return None
-    reader = StreamingMcap(files[0])
+    reader = StreamingMcap(files[0], limit)
     reader.open()
     return reader if reader.connections else None
 

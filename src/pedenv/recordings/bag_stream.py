@@ -9,24 +9,36 @@ what :class:`~pedenv.recordings.bag_source.BagSource` uses of a rosbags reader:
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Collection, Iterator
 from pathlib import Path
+from typing import Any
 
 
 class StreamingMcap:
     """An MCAP file read sequentially; ``cut`` is None until a read reaches a cut-off record."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, limit: int) -> None:
         self.path = path
+        self.limit = limit  # most bytes a chunk may hold uncompressed (bag.max_message_bytes)
         self.connections: list = []
         self.cut: str | None = None
 
     def _records(self) -> Iterator:
+        from mcap.records import Chunk
         from mcap.stream_reader import StreamReader
+
+        from pedenv.recordings.bag_bounds import BombError
 
         with self.path.open("rb") as f:
             try:
-                yield from StreamReader(f, record_size_limit=2**34).records
+                for record in StreamReader(f, record_size_limit=2**34, emit_chunks=True).records:
+                    if isinstance(record, Chunk):
+                        yield from _chunk_records(record, self.limit)
+                    else:
+                        yield record
+            except BombError:
+                raise
             except Exception as exc:  # noqa: BLE001 - the cut shows as any read error
                 self.cut = str(exc) or type(exc).__name__
 
@@ -64,3 +76,13 @@ class StreamingMcap:
         for record in self._records():
             if isinstance(record, Message) and record.channel_id in wanted:
                 yield wanted[record.channel_id], record.log_time, record.data
+
+
+def _chunk_records(chunk: Any, limit: int) -> Iterator:
+    """The records of one MCAP chunk, decompressed within its announced size and ``limit``."""
+    from mcap.stream_reader import breakup_chunk
+
+    from pedenv.recordings.bag_bounds import bounded_decompress
+
+    raw = bounded_decompress(chunk.data, chunk.compression, chunk.uncompressed_size, limit)
+    yield from breakup_chunk(dataclasses.replace(chunk, compression="", data=raw))

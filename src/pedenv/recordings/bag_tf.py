@@ -16,6 +16,7 @@ import numpy as np
 from pedenv.errors import InputError
 from pedenv.geometry import quaternion_to_rotation
 from pedenv.recordings.bag_source import RosMessage
+from pedenv.recordings.ego_poses import MAX_EGO_COORDINATE_M
 from pedenv.recordings.footage import EgoTrajectory
 
 
@@ -30,6 +31,14 @@ def _xyz(v: RosMessage) -> list[float]:
 
 def _wxyz(q: RosMessage) -> list[float]:
     return [float(q.w), float(q.x), float(q.y), float(q.z)]
+
+
+def _check_position(what: str, xyz: list[float]) -> None:
+    """InputError naming ``what`` when a coordinate is beyond :data:`MAX_EGO_COORDINATE_M`, as the ego poses CSV's."""
+    for axis, value in zip("xyz", xyz):
+        if abs(value) > MAX_EGO_COORDINATE_M:
+            raise InputError(f"{what}.{axis} = {value:g} m is beyond {MAX_EGO_COORDINATE_M:g} m from the origin "
+                             "(positions there have no millimetre precision)")
 
 
 def pose_matrix(translation: Sequence[float] | np.ndarray, quaternion: Sequence[float] | np.ndarray) -> np.ndarray:
@@ -72,6 +81,7 @@ class TransformTree:
             t, q = _xyz(tf.transform.translation), _wxyz(tf.transform.rotation)
             if not np.all(np.isfinite(t + q)) or np.linalg.norm(q) < 1e-9:
                 raise InputError(f"{where}: transform {parent!r} -> {child!r} is not finite or has a zero quaternion")
+            _check_position(f"{where}: transform {parent!r} -> {child!r}: transform.translation", t)
             if static:
                 self.static[child] = (parent, pose_matrix(t, q))  # scipy normalises, as the YAML's quaternion
                 continue
@@ -185,6 +195,7 @@ def odometry_trajectory(messages: Iterable[tuple[int, RosMessage]], bag: str,
         t, q = _xyz(msg.pose.pose.position), _wxyz(msg.pose.pose.orientation)
         if not np.all(np.isfinite(t + q)) or np.linalg.norm(q) < 1e-9:
             raise InputError(f"{where}: the pose is not finite or has a zero quaternion")
+        _check_position(f"{where}: pose.pose.position", t)
         if series.stamps and stamp < series.stamps[-1]:
             raise InputError(f"{where}: stamps go backwards: {stamp:.9f} s after {series.stamps[-1]:.9f} s")
         if series.stamps and stamp == series.stamps[-1]:

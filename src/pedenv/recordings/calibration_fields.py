@@ -65,29 +65,38 @@ def check_ranges(path: Path, intrinsics: np.ndarray, width: float, height: float
     intrinsics: (3, 3) pixels. width, height: pixels. translation: (3,) metres, of a static
     camera (``static``) in the world frame.
     """
-    side_lo, side_hi = IMAGE_SIDE_RANGE_PX
-    for name, side in (("width", width), ("height", height)):
-        if not side_lo <= side <= side_hi:
-            raise InputError(f"{path}: calibration field {name!r} must be in [{side_lo}, {side_hi}] pixels, "
-                             f"got {side:g}")
-    if width * height > MAX_IMAGE_PIXELS:
-        raise InputError(f"{path}: calibration image size {width:g}x{height:g} is above the limit of "
-                         f"{MAX_IMAGE_PIXELS / 1e6:g} megapixels (pedenv.images.MAX_IMAGE_PIXELS)")
-    f_lo, f_hi = FOCAL_RANGE_PX
-    for name, f in (("fx", intrinsics[0, 0]), ("fy", intrinsics[1, 1])):
-        if not f_lo <= f <= f_hi:
-            raise InputError(f"{path}: calibration focal length {name} must be in [{f_lo:g}, {f_hi:g}] pixels, "
-                             f"got {f:g}")
-    for name, c, side in (("cx", intrinsics[0, 2], width), ("cy", intrinsics[1, 2], height)):
-        if not -side <= c <= 2 * side:
-            raise InputError(f"{path}: calibration principal point {name} must be in [-{side:g}, {2 * side:g}] "
-                             f"pixels (within an image's size of the image), got {c:g}")
-    if abs(intrinsics[0, 1]) > intrinsics[0, 0]:
-        raise InputError(f"{path}: calibration skew (intrinsics[0][1]) must be at most fx in size, got "
-                         f"{intrinsics[0, 1]:g}")
+    problem = camera_problem(intrinsics, width, height)
+    if problem is not None:
+        raise InputError(f"{path}: calibration {problem}")
     distance = float(np.linalg.norm(translation))
     limit = MAX_EGO_COORDINATE_M if static else MAX_MOUNT_DISTANCE_M
     if distance > limit:
         origin = "world" if static else "vehicle"
         raise InputError(f"{path}: calibration field 'cam_to_vehicle.translation' puts the camera {distance:g} m "
                          f"from the {origin} origin; at most {limit:g} m")
+
+
+def camera_problem(intrinsics: np.ndarray, width: float, height: float) -> str | None:
+    """What is outside its sane range in a camera (size, focal lengths, principal point, skew), as
+    the end of an error line, or None (the ranges above; a bag's CameraInfo is held to them too).
+
+    intrinsics: (3, 3) pixels. width, height: pixels.
+    """
+    side_lo, side_hi = IMAGE_SIDE_RANGE_PX
+    for name, side in (("width", width), ("height", height)):
+        if not side_lo <= side <= side_hi:
+            return f"field {name!r} must be in [{side_lo}, {side_hi}] pixels, got {side:g}"
+    if width * height > MAX_IMAGE_PIXELS:
+        return (f"image size {width:g}x{height:g} is above the limit of {MAX_IMAGE_PIXELS / 1e6:g} megapixels "
+                "(pedenv.images.MAX_IMAGE_PIXELS)")
+    f_lo, f_hi = FOCAL_RANGE_PX
+    for name, f in (("fx", intrinsics[0, 0]), ("fy", intrinsics[1, 1])):
+        if not f_lo <= f <= f_hi:
+            return f"focal length {name} must be in [{f_lo:g}, {f_hi:g}] pixels, got {f:g}"
+    for name, c, side in (("cx", intrinsics[0, 2], width), ("cy", intrinsics[1, 2], height)):
+        if not -side <= c <= 2 * side:
+            return (f"principal point {name} must be in [-{side:g}, {2 * side:g}] pixels (within an image's size "
+                    f"of the image), got {c:g}")
+    if abs(intrinsics[0, 1]) > intrinsics[0, 0]:
+        return f"skew (intrinsics[0][1]) must be at most fx in size, got {intrinsics[0, 1]:g}"
+    return None
