@@ -1,0 +1,59 @@
+"""The estimated camera: parameters, their covariance, and what they rest on."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pedenv.calibration.geometry import static_camera
+from pedenv.records import Camera
+
+#: The parameters in the order of :attr:`CameraEstimate.covariance`, with their units.
+PARAMETERS = (("focal_px", "pixels"), ("height_m", "metres"), ("tilt_deg", "degrees"), ("roll_deg", "degrees"))
+
+
+@dataclass(frozen=True)
+class CameraEstimate:
+    """A static camera estimated from people (:func:`pedenv.calibration.fit.estimate_camera`).
+
+    focal: pixels. height: metres above the ground. tilt, roll: radians (tilt > 0 looks down).
+    covariance: (4, 4) of (focal px, height m, tilt rad, roll rad); a focal length that was
+    given (``focal_given``) has zero variance. size: (width, height) pixels. centre: the
+    principal point (u, v) pixels. people, observations: distinct people and person-images
+    the fit used. rms_px: root mean square of the head points' misfit, pixels.
+    """
+
+    focal: float
+    height: float
+    tilt: float
+    roll: float
+    covariance: np.ndarray
+    size: tuple[int, int]
+    centre: tuple[float, float]
+    people: int
+    observations: int
+    rms_px: float
+    focal_given: bool = False
+
+    @property
+    def std(self) -> np.ndarray:
+        """(4,) 1-sigma of (focal px, height m, tilt rad, roll rad)."""
+        return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
+
+    def camera(self) -> Camera:
+        """The estimate as a static :class:`~pedenv.records.Camera`."""
+        return static_camera(self.focal, self.height, self.tilt, self.roll, self.size, self.centre)
+
+    def uncertainty(self) -> dict[str, float]:
+        """1-sigma of each parameter in the units of :data:`PARAMETERS`."""
+        s = self.std
+        return {"focal_px": float(s[0]), "height_m": float(s[1]), "tilt_deg": float(np.degrees(s[2])),
+                "roll_deg": float(np.degrees(s[3]))}
+
+    def summary(self) -> dict:
+        """Parameters, their 1-sigma and what the fit rested on, as JSON-ready numbers."""
+        return {"focal_px": self.focal, "fov_deg": float(np.degrees(2 * np.arctan(self.size[0] / (2 * self.focal)))),
+                "height_m": self.height, "tilt_deg": float(np.degrees(self.tilt)),
+                "roll_deg": float(np.degrees(self.roll)), "std": self.uncertainty(), "people": self.people,
+                "observations": self.observations, "rms_px": self.rms_px, "focal_given": self.focal_given}
