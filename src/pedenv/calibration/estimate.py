@@ -41,9 +41,12 @@ class CameraEstimate:
         """(4,) 1-sigma of (focal px, height m, tilt rad, roll rad)."""
         return np.sqrt(np.maximum(np.diag(self.covariance), 0.0))
 
-    def camera(self) -> Camera:
-        """The estimate as a static :class:`~pedenv.records.Camera`."""
-        return static_camera(self.focal, self.height, self.tilt, self.roll, self.size, self.centre)
+    def camera(self, mount: str = "static") -> Camera:
+        """The estimate as a :class:`~pedenv.records.Camera` (``mount`` static, or vehicle: the
+        vehicle origin on the road under the camera, its x axis the camera's horizontal view)."""
+        camera = static_camera(self.focal, self.height, self.tilt, self.roll, self.size, self.centre)
+        return camera if mount == "static" else Camera(camera.intrinsics, camera.width, camera.height,
+                                                       camera.cam_to_vehicle, mount)
 
     def uncertainty(self) -> dict[str, float]:
         """1-sigma of each parameter in the units of :data:`PARAMETERS`."""

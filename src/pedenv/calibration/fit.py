@@ -205,3 +205,9 @@ def _covariance(fit: least_squares, obs: Observations, focal_given: bool) -> np.
         order = [3, 0, 1, 2]
         cov[:] = inner[np.ix_(order, order)]
     return cov
+
+
+def fitted_heads(estimate: CameraEstimate, obs: Observations, body: BodyModel | None = None) -> np.ndarray:
+    """(N, 2) pixels: where ``estimate`` puts the head keypoints of ``obs``' people (of mean height)."""
+    x = np.array([estimate.height, estimate.tilt, estimate.roll, estimate.focal])
+    return _predicted(x, obs, body or BodyModel(), estimate.centre, None)

@@ -49,9 +49,9 @@ def check_result(estimate: CameraEstimate, start: Start) -> None:
     f_std, h_std = estimate.std[0], estimate.std[1]
     if not estimate.focal_given and (start.focal is None or f_std > MAX_FOCAL_RELATIVE_STD * estimate.focal):
         raise CalibrationRefused(
-            f"the camera looks about level (tilt {np.degrees(estimate.tilt):.1f} deg): the people's feet-to-head "
-            f"lines are nearly parallel and do not fix the focal length (1-sigma {f_std / estimate.focal:.0%}); "
-            "give fov_deg, the horizontal field of view, with width and height in a --calibration YAML")
+            "the people's feet-to-head lines are too close to parallel to fix the focal length (a camera looking "
+            f"about level, or a narrow field of view; 1-sigma {min(f_std / estimate.focal, 99.0):.0%}); give fov_deg, "
+            "the horizontal field of view, with width and height in a --calibration YAML")
     if not np.isfinite(h_std) or h_std > MAX_HEIGHT_RELATIVE_STD * estimate.height:
         raise CalibrationRefused(f"the people do not fix the camera's height ({estimate.height:.2f} m, 1-sigma "
                                  f"{h_std:.2f} m); {INSTEAD}")
