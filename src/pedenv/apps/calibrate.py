@@ -9,18 +9,22 @@ the same warm-up before its frames.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
+import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from pedenv.apps.options import PoseOptions, RecordingSource
 from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.fit import NETWORK_BODY, BodyModel, estimate_camera, fitted_heads
 from pedenv.calibration.linking import BoxLinker
 from pedenv.calibration.observations import Observations, observations_of
+from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.pose.base import PoseBackend
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -159,3 +163,81 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
     estimate = estimate_from(warmup, backend_name, k)
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
     return write_estimate(folder, estimate, warmup, backend_name, "static" if static else "vehicle")
+
+
+@dataclass(frozen=True)
+class SelfCalibration:
+    """``pedenv run`` without a placed camera: the estimate, the warm-up it came from, the
+    calibration file the run reads (``path``, in a temporary folder) and the pose backend's name."""
+
+    estimate: CameraEstimate
+    warmup: WarmUp
+    path: Path
+    backend_name: str
+
+    def widen(self, cfg: Config) -> Config:
+        """``cfg`` with the static camera's calibration errors (``fused.static_camera_tilt_std_deg``,
+        ``fused.static_camera_height_std_m``) at least the estimate's: its tilt or roll 1-sigma,
+        whichever is larger, and its height's with the focal length's relative 1-sigma added
+        (both scale every range), so the positions' covariances carry the estimate's uncertainty."""
+        e, std = self.estimate, self.estimate.std
+        tilt = float(np.degrees(max(std[2], std[3])))
+        height = float(e.height * np.hypot(std[1] / e.height, std[0] / e.focal))
+        fused = cfg.fused
+        return cfg.replace(fused={"static_camera_tilt_std_deg": max(fused.static_camera_tilt_std_deg, tilt),
+                                  "static_camera_height_std_m": max(fused.static_camera_height_std_m, height)})
+
+    def write(self, folder: Path) -> dict:
+        """The estimate's files into the run's output ``folder`` (:func:`write_estimate`), the
+        temporary calibration file removed; returns the summary."""
+        summary = write_estimate(folder, self.estimate, self.warmup, self.backend_name)
+        shutil.rmtree(self.path.parent, ignore_errors=True)
+        return summary
+
+
+def needs_estimate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
+                   static: bool) -> bool:
+    """Whether ``pedenv run``'s recording needs its camera estimated: a static camera (images or a
+    video) without a calibration, or with one that gives no ``cam_to_vehicle``."""
+    from pedenv.recordings.footage import has_mounting
+
+    if not static or (images is None and video is None):
+        return False
+    return calibration is None or not has_mounting(calibration)
+
+
+def self_calibrate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
+                   backend: PoseBackend | None, backend_name: str, device: str = "auto") -> SelfCalibration:
+    """The warm-up of ``pedenv run`` without a placed camera: the camera estimated from the first
+    frames' people (``backend``, else the onnx network's whole-image ``far`` detection on ``device``),
+    written as a plain calibration file in a temporary folder for the run to read."""
+    import tempfile
+
+    from pedenv.calibration.files import calibration_mapping
+    from pedenv.recordings.footage import load_intrinsics
+
+    k = load_intrinsics(calibration)[2] if calibration is not None else None
+    if backend is None:
+        from pedenv.pose.base import create_pose_backend
+        from pedenv.pose.models import backend_options
+
+        backend = create_pose_backend(backend_name, **backend_options(backend_name, None, None, "far", device=device))
+    warmup = observe(warmup_frames(images, video), backend)
+    estimate = estimate_from(warmup, backend_name, k)
+    mapping = {key: v for key, v in calibration_mapping(estimate).items() if key not in ("estimated", "uncertainty")}
+    path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"
+    import yaml
+
+    path.write_text(yaml.safe_dump(mapping, sort_keys=False), encoding="utf-8")
+    return SelfCalibration(estimate, warmup, path, backend_name)
+
+
+def estimate_for_source(source: RecordingSource, pose: PoseOptions,
+                        backend: PoseBackend | None) -> tuple[RecordingSource, SelfCalibration | None]:
+    """``pedenv run``'s recording with its camera: as given, or (a static camera without a placed
+    calibration) estimated in the warm-up and read from a temporary calibration file."""
+    if source.bag is not None or not needs_estimate(source.images, source.video, source.calibration, source.static):
+        return source, None
+    found = self_calibrate(source.images, source.video, source.calibration, backend, pose.backend or "onnx",
+                           pose.device)
+    return dataclasses.replace(source, calibration=found.path), found
