@@ -51,6 +51,7 @@ def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariance
     std = summary["calibration"]["std"]
     assert fused["static_camera_tilt_std_deg"] >= max(std["tilt_deg"], std["roll_deg"]) - 1e-9
     assert fused["static_camera_height_std_m"] >= std["height_m"] - 1e-9
+    assert fused["person_height_std_m"] > 0.09  # the focal length's spread added to the height prior's
     assert json.loads((out / "run.json").read_text())["calibration"]["people"] >= 5
     lines = (out / "environment.jsonl").read_text().splitlines()
     assert len(lines) == 80 and any(json.loads(line)["pedestrians"] for line in lines[-5:])

@@ -176,16 +176,9 @@ class SelfCalibration:
     backend_name: str
 
     def widen(self, cfg: Config) -> Config:
-        """``cfg`` with the static camera's calibration errors (``fused.static_camera_tilt_std_deg``,
-        ``fused.static_camera_height_std_m``) at least the estimate's: its tilt or roll 1-sigma,
-        whichever is larger, and its height's with the focal length's relative 1-sigma added
-        (both scale every range), so the positions' covariances carry the estimate's uncertainty."""
-        e, std = self.estimate, self.estimate.std
-        tilt = float(np.degrees(max(std[2], std[3])))
-        height = float(e.height * np.hypot(std[1] / e.height, std[0] / e.focal))
-        fused = cfg.fused
-        return cfg.replace(fused={"static_camera_tilt_std_deg": max(fused.static_camera_tilt_std_deg, tilt),
-                                  "static_camera_height_std_m": max(fused.static_camera_height_std_m, height)})
+        """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
+        (:meth:`~pedenv.calibration.estimate.CameraEstimate.fused_spreads`)."""
+        return cfg.replace(fused=self.estimate.fused_spreads(cfg.fused))
 
     def write(self, folder: Path) -> dict:
         """The estimate's files into the run's output ``folder`` (:func:`write_estimate`), the

@@ -1,0 +1,246 @@
+"""Self-calibration: the camera estimated from the people it sees, against the truth or a reference.
+
+    PYTHONPATH=src python benchmarks/self_calibration.py [--samples ../shared/samples/real]
+        [--only synthetic|mot17|vtest|vehicle] [--video vtest.avi] [--frames 200]
+
+- synthetic: the built-in ``static-plaza`` scene (seed 0, 150 frames, a camera 6 m up, 20 deg
+  down, 64.5 deg field of view), skeletons from the detector model (``yolo11n-pose-far``
+  profile) and exact skeletons: the estimate against the truth, then the positions of the fused
+  method with the true and with the estimated camera (the estimate's spreads widening the static
+  camera's ``fused.static_camera_*`` as ``pedenv run`` does) side by side.
+- mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
+  6 images each), the estimate against UCMCTrack's camera (``ucmctrack_cam_para/``, itself an
+  estimate), with the focal length free and with it taken from UCMCTrack.
+- vtest: the real network on the first ``--frames`` frames of a street video (Debian's
+  ``opencv-doc`` ``examples/data/vtest.avi``): the estimate of each half and of all frames
+  (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
+- vehicle: intrinsics known, height, tilt and roll from the people: KITTI tracking 0016 (3
+  images; truth: a plane fitted to the bottoms of every labelled object's 3D box over the
+  sequence's 209 frames) and nuScenes 0061 (5 cameras; truth: the calibrated mounting).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
+DEFAULT_VIDEO = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
+STATIC_MOT17 = ("MOT17-02-FRCNN", "MOT17-04-FRCNN", "MOT17-09-FRCNN")
+#: ``fused`` settings of an exactly known camera and anatomical ankles (the synthetic scene).
+EXACT = {"static_camera_tilt_std_deg": 0.0, "static_camera_height_std_m": 0.0, "ankle_keypoint_offset_m": 0.0,
+         "ankle_keypoint_offset_std_m": 0.0}
+
+
+def row(label: str, est, truth: tuple[float, float, float, float] | None) -> None:
+    """One printed line: the estimate (and its 1-sigma) against the truth."""
+    if isinstance(est, Exception):
+        print(f"  {label:34s} refused: {est}")
+        return
+    s = est.uncertainty()
+    text = (f"f {est.focal:7.1f}+-{s['focal_px']:5.1f}  H {est.height:5.2f}+-{s['height_m']:.2f}  "
+            f"tilt {np.degrees(est.tilt):5.2f}+-{s['tilt_deg']:.2f}  roll {np.degrees(est.roll):5.2f}+-"
+            f"{s['roll_deg']:.2f}  ({est.people} people, {est.observations} obs)")
+    if truth is not None:
+        f, h, t, r = truth
+        text += (f"\n  {'':34s} truth f {f:7.1f}  H {h:5.2f}  tilt {np.degrees(t):5.2f}  roll {np.degrees(r):5.2f}"
+                 f"  -> f {100 * (est.focal / f - 1):+.1f} %  H {100 * (est.height / h - 1):+.1f} %  tilt "
+                 f"{np.degrees(est.tilt - t):+.2f} deg  roll {np.degrees(est.roll - r):+.2f} deg")
+    print(f"  {label:34s} {text}")
+
+
+def fit(obs, size, **kw):
+    from pedenv.calibration.fit import estimate_camera
+    from pedenv.errors import InputError
+
+    try:
+        return estimate_camera(obs, size, **kw)
+    except InputError as exc:
+        return exc
+
+
+def observe_frames(images, backend):
+    """Observations of images (RGB arrays) with ``backend``'s whole-image detection, boxes linked."""
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+
+    linker, parts = BoxLinker(), []
+    for index, image in enumerate(images):
+        det = backend.detect(image)
+        parts.append(observations_of(det, index, linker(det.boxes)))
+    return Observations.concat(parts)
+
+
+def onnx_far():
+    from pedenv.pose import create_pose_backend
+    from pedenv.pose.models import backend_options
+
+    return create_pose_backend("onnx", **backend_options("onnx", detection="far"))
+
+
+def evaluate(frames, camera, backend, fused: dict) -> dict:
+    """The fused method over ``frames`` seen by ``camera``: mean relative error and coverage."""
+    from pedenv.apps.scene_result import evaluate_scene, merge_scene_results
+    from pedenv.config import Config
+
+    config = Config().replace(fused=fused)
+    frames = tuple(dataclasses.replace(f, camera=camera) for f in frames)
+    result = evaluate_scene("static-plaza", frames, config=config, backend=backend)
+    metrics = merge_scene_results([result], {"scenes": ["static-plaza"]}).metrics
+    o, c = metrics.overall, metrics.calibration
+    return {"rel_error_pct": o.rel_error_pct, "abs_error_m": o.abs_error_m, "count": o.count,
+            "within_1sigma": 100 * c.get("within_1sigma", float("nan")),
+            "within_2sigma": 100 * c.get("within_2sigma", float("nan"))}
+
+
+def synthetic() -> None:
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.pose import create_pose_backend
+    from pedenv.records import Detections
+    from pedenv.synthetic import generate_scenes
+
+    scene = generate_scenes(0, ["static-plaza"])[0]
+    truth_camera = scene.frames[0].camera
+    truth = parameters_of(truth_camera)
+    print("synthetic static-plaza (seed 0, 150 frames, exact truth)")
+    for label, spec in (("detector model (yolo11n-pose-far)", "detector-model:yolo11n-pose-far"),
+                        ("exact skeletons", "ground-truth")):
+        backend, linker, parts = create_pose_backend(spec), BoxLinker(), []
+        for frame in scene.frames:
+            det: Detections = backend(frame)
+            parts.append(observations_of(det, frame.index, linker(det.boxes)))
+        est = fit(Observations.concat(parts), (truth_camera.width, truth_camera.height))
+        row(label, est, truth)
+        if isinstance(est, Exception):
+            continue
+        from pedenv.config import Config
+
+        widened = {**EXACT, **est.fused_spreads(Config().replace(fused=EXACT).fused)}
+        for name, camera, fused in (("true camera", truth_camera, EXACT), ("estimated camera", est.camera(), widened)):
+            m = evaluate(scene.frames, camera, create_pose_backend(spec), fused)
+            print(f"  {'':34s} positions, {name:16s}: rel error {m['rel_error_pct']:5.2f} %  abs "
+                  f"{m['abs_error_m']:.2f} m  within 1/2 sigma {m['within_1sigma']:.1f} / "
+                  f"{m['within_2sigma']:.1f} %  ({m['count']} pairs)")
+
+
+def mot17(samples: Path) -> None:
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.datasets import mot17 as mot
+    from pedenv.datasets.ucmctrack import read_camera_parameters, static_camera
+    from pedenv.images import read_image_rgb
+
+    backend = onnx_far()
+    print("MOT17 static sequences, real network (onnx far), against UCMCTrack's estimated camera")
+    for name in STATIC_MOT17:
+        seq = mot.read_sequence(samples / "mot17" / name)
+        ref = static_camera(read_camera_parameters(samples / "mot17" / "ucmctrack_cam_para" / f"{name}.txt"),
+                            seq.info.width, seq.info.height)
+        truth = parameters_of(ref)
+        obs = observe_frames([read_image_rgb(seq.image_path(n)) for n in seq.frames], backend)
+        size = (seq.info.width, seq.info.height)
+        row(f"{name} ({len(seq.frames)} images)", fit(obs, size, body=NETWORK_BODY), truth)
+        row("  focal from UCMCTrack", fit(obs, size, body=NETWORK_BODY, focal=truth[0]), truth)
+
+
+def vtest(video: Path, frames: int) -> None:
+    from pedenv.apps.calibrate import warmup_frames
+    from pedenv.calibration.fit import NETWORK_BODY
+
+    if not video.is_file():
+        print(f"vtest: {video} not found (apt-get install opencv-doc)")
+        return
+    images = [image for _, image in warmup_frames(None, video, frames)]
+    obs = observe_frames(images, onnx_far())
+    size = (images[0].shape[1], images[0].shape[0])
+    half = len(images) // 2
+    print(f"vtest.avi ({len(images)} frames), real network (onnx far), no truth: consistency")
+    for label, keep in ((f"frames 0-{half - 1}", obs.frames < half),
+                        (f"frames {half}-{len(images) - 1}", obs.frames >= half), ("all frames", obs.frames >= 0)):
+        est = fit(obs.subset(keep), size, body=NETWORK_BODY)
+        row(label, est, None)
+        if not isinstance(est, Exception):
+            heights = person_heights(est, obs.subset(keep))
+            print(f"  {'':34s} people's heights (median per track): median {np.median(heights):.2f} m, "
+                  f"{100 * np.mean((heights >= 1.5) & (heights <= 1.9)):.0f} % within 1.5-1.9 m")
+
+
+def person_heights(est, obs) -> np.ndarray:
+    """Each track's median height (m) under ``est``: the eye keypoint's height over the ankles'
+    ground point, divided by the network body's eye share."""
+    from pedenv.body import ANKLE
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics
+
+    k, r = intrinsics(est.focal, est.centre), camera_rotation(est.tilt, est.roll)
+    ground = ground_points(obs.feet, k, r, est.height, NETWORK_BODY.ankle_m())
+    ray = np.c_[obs.heads, np.ones(len(obs))] @ np.linalg.inv(k).T @ r.T
+    horizontal = np.hypot(ground[:, 0], ground[:, 1])
+    ray_h = np.hypot(ray[:, 0], ray[:, 1])
+    eye_z = est.height + ray[:, 2] * horizontal / ray_h
+    span = (obs.head_share - ANKLE) * NETWORK_BODY.span_scale
+    tall = (eye_z - NETWORK_BODY.ankle_m()) / span
+    return np.array([np.median(tall[obs.tracks == t]) for t in np.unique(obs.tracks)])
+
+
+def vehicle(samples: Path) -> None:
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.datasets import kitti_files, nuscenes_cameras
+    from pedenv.images import read_image_rgb
+    from pedenv.records import Camera
+
+    backend = onnx_far()
+    print("vehicle cameras, intrinsics known: height, tilt, roll from the people (real network, onnx far)")
+    training = samples / "kitti" / "tracking_mini" / "training"
+    seq = kitti_files.read_tracking_sequence(training, "0016")
+    loc = seq.labels.locations  # bottom-face centres, rectified camera frame (x right, y down, z forward)
+    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
+    h, slope_z, slope_x = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
+    truth = (float(seq.calib.K[0, 0]), float(h), float(np.arctan(-slope_z)), float(np.arctan(slope_x)))
+    images = [read_image_rgb(seq.image_path(n)) for n in seq.frames]
+    obs = observe_frames(images, backend)
+    k = seq.calib.K
+    size = (images[0].shape[1], images[0].shape[0])
+    row("KITTI tracking 0016 (3 images)", fit(obs, size, body=NETWORK_BODY, focal=float(k[0, 0]),
+                                               centre=(float(k[0, 2]), float(k[1, 2]))), truth)
+    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
+        level = np.linalg.inv(cam.ego_to_global) @ cam.cam_to_global
+        mount = np.eye(4)
+        mount[:3, :3] = level[:3, :3]
+        mount[2, 3] = level[2, 3]
+        image = read_image_rgb(cam.image_path)
+        truth = parameters_of(Camera(cam.K, image.shape[1], image.shape[0], mount))
+        obs = observe_frames([image], backend)
+        row(f"nuScenes {cam.camera}", fit(obs, (image.shape[1], image.shape[0]), body=NETWORK_BODY,
+                                          focal=float(cam.K[0, 0]), centre=(float(cam.K[0, 2]), float(cam.K[1, 2]))),
+            truth)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
+    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle"))
+    parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
+    parser.add_argument("--frames", type=int, default=200)
+    args = parser.parse_args(argv)
+    if args.only in (None, "synthetic"):
+        synthetic()
+    if args.only in (None, "mot17"):
+        mot17(args.samples)
+    if args.only in (None, "vtest"):
+        vtest(args.video, args.frames)
+    if args.only in (None, "vehicle"):
+        vehicle(args.samples)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
