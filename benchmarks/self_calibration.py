@@ -201,7 +201,9 @@ def vehicle(samples: Path) -> None:
     print("vehicle cameras, intrinsics known: height, tilt, roll from the people (real network, onnx far)")
     training = samples / "kitti" / "tracking_mini" / "training"
     seq = kitti_files.read_tracking_sequence(training, "0016")
-    loc = seq.labels.locations  # bottom-face centres, rectified camera frame (x right, y down, z forward)
+    labels = seq.labels
+    solid = np.isin(labels.types, ("Pedestrian", "Car", "Van", "Cyclist", "Truck"))
+    loc = labels.locations[solid]  # bottom-face centres, rectified camera frame (x right, y down, z forward)
     a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
     h, slope_z, slope_x = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
     truth = (float(seq.calib.K[0, 0]), float(h), float(np.arctan(-slope_z)), float(np.arctan(slope_x)))

@@ -23,6 +23,10 @@ def calibrate(
                                     "is taken from it, the rest estimated."),
     frames: int = typer.Option(200, "--frames", min=1, max=10_000, help="Most warm-up frames (a video: also at "
                                                                         "most its first 20 s)."),
+    odometry: bool = typer.Option(False, "--odometry", help="Instead: the vehicle's motion from the images "
+                                                            "(needs a full --calibration): ego_poses_estimated.csv."),
+    fps: float | None = typer.Option(None, "--fps", help="--odometry: frame rate of an image folder without "
+                                                         "timestamps.csv."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: PoseModel = None,
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
@@ -36,6 +40,9 @@ def calibrate(
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, None, detection,
                                                                   device=device))
+    if odometry:
+        _odometry(output, calibration, images, video, fps, backend, overwrite)
+        return
     summary = run_calibration(output=output, images=images, video=video, backend=backend, backend_name=pose_backend,
                               calibration=calibration, static=static, overwrite=overwrite, frames=frames)
     std = summary["std"]
@@ -43,3 +50,16 @@ def calibrate(
                f"{std['height_m']:.2f} m, tilt {summary['tilt_deg']:.1f} +- {std['tilt_deg']:.1f} deg, roll "
                f"{summary['roll_deg']:.1f} +- {std['roll_deg']:.1f} deg from {summary['people']} people: "
                f"{output / 'calibration.yaml'}")
+
+
+def _odometry(output: Path, calibration: Path | None, images: Path | None, video: Path | None, fps: float | None,
+              backend: object, overwrite: bool) -> None:
+    from pedenv.apps.odometry import estimate_ego_poses
+    from pedenv.errors import InputError
+
+    if calibration is None:
+        raise InputError("--odometry needs --calibration with the camera's mounting (cam_to_vehicle)")
+    result = estimate_ego_poses(output=output, calibration=calibration, images=images, video=video, fps=fps,
+                                backend=backend, overwrite=overwrite)  # type: ignore[arg-type]
+    typer.echo(f"{result['frames']} frames: {result['distance_m']:.2f} m travelled, yaw {result['yaw_deg']:+.2f} deg: "
+               f"{result['file']}")
