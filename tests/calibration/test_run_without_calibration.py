@@ -31,7 +31,7 @@ def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariance
     from pedenv.images import write_image
     from pedenv.synthetic.generator import generate_scenes
 
-    frames = generate_scenes(0, ["static-plaza"], duration_s=8.0)[0].frames
+    frames = generate_scenes(0, ["static-plaza"], duration_s=6.0)[0].frames
     folder = tmp_path / "images"
     folder.mkdir()
     for frame in frames:
@@ -40,7 +40,7 @@ def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariance
     summary = run_recording(source, OutputOptions(tmp_path / "run", video_out=True),
                             PoseOptions(backend="detector-model", detection=None), backend=SceneBackend(frames))
     out = tmp_path / "run"
-    assert summary["frames_done"] == len(frames) == 80
+    assert summary["frames_done"] == len(frames) == 60
     assert summary["calibration"]["focal_px"] == pytest.approx(frames[0].camera.intrinsics[0, 0], rel=0.1)
     assert summary["calibration"]["height_m"] == pytest.approx(6.0, rel=0.1)
     with pytest.warns(UserWarning, match="estimated"):
@@ -54,4 +54,4 @@ def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariance
     assert fused["person_height_std_m"] > 0.09  # the focal length's spread added to the height prior's
     assert json.loads((out / "run.json").read_text())["calibration"]["people"] >= 5
     lines = (out / "environment.jsonl").read_text().splitlines()
-    assert len(lines) == 80 and any(json.loads(line)["pedestrians"] for line in lines[-5:])
+    assert len(lines) == 60 and any(json.loads(line)["pedestrians"] for line in lines[-5:])

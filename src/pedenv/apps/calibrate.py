@@ -13,7 +13,7 @@ import dataclasses
 import json
 import math
 import shutil
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +28,7 @@ from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.pose.base import PoseBackend
 from pedenv.records import Camera, Detections, EgoPose, Frame
+from pedenv.state import EnvironmentState
 
 #: The warm-up: the first this many seconds of a video (its own frame rate) ...
 WARMUP_SECONDS = 20.0
@@ -179,6 +180,17 @@ class SelfCalibration:
         """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
         (:meth:`~pedenv.calibration.estimate.CameraEstimate.fused_spreads`)."""
         return cfg.replace(fused=self.estimate.fused_spreads(cfg.fused))
+
+    def widened(self, write: Callable[[tuple[EnvironmentState, Frame]], None]
+                ) -> Callable[[tuple[EnvironmentState, Frame]], None]:
+        """``write`` (the run's writer stage) given each state with every position's covariance
+        widened by the estimate's uncertainty (:func:`pedenv.calibration.spread.widen_state`)."""
+        from pedenv.calibration.spread import widen_state
+
+        def widened_write(result: tuple[EnvironmentState, Frame]) -> None:
+            write((widen_state(result[0], self.estimate), result[1]))
+
+        return widened_write
 
     def write(self, folder: Path) -> dict:
         """The estimate's files into the run's output ``folder`` (:func:`write_estimate`), the

@@ -93,7 +93,8 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     try:
         with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
             outputs.writer, outputs.sinks = writer, sinks
-            run_frames(rec.frames(), partial(_step, backend, model, timer), outputs.write, config=pipe,
+            write = estimated.widened(outputs.write) if estimated is not None else outputs.write
+            run_frames(rec.frames(), partial(_step, backend, model, timer), write, config=pipe,
                        done=outputs.done, stats=stats)
         _check_ended_early(rec, stats, summary)
     finally:
