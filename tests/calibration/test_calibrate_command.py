@@ -71,3 +71,23 @@ def test_intrinsics_from_a_field_of_view(tmp_path: Path) -> None:
     assert (width, height) == (1600, 900)
     assert k is not None and k[0, 0] == pytest.approx(800 / np.tan(np.radians(32.25)))
     assert k[0, 2] == 800 and k[1, 2] == 450
+
+
+@pytest.mark.parametrize(("calibration", "static", "expected"), [
+    (None, True, True),            # a fixed camera, nothing given: estimated
+    ("intrinsics", True, True),    # focal length given, the mounting estimated
+    ("full", True, False),         # a placed camera is used as it is
+    (None, False, False),          # a vehicle camera is not estimated (refused by the run's rules)
+])
+def test_which_runs_estimate_their_camera(tmp_path: Path, calibration: str | None, static: bool,
+                                          expected: bool) -> None:
+    from pedenv.apps.calibrate import needs_estimate
+
+    files = {"intrinsics": "width: 640\nheight: 480\nfov_deg: 60\n",
+             "full": "width: 640\nheight: 480\nfov_deg: 60\ncam_to_vehicle:\n  rotation: [0.5, -0.5, 0.5, -0.5]\n"
+                     "  translation: [0, 0, 5]\n"}
+    path = None
+    if calibration is not None:
+        path = tmp_path / "c.yaml"
+        path.write_text(files[calibration])
+    assert needs_estimate(tmp_path, None, path, static) is expected
