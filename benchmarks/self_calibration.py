@@ -14,6 +14,7 @@
 - vtest: the real network on the first ``--frames`` frames of a street video (Debian's
   ``opencv-doc`` ``examples/data/vtest.avi``): the estimate of each half and of all frames
   (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
+- cost: what ``pedenv run`` adds per frame after the warm-up (the positions' spread of 30 people).
 - odometry: the vehicle's motion from the images against GPS/IMU on KITTI raw 0002 (10 frames,
   the camera's height 1.65 m as KITTI gives it), and on the static vtest.avi (it should not move).
 - vehicle: intrinsics known, height, tilt and roll from the people: KITTI tracking 0016 (3
@@ -297,10 +298,26 @@ def odometry(samples: Path, video: Path, frames: int) -> None:
               f"{np.linalg.norm(poses[:, :3, 3], axis=1).max():.3f} m")
 
 
+def cost() -> None:
+    """What the run adds per frame after the warm-up: the spread of 30 people's positions."""
+    import timeit
+
+    from pedenv.calibration.estimate import CameraEstimate
+    from pedenv.calibration.spread import calibration_covariances
+
+    est = CameraEstimate(1266.4, 6.0, np.radians(20.0), 0.0, np.diag([50.0, 0.17, 0.01, 0.004]) ** 2, (1600, 900),
+                         (800.0, 450.0), 10, 100, 3.0)
+    rng = np.random.default_rng(0)
+    people = np.c_[rng.uniform(8, 60, 30), rng.uniform(-20, 20, 30), np.zeros(30)]
+    n = 500
+    seconds = timeit.timeit(lambda: calibration_covariances(people, est), number=n) / n
+    print(f"cost after the warm-up: {1e3 * seconds:.2f} ms per frame of 30 people (the positions' spread)")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "odometry"))
+    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "odometry", "cost"))
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
     parser.add_argument("--frames", type=int, default=200)
     args = parser.parse_args(argv)
@@ -314,6 +331,8 @@ def main(argv: list[str] | None = None) -> int:
         vehicle(args.samples)
     if args.only in (None, "odometry"):
         odometry(args.samples, args.video, args.frames)
+    if args.only in (None, "cost"):
+        cost()
     return 0
 
 
