@@ -86,21 +86,6 @@ def onnx_far():
     return create_pose_backend("onnx", **backend_options("onnx", detection="far"))
 
 
-def evaluate(frames, camera, backend, fused: dict) -> dict:
-    """The fused method over ``frames`` seen by ``camera``: mean relative error and coverage."""
-    from pedenv.apps.scene_result import evaluate_scene, merge_scene_results
-    from pedenv.config import Config
-
-    config = Config().replace(fused=fused)
-    frames = tuple(dataclasses.replace(f, camera=camera) for f in frames)
-    result = evaluate_scene("static-plaza", frames, config=config, backend=backend)
-    metrics = merge_scene_results([result], {"scenes": ["static-plaza"]}).metrics
-    o, c = metrics.overall, metrics.calibration
-    return {"rel_error_pct": o.rel_error_pct, "abs_error_m": o.abs_error_m, "count": o.count,
-            "within_1sigma": 100 * c.get("within_1sigma", float("nan")),
-            "within_2sigma": 100 * c.get("within_2sigma", float("nan"))}
-
-
 def coverage(frames, camera, spec: str, fused: dict, estimate=None) -> dict:
     """The fused method over ``frames`` seen by ``camera`` (skeletons from backend ``spec``): mean
     relative error and the share of errors within the 1- and 2-sigma ellipses, each estimate
