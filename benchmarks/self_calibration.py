@@ -10,7 +10,9 @@
   camera's ``fused.static_camera_*`` as ``pedenv run`` does) side by side.
 - mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
   6 images each), the estimate against UCMCTrack's camera (``ucmctrack_cam_para/``, itself an
-  estimate), with the focal length free and with it taken from UCMCTrack.
+  estimate), with the focal length free and with it taken from UCMCTrack; where the estimate
+  stands, the fused method's positions with either camera against the box bottoms cut with
+  UCMCTrack's ground.
 - vtest: the real network on the first ``--frames`` frames of a street video (Debian's
   ``opencv-doc`` ``examples/data/vtest.avi``): the estimate of each half and of all frames
   (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
@@ -86,7 +88,7 @@ def onnx_far():
     return create_pose_backend("onnx", **backend_options("onnx", detection="far"))
 
 
-def coverage(frames, camera, spec: str, fused: dict, estimate=None) -> dict:
+def coverage(frames, camera, spec, fused: dict, estimate=None) -> dict:
     """The fused method over ``frames`` seen by ``camera`` (skeletons from backend ``spec``): mean
     relative error and the share of errors within the 1- and 2-sigma ellipses, each estimate
     matched to the nearest truth whose box overlaps its box; ``estimate``: covariances widened by
@@ -97,7 +99,8 @@ def coverage(frames, camera, spec: str, fused: dict, estimate=None) -> dict:
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.pose import create_pose_backend
 
-    model, backend = PedestrianEnvironmentModel(Config().replace(fused=fused)), create_pose_backend(spec)
+    model = PedestrianEnvironmentModel(Config().replace(fused=fused))
+    backend = create_pose_backend(spec) if isinstance(spec, str) else spec()
     rel, d2 = [], []
     for frame in frames:
         frame = dataclasses.replace(frame, camera=camera)
@@ -166,7 +169,26 @@ def mot17(samples: Path) -> None:
         obs = observe_frames([read_image_rgb(seq.image_path(n)) for n in seq.frames], backend)
         size = (seq.info.width, seq.info.height)
         row(f"{name} ({len(seq.frames)} images)", fit(obs, size, body=NETWORK_BODY), truth)
-        row("  focal from UCMCTrack", fit(obs, size, body=NETWORK_BODY, focal=truth[0]), truth)
+        given = fit(obs, size, body=NETWORK_BODY, focal=truth[0])
+        row("  focal from UCMCTrack", given, truth)
+        if not isinstance(given, Exception):
+            positions(samples / "mot17" / name, ref, given)
+
+
+def positions(folder: Path, reference, est) -> None:
+    """The fused method on a MOT17 sequence with UCMCTrack's camera and with the estimate, against
+    the box bottoms cut with UCMCTrack's ground (:func:`pedenv.datasets.ucmctrack.mot17_static_scene`)."""
+    from pedenv.config import Config
+    from pedenv.datasets.ucmctrack import mot17_static_scene
+
+    scene = mot17_static_scene(folder, folder.parent / "ucmctrack_cam_para" / f"{folder.name}.txt")
+    widened = est.fused_spreads(Config().fused)
+    for name, camera, fused, spread in (("UCMCTrack camera", reference, {}, None),
+                                        ("estimated camera", est.camera(), widened, None),
+                                        ("estimated, spread", est.camera(), widened, est)):
+        m = coverage(scene.frames, camera, onnx_far, fused, spread)
+        print(f"  {'':34s} positions, {name:17s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
+              f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")
 
 
 def vtest(video: Path, frames: int) -> None:
