@@ -77,7 +77,8 @@ def test_intrinsics_from_a_field_of_view(tmp_path: Path) -> None:
     (None, True, True),            # a fixed camera, nothing given: estimated
     ("intrinsics", True, True),    # focal length given, the mounting estimated
     ("full", True, False),         # a placed camera is used as it is
-    (None, False, False),          # a vehicle camera is not estimated (refused by the run's rules)
+    (None, False, False),          # a vehicle camera without a calibration is refused by the run's rules
+    ("intrinsics", False, True),   # a vehicle camera's mounting is estimated (its ego poses given)
 ])
 def test_which_runs_estimate_their_camera(tmp_path: Path, calibration: str | None, static: bool,
                                           expected: bool) -> None:

@@ -175,6 +175,7 @@ class SelfCalibration:
     warmup: WarmUp
     path: Path
     backend_name: str
+    mount: str = "static"
 
     def widen(self, cfg: Config) -> Config:
         """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
@@ -188,31 +189,34 @@ class SelfCalibration:
         from pedenv.calibration.spread import widen_state
 
         def widened_write(result: tuple[EnvironmentState, Frame]) -> None:
-            write((widen_state(result[0], self.estimate), result[1]))
+            write((widen_state(result[0], self.estimate, result[1].ego), result[1]))
 
         return widened_write
 
     def write(self, folder: Path) -> dict:
         """The estimate's files into the run's output ``folder`` (:func:`write_estimate`), the
         temporary calibration file removed; returns the summary."""
-        summary = write_estimate(folder, self.estimate, self.warmup, self.backend_name)
+        summary = write_estimate(folder, self.estimate, self.warmup, self.backend_name, self.mount)
         shutil.rmtree(self.path.parent, ignore_errors=True)
         return summary
 
 
 def needs_estimate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
                    static: bool) -> bool:
-    """Whether ``pedenv run``'s recording needs its camera estimated: a static camera (images or a
-    video) without a calibration, or with one that gives no ``cam_to_vehicle``."""
+    """Whether ``pedenv run``'s recording (images or a video) needs its camera estimated: a static
+    camera without a calibration, or any camera whose calibration gives no ``cam_to_vehicle``."""
     from pedenv.recordings.footage import has_mounting
 
-    if not static or (images is None and video is None):
+    if images is None and video is None:
         return False
-    return calibration is None or not has_mounting(calibration)
+    if calibration is None:
+        return static
+    return not has_mounting(calibration)
 
 
 def self_calibrate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
-                   backend: PoseBackend | None, backend_name: str, device: str = "auto") -> SelfCalibration:
+                   backend: PoseBackend | None, backend_name: str, device: str = "auto",
+                   mount: str = "static") -> SelfCalibration:
     """The warm-up of ``pedenv run`` without a placed camera: the camera estimated from the first
     frames' people (``backend``, else the onnx network's whole-image ``far`` detection on ``device``),
     written as a plain calibration file in a temporary folder for the run to read."""
@@ -229,20 +233,23 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
         backend = create_pose_backend(backend_name, **backend_options(backend_name, None, None, "far", device=device))
     warmup = observe(warmup_frames(images, video), backend)
     estimate = estimate_from(warmup, backend_name, k)
-    mapping = {key: v for key, v in calibration_mapping(estimate).items() if key not in ("estimated", "uncertainty")}
+    mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
+               if key not in ("estimated", "uncertainty")}
     path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"
     import yaml
 
     path.write_text(yaml.safe_dump(mapping, sort_keys=False), encoding="utf-8")
-    return SelfCalibration(estimate, warmup, path, backend_name)
+    return SelfCalibration(estimate, warmup, path, backend_name, mount)
 
 
 def estimate_for_source(source: RecordingSource, pose: PoseOptions,
                         backend: PoseBackend | None) -> tuple[RecordingSource, SelfCalibration | None]:
-    """``pedenv run``'s recording with its camera: as given, or (a static camera without a placed
-    calibration) estimated in the warm-up and read from a temporary calibration file."""
+    """``pedenv run``'s recording with its camera: as given, or (a static camera without a calibration,
+    or any camera whose calibration has no ``cam_to_vehicle``) estimated in the warm-up and read
+    from a temporary calibration file. A vehicle camera's estimated mounting puts the vehicle
+    origin on the road under the camera, its x axis along the camera's horizontal view."""
     if source.bag is not None or not needs_estimate(source.images, source.video, source.calibration, source.static):
         return source, None
     found = self_calibrate(source.images, source.video, source.calibration, backend, pose.backend or "onnx",
-                           pose.device)
+                           pose.device, "static" if source.static else "vehicle")
     return dataclasses.replace(source, calibration=found.path), found

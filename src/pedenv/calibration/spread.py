@@ -13,6 +13,7 @@ import numpy as np
 
 from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics, project
+from pedenv.records import EgoPose
 from pedenv.state import EnvironmentState
 
 #: Parameter steps of the numerical Jacobian: focal length (px), height (m), tilt and roll (rad).
@@ -43,11 +44,18 @@ def calibration_covariances(positions: np.ndarray, estimate: CameraEstimate) -> 
     return np.nan_to_num(extra, nan=0.0, posinf=0.0)
 
 
-def widen_state(state: EnvironmentState, estimate: CameraEstimate) -> EnvironmentState:
+def widen_state(state: EnvironmentState, estimate: CameraEstimate, ego: EgoPose | None = None) -> EnvironmentState:
     """``state`` (an :class:`~pedenv.state.EnvironmentState`) with every pedestrian's covariance
-    widened by :func:`calibration_covariances`."""
+    widened by :func:`calibration_covariances`; ``ego``: the frame's vehicle -> world pose (the
+    estimate's ground frame is the vehicle's; None: the world's)."""
     people = state.pedestrians
     if not len(people):
         return state
-    covariances = people.covariances + calibration_covariances(people.positions, estimate)
+    if ego is None:
+        extra = calibration_covariances(people.positions, estimate)
+    else:
+        local = (people.positions - ego.translation) @ ego.rotation  # rows: R^T (p - t), the vehicle frame
+        turn = ego.rotation[:2, :2]
+        extra = turn @ calibration_covariances(local, estimate) @ turn.T
+    covariances = people.covariances + extra
     return dataclasses.replace(state, pedestrians=dataclasses.replace(people, covariances=covariances))
