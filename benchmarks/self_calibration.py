@@ -16,6 +16,9 @@
 - vtest: the real network on the first ``--frames`` frames of a street video (Debian's
   ``opencv-doc`` ``examples/data/vtest.avi``): the estimate of each half and of all frames
   (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
+- sequences: the eight KITTI tracking drives of ``kitti/tracking_sequences/`` (labels only),
+  skeletons' ankle and eye points rendered from the pedestrians' 3D boxes with 2 px noise:
+  height and tilt with the intrinsics known, against the plane of the boxes' bottoms.
 - cost: what ``pedenv run`` adds per frame after the warm-up (the positions' spread of 30 people).
 - odometry: the vehicle's motion from the images against GPS/IMU on KITTI raw 0002 (10 frames,
   the camera's height 1.65 m as KITTI gives it), and on the static vtest.avi (it should not move).
@@ -305,6 +308,51 @@ def odometry(samples: Path, video: Path, frames: int) -> None:
               f"{np.linalg.norm(poses[:, :3, 3], axis=1).max():.3f} m")
 
 
+def label_truth(labels) -> tuple[float, float]:
+    """(height m, tilt rad) of the camera over the plane fitted to every labelled object's 3D box
+    bottom (rectified camera frame: x right, y down, z forward)."""
+    solid = np.isin(labels.types, ("Pedestrian", "Car", "Van", "Cyclist", "Truck"))
+    loc = labels.locations[solid]
+    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
+    h, slope_z, _ = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
+    return float(h), float(np.arctan(-slope_z))
+
+
+def sequences(samples: Path) -> None:
+    """KITTI tracking_sequences, skeletons rendered from the labels: each pedestrian's ankle and
+    eye points (anatomical shares of the box height) projected with 2 px noise, the camera's
+    height and tilt fitted with its intrinsics, against the plane of the labelled boxes' bottoms."""
+    from pedenv.body import ANKLE, EYE
+    from pedenv.calibration.observations import Observations
+    from pedenv.datasets import kitti_files
+    from pedenv.errors import InputError
+
+    training = samples / "kitti" / "tracking_sequences" / "training"
+    rng = np.random.default_rng(0)
+    print("KITTI tracking_sequences, skeletons rendered from the labels (real geometry, modelled perception); "
+          "truth: the plane of the labelled boxes' bottoms (KITTI's nominal camera height: 1.65 m)")
+    for name in sorted(p.stem for p in (training / "label_02").glob("*.txt")):
+        calib = kitti_files.read_calib(training / "calib" / f"{name}.txt")
+        try:
+            labels = kitti_files.read_labels(training / "label_02" / f"{name}.txt")
+        except InputError as exc:
+            print(f"  seq {name}: not read ({exc})")
+            continue
+        k = calib.K
+        people = labels.of_type("Pedestrian")
+        bottom, tall = people.locations, people.dimensions[:, 0]
+        feet, heads = (np.c_[bottom[:, 0], bottom[:, 1] - share * tall, bottom[:, 2]] @ k.T for share in (ANKLE, EYE))
+        feet, heads = feet[:, :2] / feet[:, 2:], heads[:, :2] / heads[:, 2:]
+        feet, heads = feet + rng.normal(0, 2.0, feet.shape), heads + rng.normal(0, 2.0, heads.shape)
+        seen = (bottom[:, 2] > 1.0) & (feet[:, 1] - heads[:, 1] > 24) & (people.occluded <= 1)
+        obs = Observations(feet[seen], heads[seen], np.full(int(seen.sum()), EYE), people.track_id[seen],
+                           people.frame[seen])
+        h, tilt = label_truth(labels)
+        size = (int(round(2 * k[0, 2])), int(round(2 * k[1, 2])))
+        est = fit(obs, size, focal=float(k[0, 0]), centre=(float(k[0, 2]), float(k[1, 2])))
+        row(f"seq {name} ({len(np.unique(obs.tracks))} people)", est, (float(k[0, 0]), h, tilt, 0.0))
+
+
 def cost() -> None:
     """What the run adds per frame after the warm-up: the spread of 30 people's positions."""
     import timeit
@@ -324,7 +372,7 @@ def cost() -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "odometry", "cost"))
+    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "sequences", "odometry", "cost"))
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
     parser.add_argument("--frames", type=int, default=200)
     args = parser.parse_args(argv)
@@ -336,6 +384,8 @@ def main(argv: list[str] | None = None) -> int:
         vtest(args.video, args.frames)
     if args.only in (None, "vehicle"):
         vehicle(args.samples)
+    if args.only in (None, "sequences"):
+        sequences(args.samples)
     if args.only in (None, "odometry"):
         odometry(args.samples, args.video, args.frames)
     if args.only in (None, "cost"):
