@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
+from pedenv.apps.calibrate import estimate_for_source
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
 from pedenv.config import Config
@@ -74,6 +75,8 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
+    source, estimated = estimate_for_source(source, pose, backend)  # a static camera without one: its warm-up
+    cfg = estimated.widen(cfg) if estimated is not None else cfg
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     extra = output.extra or ExtraOutputs()
     rec, backend, out = _open_run(source, output, pose, cfg, pipe, backend)
@@ -82,13 +85,16 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(out / "environment.jsonl")}
+    if estimated is not None:
+        summary["calibration"] = estimated.write(out)  # calibration.yaml (estimated: true), .json and .png
     stats, timer = PipelineStats(), _StepTimes()
     outputs = _Outputs(out, rec, output, summary, progress)
     sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
         with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
             outputs.writer, outputs.sinks = writer, sinks
-            run_frames(rec.frames(), partial(_step, backend, model, timer), outputs.write, config=pipe,
+            write = estimated.widened(outputs.write) if estimated is not None else outputs.write
+            run_frames(rec.frames(), partial(_step, backend, model, timer), write, config=pipe,
                        done=outputs.done, stats=stats)
         _check_ended_early(rec, stats, summary)
     finally:

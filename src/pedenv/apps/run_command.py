@@ -37,8 +37,9 @@ def run_command(*, source: RecordingSource, output: OutputOptions, flags: Output
     ``realtime``: frames at the recording's rate (:class:`~pedenv.apps.pipeline.PipelineConfig`).
     Refused with one InputError: a recording's files beside a manifest, single-recording outputs,
     ``--realtime`` or ``--device`` with a manifest, the executor's flags without one, a bag beside
-    the files it holds, the bag's topic flags without a bag, a recording without its calibration
-    and ego poses.
+    the files it holds, the bag's topic flags without a bag, a vehicle recording without its
+    calibration and ego poses (a ``static`` one without a calibration has its camera estimated
+    from the people it sees: :mod:`pedenv.apps.calibrate`).
     """
     if manifest is not None:
         refuse_beside_manifest(source, flags, paced=realtime or pose.device != "auto")
@@ -88,9 +89,10 @@ def check_single_recording(source: RecordingSource, executor: ExecutorOptions) -
         given = [f"--{k.replace('_', '-')}" for k, v in chosen.items() if v is not None]
         if given:
             raise InputError(f"{', '.join(given)} apply to --bag")
-        if source.calibration is None or (source.ego_poses is None and not source.static):
+        if not source.static and (source.calibration is None or source.ego_poses is None):
             raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
-                             "(or a --bag, or a --manifest of recordings)")
+                             "(or a --bag, or a --manifest of recordings); --static alone estimates a fixed camera "
+                             "from the people it sees")
     elif any(v is not None for v in (source.images, source.video, source.calibration, source.ego_poses)) \
             or source.static:
         raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, "

@@ -8,6 +8,7 @@ from __future__ import annotations
 # Importing the modules registers their commands on ``app``.
 from pedenv.cli import (
     bag_commands,  # noqa: E402,F401
+    calibrate_commands,  # noqa: E402,F401
     core_commands,  # noqa: E402,F401
     detection_commands,  # noqa: E402,F401
     pose_commands,  # noqa: E402,F401

@@ -27,16 +27,22 @@ CALIBRATION_FIELDS: dict[str, str] = {
     "cy": "principal point v, pixels",
     "cam_to_vehicle": "the camera's mounting (rotation, translation)",
     "mount": "vehicle (the default) or static (a camera fixed to the ground)",
+    "fov_deg": "horizontal field of view, degrees, instead of the intrinsics (principal point at the centre)",
+    "estimated": "true: the camera was estimated from the people seen (pedenv calibrate), not measured",
+    "uncertainty": "1-sigma of an estimated camera (focal_px, height_m, tilt_deg, roll_deg)",
 }
 #: The keys of the calibration's mappings.
 CALIBRATION_SUBFIELDS: dict[str, dict[str, str]] = {
     "cam_to_vehicle": {"rotation": "quaternion [w, x, y, z] or 3x3 matrix, optical -> vehicle",
                        "translation": "camera position in the vehicle frame, metres"},
+    "uncertainty": {"focal_px": "pixels", "height_m": "metres", "tilt_deg": "degrees", "roll_deg": "degrees"},
 }
 
 #: Focal lengths (fx, fy) in pixels: a 100,000 px focal length is a 1 degree field of view
 #: on a 2,000 px image; beyond it distances overflow.
 FOCAL_RANGE_PX = (1.0, 1e5)
+#: Horizontal field of view ``fov_deg``, degrees.
+FOV_RANGE_DEG = (1.0, 179.0)
 #: Image width and height in pixels.
 IMAGE_SIDE_RANGE_PX = (8, 20_000)
 #: Farthest camera from the vehicle origin, metres (a camera is mounted on the vehicle). A

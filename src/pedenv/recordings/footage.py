@@ -11,6 +11,12 @@ to the vehicle frame, x forward / y left / z up; translation in metres)::
       translation: [1.70, 0.0, 1.51]
     mount: vehicle    # optional: vehicle (the default) or static (a camera fixed to the ground)
 
+``fov_deg`` (the horizontal field of view, degrees; square pixels, principal point at the
+centre) may stand for the intrinsics. A file written by ``pedenv calibrate`` carries
+``estimated: true`` and the estimate's 1-sigma ``uncertainty``; loading it warns. A file with
+the size and intrinsics (or ``fov_deg``) but no ``cam_to_vehicle`` is read by
+:func:`load_intrinsics`: the mounting is then estimated (:mod:`pedenv.calibration`).
+
 A ``static`` camera (an infrastructure camera, a parked vehicle) needs no ego poses: its
 vehicle frame stays where it is (the world frame), with ``cam_to_vehicle`` placing the
 camera over the ground (z = 0).
@@ -23,6 +29,7 @@ from __future__ import annotations
 
 import csv
 import os
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +41,7 @@ from pedenv.errors import InputError
 from pedenv.geometry import quaternion_to_rotation
 from pedenv.images import image_size, read_image_rgb
 from pedenv.paths import check_path
-from pedenv.recordings.calibration_fields import check_keys, check_ranges
+from pedenv.recordings.calibration_fields import FOV_RANGE_DEG, check_keys, check_ranges
 from pedenv.recordings.ego_poses import (  # noqa: F401 - the recordings' API in one place
     MAX_PLAUSIBLE_EGO_SPEED_MPS,
     EgoTrajectory,
@@ -67,6 +74,55 @@ def _numbers(value: object, key: str, path: Path, shape: tuple[int, ...]) -> np.
     return array
 
 
+def _intrinsics(data: dict[str, Any], path: Path, width: float, height: float) -> np.ndarray | None:
+    """The (3, 3) camera matrix of a calibration mapping: ``intrinsics``, ``fx fy cx cy`` or
+    ``fov_deg`` (square pixels, principal point at the centre); None when it gives none."""
+    if "intrinsics" in data:
+        k = _numbers(data["intrinsics"], "intrinsics", path, (3, 3))
+        if not np.array_equal(k[2], [0.0, 0.0, 1.0]):
+            raise InputError(f"{path}: calibration field 'intrinsics' must have the last row [0, 0, 1], got "
+                             f"{k[2].tolist()} (a scaled matrix would scale every distance)")
+        return k
+    if "fov_deg" in data and "fx" not in data:
+        fov = float(_numbers(data["fov_deg"], "fov_deg", path, ()))
+        if not FOV_RANGE_DEG[0] <= fov <= FOV_RANGE_DEG[1]:
+            raise InputError(f"{path}: calibration field 'fov_deg' must be in [{FOV_RANGE_DEG[0]:g}, "
+                             f"{FOV_RANGE_DEG[1]:g}] degrees, got {fov:g}")
+        f = width / (2.0 * np.tan(np.radians(fov) / 2.0))
+        return np.array([[f, 0.0, width / 2.0], [0.0, f, height / 2.0], [0.0, 0.0, 1.0]])
+    if not any(key in data for key in ("fx", "fy", "cx", "cy")):
+        return None
+    fx, fy, cx, cy = (float(_numbers(_field(data, f, path), f, path, ())) for f in ("fx", "fy", "cx", "cy"))
+    return np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def load_intrinsics(path: str | Path) -> tuple[int, int, np.ndarray | None]:
+    """(width, height, (3, 3) camera matrix or None) of a calibration YAML that may lack the
+    mounting (``cam_to_vehicle``) and the intrinsics: what a camera estimated from people starts from."""
+    path = Path(path)
+    data = load_yaml(path, "the calibration")
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: calibration must be a YAML mapping of fields")
+    check_keys(data, path)
+    width, height = (_numbers(_field(data, f, path), f, path, ()) for f in ("width", "height"))
+    if width != int(width) or height != int(height):
+        raise InputError(f"{path}: calibration fields 'width' and 'height' must be whole pixels, got {width}, {height}")
+    k = _intrinsics(data, path, float(width), float(height))
+    if k is not None:
+        check_ranges(path, k, float(width), float(height), np.zeros(3))
+    return int(width), int(height), k
+
+
+def has_mounting(path: str | Path) -> bool:
+    """Whether a calibration YAML places the camera (has ``cam_to_vehicle``); a file that cannot
+    be read says True, so that loading it gives its own error."""
+    try:
+        data = load_yaml(Path(path), "the calibration")
+    except InputError:
+        return True
+    return not isinstance(data, dict) or "cam_to_vehicle" in data
+
+
 def load_calibration(path: str | Path) -> Camera:
     """The :class:`Camera` described by a calibration YAML file (format in the module doc)."""
     path = Path(path)
@@ -74,15 +130,13 @@ def load_calibration(path: str | Path) -> Camera:
     if not isinstance(data, dict):
         raise InputError(f"{path}: calibration must be a YAML mapping of fields")
     check_keys(data, path)
-    if "intrinsics" in data:
-        k = _numbers(data["intrinsics"], "intrinsics", path, (3, 3))
-        if not np.array_equal(k[2], [0.0, 0.0, 1.0]):
-            raise InputError(f"{path}: calibration field 'intrinsics' must have the last row [0, 0, 1], got "
-                             f"{k[2].tolist()} (a scaled matrix would scale every distance)")
-    else:
-        fx, fy, cx, cy = (float(_numbers(_field(data, f, path), f, path, ())) for f in ("fx", "fy", "cx", "cy"))
-        k = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
     width, height = (_numbers(_field(data, f, path), f, path, ()) for f in ("width", "height"))
+    k = _intrinsics(data, path, float(width), float(height))
+    if k is None:
+        raise InputError(f"{path}: calibration field 'intrinsics' is missing (or fx, fy, cx, cy, or fov_deg)")
+    if data.get("estimated") is True:
+        warnings.warn(f"{path}: this calibration was estimated from the people seen (estimated: true), not "
+                      "measured; its uncertainty field says how well", stacklevel=2)
     rot = np.asarray(_field(data, "cam_to_vehicle.rotation", path), dtype=object)
     if rot.shape == (4,):
         q = _numbers(rot.tolist(), "cam_to_vehicle.rotation", path, (4,))

@@ -1,0 +1,397 @@
+"""Self-calibration: the camera estimated from the people it sees, against the truth or a reference.
+
+    PYTHONPATH=src python benchmarks/self_calibration.py [--samples ../shared/samples/real]
+        [--only synthetic|mot17|vtest|vehicle] [--video vtest.avi] [--frames 200]
+
+- synthetic: the built-in ``static-plaza`` scene (seed 0, 150 frames, a camera 6 m up, 20 deg
+  down, 64.5 deg field of view), skeletons from the detector model (``yolo11n-pose-far``
+  profile) and exact skeletons: the estimate against the truth, then the positions of the fused
+  method with the true and with the estimated camera (the estimate's spreads widening the static
+  camera's ``fused.static_camera_*`` as ``pedenv run`` does) side by side.
+- mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
+  6 images each), the estimate against UCMCTrack's camera (``ucmctrack_cam_para/``, itself an
+  estimate), with the focal length free and with it taken from UCMCTrack; where the estimate
+  stands, the fused method's positions with either camera against the box bottoms cut with
+  UCMCTrack's ground.
+- vtest: the real network on the first ``--frames`` frames of a street video (Debian's
+  ``opencv-doc`` ``examples/data/vtest.avi``): the estimate of each half and of all frames
+  (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
+- sequences: the eight KITTI tracking drives of ``kitti/tracking_sequences/`` (labels only),
+  skeletons' ankle and eye points rendered from the pedestrians' 3D boxes with 2 px noise:
+  height and tilt with the intrinsics known, against the plane of the boxes' bottoms.
+- cost: what ``pedenv run`` adds per frame after the warm-up (the positions' spread of 30 people).
+- odometry: the vehicle's motion from the images against GPS/IMU on KITTI raw 0002 (10 frames,
+  the camera's height 1.65 m as KITTI gives it), and on the static vtest.avi (it should not move).
+- vehicle: intrinsics known, height, tilt and roll from the people: KITTI tracking 0016 (3
+  images; truth: a plane fitted to the bottoms of every labelled object's 3D box over the
+  sequence's 209 frames) and nuScenes 0061 (5 cameras; truth: the calibrated mounting).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
+DEFAULT_VIDEO = Path("/usr/share/doc/opencv-doc/examples/data/vtest.avi")
+STATIC_MOT17 = ("MOT17-02-FRCNN", "MOT17-04-FRCNN", "MOT17-09-FRCNN")
+#: ``fused`` settings of an exactly known camera and anatomical ankles (the synthetic scene).
+EXACT = {"static_camera_tilt_std_deg": 0.0, "static_camera_height_std_m": 0.0, "ankle_keypoint_offset_m": 0.0,
+         "ankle_keypoint_offset_std_m": 0.0}
+
+
+def row(label: str, est, truth: tuple[float, float, float, float] | None) -> None:
+    """One printed line: the estimate (and its 1-sigma) against the truth."""
+    if isinstance(est, Exception):
+        print(f"  {label:34s} refused: {est}")
+        return
+    s = est.uncertainty()
+    text = (f"f {est.focal:7.1f}+-{s['focal_px']:5.1f}  H {est.height:5.2f}+-{s['height_m']:.2f}  "
+            f"tilt {np.degrees(est.tilt):5.2f}+-{s['tilt_deg']:.2f}  roll {np.degrees(est.roll):5.2f}+-"
+            f"{s['roll_deg']:.2f}  ({est.people} people, {est.observations} obs)")
+    if truth is not None:
+        f, h, t, r = truth
+        text += (f"\n  {'':34s} truth f {f:7.1f}  H {h:5.2f}  tilt {np.degrees(t):5.2f}  roll {np.degrees(r):5.2f}"
+                 f"  -> f {100 * (est.focal / f - 1):+.1f} %  H {100 * (est.height / h - 1):+.1f} %  tilt "
+                 f"{np.degrees(est.tilt - t):+.2f} deg  roll {np.degrees(est.roll - r):+.2f} deg")
+    print(f"  {label:34s} {text}")
+
+
+def fit(obs, size, **kw):
+    from pedenv.calibration.fit import estimate_camera
+    from pedenv.errors import InputError
+
+    try:
+        return estimate_camera(obs, size, **kw)
+    except InputError as exc:
+        return exc
+
+
+def observe_frames(images, backend):
+    """Observations of images (RGB arrays) with ``backend``'s whole-image detection, boxes linked."""
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+
+    linker, parts = BoxLinker(), []
+    for index, image in enumerate(images):
+        det = backend.detect(image)
+        parts.append(observations_of(det, index, linker(det.boxes)))
+    return Observations.concat(parts)
+
+
+def onnx_far():
+    from pedenv.pose import create_pose_backend
+    from pedenv.pose.models import backend_options
+
+    return create_pose_backend("onnx", **backend_options("onnx", detection="far"))
+
+
+def coverage(frames, camera, spec, fused: dict, estimate=None) -> dict:
+    """The fused method over ``frames`` seen by ``camera`` (skeletons from backend ``spec``): mean
+    relative error and the share of errors within the 1- and 2-sigma ellipses, each estimate
+    matched to the nearest truth whose box overlaps its box; ``estimate``: covariances widened by
+    the calibration's (:func:`pedenv.calibration.spread.widen_state`)."""
+    from pedenv.calibration.spread import widen_state
+    from pedenv.config import Config
+    from pedenv.evaluation.matching import match_to_ground_truth
+    from pedenv.model import PedestrianEnvironmentModel
+    from pedenv.pose import create_pose_backend
+
+    model = PedestrianEnvironmentModel(Config().replace(fused=fused))
+    backend = create_pose_backend(spec) if isinstance(spec, str) else spec()
+    rel, d2 = [], []
+    for frame in frames:
+        frame = dataclasses.replace(frame, camera=camera)
+        frame = dataclasses.replace(frame, detections=backend(frame))
+        state = model.update(frame)
+        if estimate is not None:
+            state = widen_state(state, estimate)
+        p, gt = state.pedestrians, frame.ground_truth
+        match = match_to_ground_truth(p.boxes, p.positions[:, :2], gt.boxes, gt.positions[:, :2])
+        for i in np.flatnonzero(match >= 0):
+            err = p.positions[i, :2] - gt.positions[match[i], :2]
+            rel.append(np.linalg.norm(err) / np.linalg.norm(gt.positions[match[i], :2]))
+            d2.append(float(err @ np.linalg.solve(p.covariances[i], err)))
+    d2a = np.array(d2)
+    return {"rel_error_pct": 100 * float(np.mean(rel)), "within_1sigma": 100 * float(np.mean(d2a <= 1.0)),
+            "within_2sigma": 100 * float(np.mean(d2a <= 4.0)), "count": len(d2)}
+
+
+def synthetic() -> None:
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.pose import create_pose_backend
+    from pedenv.records import Detections
+    from pedenv.synthetic import generate_scenes
+
+    scene = generate_scenes(0, ["static-plaza"])[0]
+    truth_camera = scene.frames[0].camera
+    truth = parameters_of(truth_camera)
+    print("synthetic static-plaza (seed 0, 150 frames, exact truth)")
+    for label, spec in (("detector model (yolo11n-pose-far)", "detector-model:yolo11n-pose-far"),
+                        ("exact skeletons", "ground-truth")):
+        backend, linker, parts = create_pose_backend(spec), BoxLinker(), []
+        for frame in scene.frames:
+            det: Detections = backend(frame)
+            parts.append(observations_of(det, frame.index, linker(det.boxes)))
+        est = fit(Observations.concat(parts), (truth_camera.width, truth_camera.height))
+        row(label, est, truth)
+        if isinstance(est, Exception):
+            continue
+        from pedenv.config import Config
+
+        widened = {**EXACT, **est.fused_spreads(Config().replace(fused=EXACT).fused)}
+        for name, camera, fused, spread in (("true camera", truth_camera, EXACT, None),
+                                            ("estimated camera", est.camera(), widened, None),
+                                            ("estimated, spread", est.camera(), widened, est)):
+            m = coverage(scene.frames, camera, spec, fused, spread)
+            print(f"  {'':34s} positions, {name:17s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
+                  f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")
+
+
+def mot17(samples: Path) -> None:
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.datasets import mot17 as mot
+    from pedenv.datasets.ucmctrack import read_camera_parameters, static_camera
+    from pedenv.images import read_image_rgb
+
+    backend = onnx_far()
+    print("MOT17 static sequences, real network (onnx far), against UCMCTrack's estimated camera")
+    for name in STATIC_MOT17:
+        seq = mot.read_sequence(samples / "mot17" / name)
+        ref = static_camera(read_camera_parameters(samples / "mot17" / "ucmctrack_cam_para" / f"{name}.txt"),
+                            seq.info.width, seq.info.height)
+        truth = parameters_of(ref)
+        obs = observe_frames([read_image_rgb(seq.image_path(n)) for n in seq.frames], backend)
+        size = (seq.info.width, seq.info.height)
+        row(f"{name} ({len(seq.frames)} images)", fit(obs, size, body=NETWORK_BODY), truth)
+        given = fit(obs, size, body=NETWORK_BODY, focal=truth[0])
+        row("  focal from UCMCTrack", given, truth)
+        if not isinstance(given, Exception):
+            positions(samples / "mot17" / name, ref, given)
+
+
+def positions(folder: Path, reference, est) -> None:
+    """The fused method on a MOT17 sequence with UCMCTrack's camera and with the estimate, against
+    the box bottoms cut with UCMCTrack's ground (:func:`pedenv.datasets.ucmctrack.mot17_static_scene`)."""
+    from pedenv.config import Config
+    from pedenv.datasets.ucmctrack import mot17_static_scene
+
+    scene = mot17_static_scene(folder, folder.parent / "ucmctrack_cam_para" / f"{folder.name}.txt")
+    widened = est.fused_spreads(Config().fused)
+    for name, camera, fused, spread in (("UCMCTrack camera", reference, {}, None),
+                                        ("estimated camera", est.camera(), widened, None),
+                                        ("estimated, spread", est.camera(), widened, est)):
+        m = coverage(scene.frames, camera, onnx_far, fused, spread)
+        print(f"  {'':34s} positions, {name:17s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
+              f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")
+
+
+def vtest(video: Path, frames: int) -> None:
+    from pedenv.apps.calibrate import warmup_frames
+    from pedenv.calibration.fit import NETWORK_BODY
+
+    if not video.is_file():
+        print(f"vtest: {video} not found (apt-get install opencv-doc)")
+        return
+    images = [image for _, image in warmup_frames(None, video, frames)]
+    obs = observe_frames(images, onnx_far())
+    size = (images[0].shape[1], images[0].shape[0])
+    half = len(images) // 2
+    print(f"vtest.avi ({len(images)} frames), real network (onnx far), no truth: consistency")
+    for label, keep in ((f"frames 0-{half - 1}", obs.frames < half),
+                        (f"frames {half}-{len(images) - 1}", obs.frames >= half), ("all frames", obs.frames >= 0)):
+        est = fit(obs.subset(keep), size, body=NETWORK_BODY)
+        row(label, est, None)
+        if not isinstance(est, Exception):
+            heights = person_heights(est, obs.subset(keep))
+            print(f"  {'':34s} people's heights (median per track): median {np.median(heights):.2f} m, "
+                  f"{100 * np.mean((heights >= 1.5) & (heights <= 1.9)):.0f} % within 1.5-1.9 m")
+
+
+def person_heights(est, obs) -> np.ndarray:
+    """Each track's median height (m) under ``est``: the eye keypoint's height over the ankles'
+    ground point, divided by the network body's eye share."""
+    from pedenv.body import ANKLE
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics
+
+    k, r = intrinsics(est.focal, est.centre), camera_rotation(est.tilt, est.roll)
+    ground = ground_points(obs.feet, k, r, est.height, NETWORK_BODY.ankle_m())
+    ray = np.c_[obs.heads, np.ones(len(obs))] @ np.linalg.inv(k).T @ r.T
+    horizontal = np.hypot(ground[:, 0], ground[:, 1])
+    ray_h = np.hypot(ray[:, 0], ray[:, 1])
+    eye_z = est.height + ray[:, 2] * horizontal / ray_h
+    span = (obs.head_share - ANKLE) * NETWORK_BODY.span_scale
+    tall = (eye_z - NETWORK_BODY.ankle_m()) / span
+    return np.array([np.median(tall[obs.tracks == t]) for t in np.unique(obs.tracks)])
+
+
+def vehicle(samples: Path) -> None:
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.datasets import kitti_files, nuscenes_cameras
+    from pedenv.images import read_image_rgb
+    from pedenv.records import Camera
+
+    backend = onnx_far()
+    print("vehicle cameras, intrinsics known: height, tilt, roll from the people (real network, onnx far)")
+    training = samples / "kitti" / "tracking_mini" / "training"
+    seq = kitti_files.read_tracking_sequence(training, "0016")
+    labels = seq.labels
+    solid = np.isin(labels.types, ("Pedestrian", "Car", "Van", "Cyclist", "Truck"))
+    loc = labels.locations[solid]  # bottom-face centres, rectified camera frame (x right, y down, z forward)
+    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
+    h, slope_z, slope_x = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
+    truth = (float(seq.calib.K[0, 0]), float(h), float(np.arctan(-slope_z)), float(np.arctan(slope_x)))
+    images = [read_image_rgb(seq.image_path(n)) for n in seq.frames]
+    obs = observe_frames(images, backend)
+    k = seq.calib.K
+    size = (images[0].shape[1], images[0].shape[0])
+    row("KITTI tracking 0016 (3 images)", fit(obs, size, body=NETWORK_BODY, focal=float(k[0, 0]),
+                                               centre=(float(k[0, 2]), float(k[1, 2]))), truth)
+    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
+        level = np.linalg.inv(cam.ego_to_global) @ cam.cam_to_global
+        mount = np.eye(4)
+        mount[:3, :3] = level[:3, :3]
+        mount[2, 3] = level[2, 3]
+        image = read_image_rgb(cam.image_path)
+        truth = parameters_of(Camera(cam.K, image.shape[1], image.shape[0], mount))
+        obs = observe_frames([image], backend)
+        row(f"nuScenes {cam.camera}", fit(obs, (image.shape[1], image.shape[0]), body=NETWORK_BODY,
+                                          focal=float(cam.K[0, 0]), centre=(float(cam.K[0, 2]), float(cam.K[1, 2]))),
+            truth)
+
+
+def odometry(samples: Path, video: Path, frames: int) -> None:
+    """Visual odometry against GPS/IMU (KITTI raw 0002, 10 frames) and on a static camera (vtest)."""
+    from pedenv.apps.calibrate import warmup_frames
+    from pedenv.calibration.odometry import trajectory
+    from pedenv.images import read_image_rgb
+    from pedenv.records import default_cam_to_vehicle
+
+    backend = onnx_far()
+    root = samples / "kitti" / "raw_2011_09_26_drive_0002" / "2011_09_26_drive_0002_sync"
+    paths = sorted((root / "image_02" / "data").glob("*.png"))
+    images = [read_image_rgb(p) for p in paths]
+    k = np.array([[721.5377, 0.0, 609.5593], [0.0, 721.5377, 172.854], [0.0, 0.0, 1.0]])  # P_rect_02
+    oxts = np.array([np.loadtxt(p)[:6] for p in sorted((root / "oxts" / "data").glob("*.txt"))])
+    lat, lon, yaw = np.radians(oxts[:, 0]), np.radians(oxts[:, 1]), oxts[:, 5]
+    scale, earth = np.cos(lat[0]), 6378137.0  # KITTI's Mercator projection of the GPS fixes
+    east, north = scale * earth * lon, scale * earth * np.log(np.tan(np.pi / 4 + lat / 2))
+    gps = float(np.hypot(east[-1] - east[0], north[-1] - north[0]))
+    print("visual odometry, KITTI raw 2011_09_26_drive_0002 (10 frames, camera 1.65 m, level), against GPS/IMU")
+    for label, boxes in (("corners everywhere", None), ("people and cyclists masked", [backend.detect(i).boxes
+                                                                                        for i in images])):
+        poses = trajectory(images, k, default_cam_to_vehicle(1.65), boxes)
+        dist = float(np.linalg.norm(poses[-1, :3, 3]))
+        est_yaw = float(np.degrees(np.arctan2(poses[-1, 1, 0], poses[-1, 0, 0])))
+        imu = float(np.degrees(yaw[-1] - yaw[0]))
+        print(f"  {label:34s} distance {dist:.2f} m (GPS {gps:.2f} m, {100 * (dist / gps - 1):+.1f} %)  yaw change "
+              f"{est_yaw:+.2f} deg (IMU {imu:+.2f} deg, {est_yaw - imu:+.2f})")
+    if video.is_file():
+        frames_rgb = [image for _, image in warmup_frames(None, video, frames)]
+        w, h = frames_rgb[0].shape[1], frames_rgb[0].shape[0]
+        k = np.array([[w, 0.0, w / 2], [0.0, w, h / 2], [0.0, 0.0, 1.0]])  # about 53 deg; no truth
+        from pedenv.calibration.geometry import static_camera
+
+        mount = static_camera(float(w), 7.0, np.radians(25.0), 0.0, (w, h)).cam_to_vehicle
+        poses = trajectory(frames_rgb, k, mount)
+        print(f"  vtest.avi ({len(frames_rgb)} frames, static): largest distance from the start "
+              f"{np.linalg.norm(poses[:, :3, 3], axis=1).max():.3f} m")
+
+
+def label_truth(labels) -> tuple[float, float]:
+    """(height m, tilt rad) of the camera over the plane fitted to every labelled object's 3D box
+    bottom (rectified camera frame: x right, y down, z forward)."""
+    solid = np.isin(labels.types, ("Pedestrian", "Car", "Van", "Cyclist", "Truck"))
+    loc = labels.locations[solid]
+    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
+    h, slope_z, _ = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
+    return float(h), float(np.arctan(-slope_z))
+
+
+def sequences(samples: Path) -> None:
+    """KITTI tracking_sequences, skeletons rendered from the labels: each pedestrian's ankle and
+    eye points (anatomical shares of the box height) projected with 2 px noise, the camera's
+    height and tilt fitted with its intrinsics, against the plane of the labelled boxes' bottoms."""
+    from pedenv.body import ANKLE, EYE
+    from pedenv.calibration.observations import Observations
+    from pedenv.datasets import kitti_files
+    from pedenv.errors import InputError
+
+    training = samples / "kitti" / "tracking_sequences" / "training"
+    rng = np.random.default_rng(0)
+    print("KITTI tracking_sequences, skeletons rendered from the labels (real geometry, modelled perception); "
+          "truth: the plane of the labelled boxes' bottoms (KITTI's nominal camera height: 1.65 m)")
+    for name in sorted(p.stem for p in (training / "label_02").glob("*.txt")):
+        calib = kitti_files.read_calib(training / "calib" / f"{name}.txt")
+        try:
+            labels = kitti_files.read_labels(training / "label_02" / f"{name}.txt")
+        except InputError as exc:
+            print(f"  seq {name}: not read ({exc})")
+            continue
+        k = calib.K
+        people = labels.of_type("Pedestrian")
+        bottom, tall = people.locations, people.dimensions[:, 0]
+        feet, heads = (np.c_[bottom[:, 0], bottom[:, 1] - share * tall, bottom[:, 2]] @ k.T for share in (ANKLE, EYE))
+        feet, heads = feet[:, :2] / feet[:, 2:], heads[:, :2] / heads[:, 2:]
+        feet, heads = feet + rng.normal(0, 2.0, feet.shape), heads + rng.normal(0, 2.0, heads.shape)
+        seen = (bottom[:, 2] > 1.0) & (feet[:, 1] - heads[:, 1] > 24) & (people.occluded <= 1)
+        obs = Observations(feet[seen], heads[seen], np.full(int(seen.sum()), EYE), people.track_id[seen],
+                           people.frame[seen])
+        h, tilt = label_truth(labels)
+        size = (int(round(2 * k[0, 2])), int(round(2 * k[1, 2])))
+        est = fit(obs, size, focal=float(k[0, 0]), centre=(float(k[0, 2]), float(k[1, 2])))
+        row(f"seq {name} ({len(np.unique(obs.tracks))} people)", est, (float(k[0, 0]), h, tilt, 0.0))
+
+
+def cost() -> None:
+    """What the run adds per frame after the warm-up: the spread of 30 people's positions."""
+    import timeit
+
+    from pedenv.calibration.estimate import CameraEstimate
+    from pedenv.calibration.spread import calibration_covariances
+
+    est = CameraEstimate(1266.4, 6.0, np.radians(20.0), 0.0, np.diag([50.0, 0.17, 0.01, 0.004]) ** 2, (1600, 900),
+                         (800.0, 450.0), 10, 100, 3.0)
+    rng = np.random.default_rng(0)
+    people = np.c_[rng.uniform(8, 60, 30), rng.uniform(-20, 20, 30), np.zeros(30)]
+    n = 500
+    seconds = timeit.timeit(lambda: calibration_covariances(people, est), number=n) / n
+    print(f"cost after the warm-up: {1e3 * seconds:.2f} ms per frame of 30 people (the positions' spread)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
+    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "sequences", "odometry", "cost"))
+    parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
+    parser.add_argument("--frames", type=int, default=200)
+    args = parser.parse_args(argv)
+    if args.only in (None, "synthetic"):
+        synthetic()
+    if args.only in (None, "mot17"):
+        mot17(args.samples)
+    if args.only in (None, "vtest"):
+        vtest(args.video, args.frames)
+    if args.only in (None, "vehicle"):
+        vehicle(args.samples)
+    if args.only in (None, "sequences"):
+        sequences(args.samples)
+    if args.only in (None, "odometry"):
+        odometry(args.samples, args.video, args.frames)
+    if args.only in (None, "cost"):
+        cost()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

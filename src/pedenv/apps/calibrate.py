@@ -1,0 +1,255 @@
+"""``pedenv calibrate``: a camera estimated from the people in its first frames (the warm-up).
+
+The warm-up reads the first :data:`WARMUP_SECONDS` of a video (or the first
+:data:`WARMUP_MAX_FRAMES` images of a folder, whichever is fewer), finds the people with the
+pose backend, links them from frame to frame and fits the camera
+(:func:`pedenv.calibration.fit.estimate_camera`). ``pedenv run`` without ``--calibration`` runs
+the same warm-up before its frames.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import shutil
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pedenv.apps.options import PoseOptions, RecordingSource
+from pedenv.calibration.estimate import CameraEstimate
+from pedenv.calibration.fit import NETWORK_BODY, BodyModel, estimate_camera, fitted_heads
+from pedenv.calibration.linking import BoxLinker
+from pedenv.calibration.observations import Observations, observations_of
+from pedenv.config import Config
+from pedenv.errors import InputError
+from pedenv.pose.base import PoseBackend
+from pedenv.records import Camera, Detections, EgoPose, Frame
+from pedenv.state import EnvironmentState
+
+#: The warm-up: the first this many seconds of a video (its own frame rate) ...
+WARMUP_SECONDS = 20.0
+#: ... and at most this many frames (an image folder: the first this many images). 200 frames of
+#: the built-in static scene (10 Hz, about 45 people) fix its focal length within 3 %; on a CPU
+#: the network takes about a second a frame, so the warm-up stays a few minutes.
+WARMUP_MAX_FRAMES = 200
+#: Pose backends that run a real network (whose keypoints sit as :data:`NETWORK_BODY` says).
+NETWORK_BACKENDS = ("onnx", "ultralytics")
+
+
+@dataclass(frozen=True)
+class WarmUp:
+    """What the warm-up saw: the people (``people``), the frames read, the last image (RGB)."""
+
+    people: Observations
+    frames: int
+    image: np.ndarray
+
+
+def warmup_frames(images: str | Path | None, video: str | Path | None,
+                  limit: int = WARMUP_MAX_FRAMES) -> Iterator[tuple[int, np.ndarray]]:
+    """(index, (H, W, 3) uint8 RGB) of the warm-up's frames: a folder's first ``limit`` images
+    (sorted by name) or a video's first :data:`WARMUP_SECONDS`, at most ``limit`` frames."""
+    from pedenv.images import read_image_rgb
+    from pedenv.recordings.footage import IMAGE_SUFFIXES
+
+    if video is not None:
+        import cv2
+
+        from pedenv.video_files import video_capture
+
+        with video_capture(video) as cap:
+            rate = cap.get(cv2.CAP_PROP_FPS)
+            count = min(limit, math.ceil(WARMUP_SECONDS * rate)) if rate and rate > 0 else limit
+            for index in range(count):
+                ok, bgr = cap.read()
+                if not ok:
+                    return
+                yield index, cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+        return
+    assert images is not None
+    folder = Path(images)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: image folder not found")
+    paths = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)[:limit]
+    if not paths:
+        raise InputError(f"{folder}: no images ({', '.join(IMAGE_SUFFIXES)}) in the folder")
+    for index, path in enumerate(paths):
+        yield index, read_image_rgb(path)
+
+
+def _detect(backend: PoseBackend, index: int, image: np.ndarray) -> Detections:
+    """One image's skeletons: the backend's whole-image ``detect`` where it has one, else the
+    backend on a frame (a placeholder camera: the backend must not need the true one)."""
+    detect = getattr(backend, "detect", None)
+    if detect is not None:
+        return detect(image)
+    camera = Camera.from_fov(image.shape[1], image.shape[0])
+    return backend(Frame(index, float(index), camera, EgoPose(np.zeros(3), np.eye(3)), image=image))
+
+
+def observe(frames: Iterator[tuple[int, np.ndarray]], backend: PoseBackend) -> WarmUp:
+    """The upright people of ``frames``, linked into tracks (:class:`~pedenv.calibration.linking.BoxLinker`)."""
+    linker, parts, last, count = BoxLinker(), [], None, 0
+    for index, image in frames:
+        det = _detect(backend, index, image)
+        parts.append(observations_of(det, index, linker(det.boxes)))
+        last, count = image, count + 1
+    if last is None:
+        raise InputError("the recording holds no readable frame to estimate the camera from")
+    return WarmUp(Observations.concat(parts), count, last)
+
+
+def body_of(backend_name: str) -> BodyModel:
+    """Where ``backend_name``'s keypoints sit on a person: a real network's, or the anatomical table."""
+    return NETWORK_BODY if backend_name in NETWORK_BACKENDS else BodyModel()
+
+
+def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None) -> CameraEstimate:
+    """The camera fitted to the warm-up's people (``intrinsics`` (3, 3) pixels fix focal length
+    and principal point when given)."""
+    size = (warmup.image.shape[1], warmup.image.shape[0])
+    focal = None if intrinsics is None else float(intrinsics[0, 0])
+    centre = None if intrinsics is None else (float(intrinsics[0, 2]), float(intrinsics[1, 2]))
+    return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name))
+
+
+def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backend_name: str,
+                   mount: str = "static") -> dict:
+    """``calibration.yaml`` (the input format, ``estimated: true``), ``calibration.json`` (the
+    summary) and ``calibration.png`` (horizon, ground grid, people) in ``folder``; returns the summary."""
+    from pedenv.calibration.files import write_calibration
+    from pedenv.calibration.picture import draw_calibration
+    from pedenv.images import write_image
+
+    write_calibration(folder / "calibration.yaml", estimate, mount)
+    people = warmup.people
+    shown = people.subset(np.linspace(0, len(people) - 1, min(len(people), 400)).astype(int))
+    heads = fitted_heads(estimate, shown, body_of(backend_name))
+    write_image(folder / "calibration.png", draw_calibration(warmup.image, estimate, shown, heads))
+    summary = {**estimate.summary(), "mount": mount, "warmup_frames": warmup.frames, "pose_backend": backend_name}
+    (folder / "calibration.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
+    return summary
+
+
+def calibrate(*, output: str | Path, images: str | Path | None = None, video: str | Path | None = None,
+              backend: PoseBackend, backend_name: str, calibration: str | Path | None = None,
+              static: bool = True, overwrite: bool = False, frames: int = WARMUP_MAX_FRAMES) -> dict:
+    """Estimate the camera of ``images`` (a folder) or ``video`` from its warm-up's people and write
+    ``calibration.yaml``, ``calibration.json`` and ``calibration.png`` into ``output``.
+
+    calibration: a YAML with the image size and the intrinsics or ``fov_deg`` (no ``cam_to_vehicle``
+    needed): the focal length is then taken from it. static: ``mount: static`` (else ``vehicle``,
+    the vehicle origin under the camera). Returns the summary (``calibration.json``). Raises
+    :class:`~pedenv.calibration.refusals.CalibrationRefused` (one line: what could not be
+    estimated and what to give instead) before ``output`` is touched.
+    """
+    from pedenv.outputs.output_dir import prepare_output_dir
+    from pedenv.recordings.footage import load_intrinsics
+
+    if (images is None) == (video is None):
+        raise InputError("give exactly one of an image folder (--images) or a video (--video)")
+    if video is not None and not Path(video).is_file():
+        raise InputError(f"{video}: video file not found")
+    k = None
+    if calibration is not None:
+        width, height, k = load_intrinsics(calibration)
+    warmup = observe(warmup_frames(images, video, frames), backend)
+    if calibration is not None and (warmup.image.shape[1], warmup.image.shape[0]) != (width, height):
+        raise InputError(f"{calibration}: the calibration is {width}x{height} pixels, the frames "
+                         f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
+    estimate = estimate_from(warmup, backend_name, k)
+    folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
+    return write_estimate(folder, estimate, warmup, backend_name, "static" if static else "vehicle")
+
+
+@dataclass(frozen=True)
+class SelfCalibration:
+    """``pedenv run`` without a placed camera: the estimate, the warm-up it came from, the
+    calibration file the run reads (``path``, in a temporary folder) and the pose backend's name."""
+
+    estimate: CameraEstimate
+    warmup: WarmUp
+    path: Path
+    backend_name: str
+    mount: str = "static"
+
+    def widen(self, cfg: Config) -> Config:
+        """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
+        (:meth:`~pedenv.calibration.estimate.CameraEstimate.fused_spreads`)."""
+        return cfg.replace(fused=self.estimate.fused_spreads(cfg.fused))
+
+    def widened(self, write: Callable[[tuple[EnvironmentState, Frame]], None]
+                ) -> Callable[[tuple[EnvironmentState, Frame]], None]:
+        """``write`` (the run's writer stage) given each state with every position's covariance
+        widened by the estimate's uncertainty (:func:`pedenv.calibration.spread.widen_state`)."""
+        from pedenv.calibration.spread import widen_state
+
+        def widened_write(result: tuple[EnvironmentState, Frame]) -> None:
+            write((widen_state(result[0], self.estimate, result[1].ego), result[1]))
+
+        return widened_write
+
+    def write(self, folder: Path) -> dict:
+        """The estimate's files into the run's output ``folder`` (:func:`write_estimate`), the
+        temporary calibration file removed; returns the summary."""
+        summary = write_estimate(folder, self.estimate, self.warmup, self.backend_name, self.mount)
+        shutil.rmtree(self.path.parent, ignore_errors=True)
+        return summary
+
+
+def needs_estimate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
+                   static: bool) -> bool:
+    """Whether ``pedenv run``'s recording (images or a video) needs its camera estimated: a static
+    camera without a calibration, or any camera whose calibration gives no ``cam_to_vehicle``."""
+    from pedenv.recordings.footage import has_mounting
+
+    if images is None and video is None:
+        return False
+    if calibration is None:
+        return static
+    return not has_mounting(calibration)
+
+
+def self_calibrate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
+                   backend: PoseBackend | None, backend_name: str, device: str = "auto",
+                   mount: str = "static") -> SelfCalibration:
+    """The warm-up of ``pedenv run`` without a placed camera: the camera estimated from the first
+    frames' people (``backend``, else the onnx network's whole-image ``far`` detection on ``device``),
+    written as a plain calibration file in a temporary folder for the run to read."""
+    import tempfile
+
+    from pedenv.calibration.files import calibration_mapping
+    from pedenv.recordings.footage import load_intrinsics
+
+    k = load_intrinsics(calibration)[2] if calibration is not None else None
+    if backend is None:
+        from pedenv.pose.base import create_pose_backend
+        from pedenv.pose.models import backend_options
+
+        backend = create_pose_backend(backend_name, **backend_options(backend_name, None, None, "far", device=device))
+    warmup = observe(warmup_frames(images, video), backend)
+    estimate = estimate_from(warmup, backend_name, k)
+    mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
+               if key not in ("estimated", "uncertainty")}
+    path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"
+    import yaml
+
+    path.write_text(yaml.safe_dump(mapping, sort_keys=False), encoding="utf-8")
+    return SelfCalibration(estimate, warmup, path, backend_name, mount)
+
+
+def estimate_for_source(source: RecordingSource, pose: PoseOptions,
+                        backend: PoseBackend | None) -> tuple[RecordingSource, SelfCalibration | None]:
+    """``pedenv run``'s recording with its camera: as given, or (a static camera without a calibration,
+    or any camera whose calibration has no ``cam_to_vehicle``) estimated in the warm-up and read
+    from a temporary calibration file. A vehicle camera's estimated mounting puts the vehicle
+    origin on the road under the camera, its x axis along the camera's horizontal view."""
+    if source.bag is not None or not needs_estimate(source.images, source.video, source.calibration, source.static):
+        return source, None
+    found = self_calibrate(source.images, source.video, source.calibration, backend, pose.backend or "onnx",
+                           pose.device, "static" if source.static else "vehicle")
+    return dataclasses.replace(source, calibration=found.path), found

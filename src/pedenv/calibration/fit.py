@@ -1,0 +1,213 @@
+"""The robust least-squares fit of a static camera to people's foot and head points.
+
+Each person's foot point is cut with the ground (raised to the ankle keypoint's height), the
+head keypoint is placed a mean person's span above it and projected back; the misfit to the
+seen head point, in units of its expected spread (pixel noise and the spread of body heights,
+:data:`PERSON_HEIGHT_STD_M`), is minimised over (f, H, tilt, roll) with a soft-L1 loss.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.sparse import lil_matrix
+
+from pedenv.body import ANKLE
+from pedenv.calibration.estimate import CameraEstimate
+from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics, project
+from pedenv.calibration.initial import closed_form
+from pedenv.calibration.observations import Observations
+from pedenv.calibration.refusals import check_result, check_spread
+
+#: Prior of adult body height, metres (the fused method's ``person_height_mean_m`` and
+#: ``person_height_std_m``: 1.72 m, 0.09 m; the paper's refinement assumes 1.7 m).
+PERSON_HEIGHT_MEAN_M, PERSON_HEIGHT_STD_M = 1.72, 0.09
+#: How far the mean height of the people one camera sees may be off the prior, metres: the
+#: adult means of different populations (and crowds with children) lie a few centimetres
+#: apart. A judgment, not a fit; it bounds the height's accuracy however many people pass.
+CROWD_MEAN_STD_M = 0.04
+#: A keypoint's pixel noise (the fused method's ``keypoint_pixel_std`` prior).
+KEYPOINT_PIXEL_STD = 3.0
+#: A head's sideways spread about the feet's vertical, share of the span (gait, lean, the
+#: feet's midpoint against the body's axis).
+SIDEWAYS_SHARE = 0.05
+#: Spread of one person's ankle-to-eye span from image to image, share of it: the synthetic
+#: walker's gait moves the ankles' midpoint by 0.021 and the eyes by 0.010 of body height
+#: (1-sigma) over a span of 0.857 of it. A person's height itself is a parameter of the fit
+#: (one per track, prior :data:`PERSON_HEIGHT_STD_M`).
+WITHIN_PERSON_SPAN_STD = 0.03
+#: Ridge added to the unit-scaled information matrix before inverting it: a direction the data
+#: fix less than this (relative) gets a variance about 1e12 times its parameter's scale.
+UNFIXED_RIDGE = 1e-12
+#: Misfit (in sigmas) above which a person-image is dropped before the final fit.
+OUTLIER_SIGMA = 3.0
+
+
+@dataclass(frozen=True)
+class BodyModel:
+    """Where a pose source puts an upright person's keypoints.
+
+    span_scale: the source's ankle-to-head span as a share of the anatomical table's
+    (:mod:`pedenv.body`; the fused method's ``keypoint_span_scale``). ankle_offset_m: the
+    ankle keypoint above the anatomical ankle, metres (``ankle_keypoint_offset_m``).
+    """
+
+    span_scale: float = 1.0
+    ankle_offset_m: float = 0.0
+    height_mean_m: float = PERSON_HEIGHT_MEAN_M
+    height_std_m: float = PERSON_HEIGHT_STD_M
+
+    def ankle_m(self) -> float:
+        return ANKLE * self.height_mean_m + self.ankle_offset_m
+
+    def head_m(self, share: np.ndarray) -> np.ndarray:
+        return (ANKLE + self.span_scale * (share - ANKLE)) * self.height_mean_m + self.ankle_offset_m
+
+
+#: Where a real pose network (YOLO11n-pose) puts the keypoints: its ankle-to-eye span is 0.823 of
+#: the true height on KITTI, 0.928 of the anatomical table's, and its ankle keypoint 0.039 m above
+#: the anatomical ankle (the fused method's measured figures, ``pedenv.config_position``).
+NETWORK_BODY = BodyModel(span_scale=0.928, ankle_offset_m=0.039)
+
+
+def _camera_count(focal: float | None) -> int:
+    return 3 if focal is not None else 4
+
+
+def _predicted(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+               focal: float | None) -> np.ndarray:
+    """(N, 2) pixels: each head keypoint its person's span above the ground under the feet, for
+    ``x`` = (H, tilt, roll[, f], one height scale per track): the person's height over the mean."""
+    n_cam = _camera_count(focal)
+    f = focal if focal is not None else x[3]
+    k, r = intrinsics(f, centre), camera_rotation(x[1], x[2])
+    ground = ground_points(obs.feet, k, r, x[0], body.ankle_m())
+    slots = _slots(obs)
+    scale = np.where(slots >= 0, x[n_cam + np.maximum(slots, 0)] if len(x) > n_cam else 1.0, 1.0)
+    ground[:, 2] = body.ankle_m() + (body.head_m(obs.head_share) - body.ankle_m()) * scale
+    return project(ground, k, r, x[0])
+
+
+def _slots(obs: Observations) -> np.ndarray:
+    """(N,) each person-image's track as 0..J-1, -1 where unknown."""
+    slots = np.full(len(obs), -1)
+    known = obs.tracks >= 0
+    slots[known] = np.unique(obs.tracks[known], return_inverse=True)[1]
+    return slots
+
+
+def _residuals(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+               focal: float | None) -> np.ndarray:
+    """Whitened misfits: (u, v) per person-image, then one prior term per track's height scale."""
+    span = np.maximum(obs.feet[:, 1] - obs.heads[:, 1], 1.0)
+    spread = np.where(obs.tracks >= 0, WITHIN_PERSON_SPAN_STD, body.height_std_m / body.height_mean_m)
+    sigma_v = np.hypot(KEYPOINT_PIXEL_STD, span * spread)
+    sigma_u = np.hypot(KEYPOINT_PIXEL_STD, span * SIDEWAYS_SHARE)
+    miss = (obs.heads - _predicted(x, obs, body, centre, focal)) / np.stack([sigma_u, sigma_v], axis=1)
+    prior = (x[_camera_count(focal):] - 1.0) / (body.height_std_m / body.height_mean_m)
+    return np.concatenate([np.nan_to_num(miss, nan=1e3).ravel(), prior])
+
+
+def _sparsity(obs: Observations, n_cam: int) -> lil_matrix:
+    """Which parameters each residual depends on: the camera's, and its own track's scale."""
+    slots, n = _slots(obs), len(obs)
+    tracks = int(slots.max()) + 1 if n else 0
+    pattern = lil_matrix((2 * n + tracks, n_cam + tracks), dtype=int)
+    pattern[: 2 * n, :n_cam] = 1
+    rows = np.flatnonzero(slots >= 0)
+    for offset in (0, 1):
+        pattern[2 * rows + offset, n_cam + slots[rows]] = 1
+    pattern[2 * n + np.arange(tracks), n_cam + np.arange(tracks)] = 1
+    return pattern
+
+
+def _solve(x0: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+           focal: float | None, loss: str = "soft_l1") -> least_squares:
+    n_cam = _camera_count(focal)
+    tracks = int(_slots(obs).max()) + 1 if len(obs) else 0
+    lower = [0.2, np.radians(-30.0), np.radians(-30.0)] + ([] if focal is not None else [10.0]) + [0.5] * tracks
+    upper = [500.0, np.radians(89.0), np.radians(30.0)] + ([] if focal is not None else [1e5]) + [1.5] * tracks
+    x0 = np.concatenate([x0[:n_cam], np.ones(tracks)])
+    x0 = np.clip(x0, np.array(lower) + 1e-6, np.array(upper) - 1e-6)
+    return least_squares(_residuals, x0, bounds=(lower, upper), loss=loss, x_scale="jac",
+                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal))
+
+
+def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | None = None,
+                    centre: tuple[float, float] | None = None, body: BodyModel | None = None) -> CameraEstimate:
+    """A static camera (f, H, tilt, roll) fitted to people's foot and head points.
+
+    obs: the people (:func:`pedenv.calibration.observations.observations_of`). size: (width,
+    height) pixels. focal: the focal length in pixels when known (intrinsics or ``fov_deg``):
+    then only H, tilt and roll are fitted. centre: the principal point (default: the image
+    centre). Raises :class:`~pedenv.calibration.refusals.CalibrationRefused` with what to give
+    instead when the people cannot fix the camera (too few, one row only, a level camera
+    without a focal length).
+    """
+    body = body or BodyModel()
+    centre = centre if centre is not None else (size[0] / 2.0, size[1] / 2.0)
+    check_spread(obs, size)
+    span_world = float(np.mean(body.head_m(obs.head_share))) - body.ankle_m()
+    start = closed_form(obs, centre, span_world, body.ankle_m(), focal)
+    f0 = start.focal if start.focal is not None else float(size[0])  # about a 53 deg field of view
+    x0 = np.array([start.height if np.isfinite(start.height) else 5.0, start.tilt, 0.0] + ([] if focal else [f0]))
+    fit = _solve(x0, obs, body, centre, focal)
+    inliers = np.abs(fit.fun[: 2 * len(obs)].reshape(-1, 2)).max(axis=1) <= OUTLIER_SIGMA
+    kept = obs.subset(inliers)
+    check_spread(kept, size)
+    fit = _solve(fit.x, kept, body, centre, focal, loss="linear")
+    cov = _covariance(fit, kept, focal is not None)
+    h = fit.x[0]
+    cov[1, 1] += (h * CROWD_MEAN_STD_M / body.height_mean_m) ** 2
+    f = float(focal if focal is not None else fit.x[3])
+    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal)
+    rms = float(np.sqrt(np.nanmean(np.sum(miss ** 2, axis=1))))
+    estimate = CameraEstimate(f, float(h), float(fit.x[1]), float(fit.x[2]), cov, size, centre, kept.people,
+                              len(kept), rms, focal is not None)
+    check_result(estimate, start)
+    return estimate
+
+
+def _inverse(information: np.ndarray) -> np.ndarray:
+    """The inverse of a Fisher information matrix whose unfixed directions (a parameter the data
+    do not move, as a level camera's focal length) come out with a huge variance, not zero."""
+    scale = 1.0 / np.sqrt(np.maximum(np.diag(information), 1e-300))
+    scaled = information * np.outer(scale, scale)
+    return np.linalg.inv(scaled + UNFIXED_RIDGE * np.eye(len(scaled))) * np.outer(scale, scale)
+
+
+def _covariance(fit: least_squares, obs: Observations, focal_given: bool) -> np.ndarray:
+    """(4, 4) covariance of (f, H, tilt, roll) from the Jacobian of the whitened misfits (the
+    people's heights marginalised), widened to the clustered (sandwich) estimate: one person's
+    images share the person's gait, lean and facing, so their misfits are summed per track
+    before they are counted (a person-image without a track is its own cluster)."""
+    j = fit.jac.toarray() if hasattr(fit.jac, "toarray") else np.asarray(fit.jac)
+    inverse = _inverse(j.T @ j)
+    slots = _slots(obs)
+    tracks = int(slots.max()) + 1 if len(obs) else 0
+    own = np.where(slots >= 0, slots, tracks + np.arange(len(obs)))
+    cluster = np.concatenate([np.repeat(own, 2), np.arange(tracks)])
+    scores = np.zeros((int(cluster.max()) + 1, j.shape[1]))
+    np.add.at(scores, cluster, j * fit.fun[:, None])
+    clusters = len(np.unique(cluster))
+    sandwich = inverse @ (scores.T @ scores) @ inverse * clusters / max(clusters - 1, 1)
+    n_cam = _camera_count(1.0 if focal_given else None)
+    model, robust = inverse[:n_cam, :n_cam], sandwich[:n_cam, :n_cam]
+    spread = np.sqrt(np.maximum(np.diag(model), np.diag(robust)))  # each parameter's wider 1-sigma
+    scale = spread / np.sqrt(np.maximum(np.diag(model), 1e-30))
+    inner = model * np.outer(scale, scale)  # the model's correlations, the wider spreads
+    cov = np.zeros((4, 4))
+    if focal_given:
+        cov[1:, 1:] = inner
+    else:
+        order = [3, 0, 1, 2]
+        cov[:] = inner[np.ix_(order, order)]
+    return cov
+
+
+def fitted_heads(estimate: CameraEstimate, obs: Observations, body: BodyModel | None = None) -> np.ndarray:
+    """(N, 2) pixels: where ``estimate`` puts the head keypoints of ``obs``' people (of mean height)."""
+    x = np.array([estimate.height, estimate.tilt, estimate.roll, estimate.focal])
+    return _predicted(x, obs, body or BodyModel(), estimate.centre, None)

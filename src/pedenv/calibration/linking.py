@@ -1,0 +1,42 @@
+"""Person boxes linked from image to image into tracks, so one person's images count as one person.
+
+A greedy overlap linker (each box joins the previous image's box it overlaps most, above
+:data:`MIN_IOU`): the fit needs only which images show the same person, not a tracker's
+motion model, and a static camera's people move little from one frame to the next.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pedenv.boxes import iou_matrix
+
+#: Least intersection over union for a box to continue a track of the image before.
+MIN_IOU = 0.3
+
+
+class BoxLinker:
+    """Track ids for each image's boxes, in order (ids from 0, never reused)."""
+
+    def __init__(self) -> None:
+        self.previous = np.zeros((0, 4))
+        self.previous_ids = np.zeros(0, int)
+        self.next_id = 0
+
+    def __call__(self, boxes: np.ndarray) -> np.ndarray:
+        """boxes: (N, 4) pixels [u_min, v_min, u_max, v_max] -> (N,) int track ids."""
+        boxes = np.asarray(boxes, float).reshape(-1, 4)
+        ids = np.full(len(boxes), -1)
+        if len(boxes) and len(self.previous):
+            overlap = iou_matrix(boxes, self.previous)
+            for flat in np.argsort(-overlap, axis=None):
+                i, j = np.unravel_index(flat, overlap.shape)
+                if overlap[i, j] < MIN_IOU:
+                    break
+                if ids[i] < 0 and self.previous_ids[j] not in ids:
+                    ids[i] = self.previous_ids[j]
+        fresh = ids < 0
+        ids[fresh] = self.next_id + np.arange(int(fresh.sum()))
+        self.next_id += int(fresh.sum())
+        self.previous, self.previous_ids = boxes, ids
+        return ids

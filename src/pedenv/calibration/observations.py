@@ -1,0 +1,110 @@
+"""People's foot and head points from 2D skeletons: what the camera is fitted to.
+
+A person counts when both ankles and a head keypoint are confident, the head is above the
+feet and the skeleton is upright enough (its torso within :data:`MAX_LEAN_DEG` of the
+foot-to-head line): a sitting, bending or cut-off person would pull the fit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pedenv.errors import check_array
+from pedenv.records import Detections
+from pedenv.skeleton import CocoKeypoint as KP
+
+#: Keypoints below this confidence are not used (the fused method's ``min_keypoint_confidence``).
+MIN_CONFIDENCE = 0.3
+#: A person shorter than this from feet to head (pixels) is left out: its keypoints' noise
+#: (a few pixels) would be a large share of its span.
+MIN_SPAN_PX = 24.0
+#: Largest angle between the shoulders-to-hips line and the feet-to-head line, degrees: an
+#: upright person's torso lies along it; a bending or sitting one's does not.
+MAX_LEAN_DEG = 20.0
+
+_ANKLES = [KP.LEFT_ANKLE, KP.RIGHT_ANKLE]
+_HEADS = ([KP.LEFT_EYE, KP.RIGHT_EYE], [KP.NOSE], [KP.LEFT_EAR, KP.RIGHT_EAR])
+_SHOULDERS, _HIPS = [KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER], [KP.LEFT_HIP, KP.RIGHT_HIP]
+
+
+@dataclass(frozen=True)
+class Observations:
+    """Upright people seen by one camera, over any number of images.
+
+    feet: (N, 2) float, pixels, the midpoint of the ankles. heads: (N, 2) float, pixels,
+    the eyes' midpoint. head_share: (N,) float, the head keypoint's height as a share of
+    body height (eyes, else nose or ears: :mod:`pedenv.body`). tracks: (N,) int, the
+    person's track id, -1 where unknown. frames: (N,) int, the image each came from.
+    """
+
+    feet: np.ndarray
+    heads: np.ndarray
+    head_share: np.ndarray
+    tracks: np.ndarray
+    frames: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = check_array("feet", self.feet, (None, 2)).shape[0]
+        check_array("heads", self.heads, (n, 2))
+        check_array("head_share", self.head_share, (n,))
+        check_array("tracks", self.tracks, (n,), finite=False)
+        check_array("frames", self.frames, (n,), finite=False)
+
+    def __len__(self) -> int:
+        return self.feet.shape[0]
+
+    @property
+    def people(self) -> int:
+        """Distinct people: tracks where known, else observations per image on average."""
+        known = self.tracks[self.tracks >= 0]
+        unknown = int(np.sum(self.tracks < 0))
+        frames = max(len(np.unique(self.frames[self.tracks < 0])), 1)
+        return len(np.unique(known)) + int(np.ceil(unknown / frames))
+
+    def subset(self, keep: np.ndarray) -> Observations:
+        """The observations where ``keep`` ((N,) bool or indices)."""
+        return Observations(self.feet[keep], self.heads[keep], self.head_share[keep], self.tracks[keep],
+                            self.frames[keep])
+
+    @classmethod
+    def empty(cls) -> Observations:
+        z2 = np.zeros((0, 2))
+        return cls(z2, z2, np.zeros(0), np.zeros(0, int), np.zeros(0, int))
+
+    @classmethod
+    def concat(cls, parts: list[Observations]) -> Observations:
+        if not parts:
+            return cls.empty()
+        return cls(*(np.concatenate([getattr(p, f) for p in parts]) for f in
+                     ("feet", "heads", "head_share", "tracks", "frames")))
+
+
+def _mean_of(points: np.ndarray, confident: np.ndarray, groups: tuple[list, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Per person the mean of the first group of keypoints all confident: ((N, 2), index of the group or -1)."""
+    out, which = np.full((points.shape[0], 2), np.nan), np.full(points.shape[0], -1)
+    for g, idx in enumerate(groups):
+        ok = confident[:, idx].all(axis=1) & (which < 0)
+        out[ok] = points[ok][:, idx].mean(axis=1)
+        which[ok] = g
+    return out, which
+
+
+def observations_of(detections: Detections, frame: int = 0, tracks: np.ndarray | None = None) -> Observations:
+    """The upright people of one image's ``detections`` (``tracks``: (N,) ids of the detections, or None)."""
+    from pedenv.body import EAR, EYE, NOSE
+
+    kp, conf = detections.keypoints, detections.confidences >= MIN_CONFIDENCE
+    feet, has_feet = _mean_of(kp, conf, (_ANKLES,))
+    heads, group = _mean_of(kp, conf, _HEADS)
+    torso_top, has_top = _mean_of(kp, conf, (_SHOULDERS,))
+    torso_low, has_low = _mean_of(kp, conf, (_HIPS,))
+    axis, torso = heads - feet, torso_top - torso_low
+    with np.errstate(invalid="ignore"):
+        cos = np.sum(axis * torso, axis=1) / (np.linalg.norm(axis, axis=1) * np.linalg.norm(torso, axis=1) + 1e-9)
+        keep = (has_feet >= 0) & (group >= 0) & (has_top >= 0) & (has_low >= 0) \
+            & (feet[:, 1] - heads[:, 1] >= MIN_SPAN_PX) & (cos >= np.cos(np.radians(MAX_LEAN_DEG)))
+    share = np.array([EYE, NOSE, EAR])[np.maximum(group, 0)]
+    ids = np.full(len(kp), -1) if tracks is None else np.asarray(tracks, int)
+    return Observations(feet[keep], heads[keep], share[keep], ids[keep], np.full(int(keep.sum()), frame))

@@ -1,0 +1,57 @@
+"""``pedenv run --static`` without ``--calibration``: the camera estimated in the warm-up, then the run."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
+from pedenv.records import Frame
+
+
+class SceneBackend:
+    """A pose backend answering each frame (by index) with the detector model on the scene's frame."""
+
+    name = "detector-model"
+
+    def __init__(self, frames: tuple[Frame, ...]) -> None:
+        from pedenv.synthetic.detector import DetectorModel
+
+        self.frames, self.model = frames, DetectorModel(0)
+
+    def __call__(self, frame: Frame):
+        return self.model(self.frames[frame.index])
+
+
+def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariances(tmp_path: Path) -> None:
+    from pedenv.apps.run import run_recording
+    from pedenv.images import write_image
+    from pedenv.synthetic.generator import generate_scenes
+
+    frames = generate_scenes(0, ["static-plaza"], duration_s=6.0)[0].frames
+    folder = tmp_path / "images"
+    folder.mkdir()
+    for frame in frames:
+        write_image(folder / f"{frame.index:06d}.jpg", np.full((900, 1600, 3), 90, np.uint8))
+    source = RecordingSource(images=folder, static=True, fps=10.0)
+    summary = run_recording(source, OutputOptions(tmp_path / "run", video_out=True),
+                            PoseOptions(backend="detector-model", detection=None), backend=SceneBackend(frames))
+    out = tmp_path / "run"
+    assert summary["frames_done"] == len(frames) == 60
+    assert summary["calibration"]["focal_px"] == pytest.approx(frames[0].camera.intrinsics[0, 0], rel=0.1)
+    assert summary["calibration"]["height_m"] == pytest.approx(6.0, rel=0.1)
+    with pytest.warns(UserWarning, match="estimated"):
+        from pedenv.recordings.footage import load_calibration
+
+        load_calibration(out / "calibration.yaml")
+    fused = json.loads((out / "config.json").read_text())["fused"]
+    std = summary["calibration"]["std"]
+    assert fused["static_camera_tilt_std_deg"] >= max(std["tilt_deg"], std["roll_deg"]) - 1e-9
+    assert fused["static_camera_height_std_m"] >= std["height_m"] - 1e-9
+    assert fused["person_height_std_m"] > 0.09  # the focal length's spread added to the height prior's
+    assert json.loads((out / "run.json").read_text())["calibration"]["people"] >= 5
+    lines = (out / "environment.jsonl").read_text().splitlines()
+    assert len(lines) == 60 and any(json.loads(line)["pedestrians"] for line in lines[-5:])
