@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 import warnings
 from collections.abc import Callable
@@ -16,20 +15,21 @@ import cv2
 import numpy as np
 
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
+from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
+from pedenv.apps.run_outputs import OverlayWriter, check_run_paths, finish_run, live_address, outside
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
-from pedenv.outputs.output_dir import holds_files, prepare_output_dir
-from pedenv.outputs.png import write_png
+from pedenv.outputs.output_dir import holds_files
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.pose.redetect import with_redetection
 from pedenv.recordings.footage import Recording
 from pedenv.records import Frame
-from pedenv.video_files import VideoOut, video_capture
+from pedenv.video_files import video_capture
 from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
@@ -41,7 +41,8 @@ if TYPE_CHECKING:
 def run_recording(source: RecordingSource, output: OutputOptions | str | Path, pose: PoseOptions | None = None, *,
                   config: Config | str | Path | None = None, method: str | None = None,
                   backend: PoseBackend | None = None, pipeline: PipelineConfig | None = None,
-                  progress: Callable[[int, int], None] | None = None) -> dict:
+                  progress: Callable[[int, int], None] | None = None,
+                  notice: Callable[[str], None] | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
     Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
@@ -53,10 +54,12 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`, ``pipeline``; its
     ``nice`` None: chosen by the outputs, :func:`_pipeline`); every output holds the frames in
     order. A bad frame stops the run with an InputError; what was computed before it stays on
-    disk. ``progress(done, total)`` is called per frame written.
-    ``output.folder`` must be empty or new, unless ``output.overwrite`` (then an earlier pedenv run there is
-    deleted once every frame's size and ego pose are checked:
-    :func:`pedenv.outputs.output_dir.prepare_output_dir`).
+    disk. ``progress(done, total)`` is called per frame written; ``notice(line)`` with the
+    address ``--live`` serves on. No output may be, hold or lie inside an input, nor two outputs
+    share a file (:mod:`pedenv.apps.output_safety`).
+    ``output.folder`` must be empty or new, unless ``output.overwrite`` (then the new run is written
+    beside the earlier pedenv run there and replaces it when it has finished; a full disk stops
+    the run with every output valid: :mod:`pedenv.apps.output_safety`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``pose.detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
@@ -76,43 +79,54 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     extra = output.extra or ExtraOutputs()
-    rec, backend, out = _open_run(source, output, pose, cfg, pipe, backend)
+    rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
+    out = folder.work
     model = PedestrianEnvironmentModel(cfg)
     backend = with_redetection(backend, model, cfg.redetect)  # missed tracks searched in crops (fused preset)
     summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
-                               "environment": str(out / "environment.jsonl")}
+                               "environment": str(folder.final / "environment.jsonl")}
     stats, timer = PipelineStats(), _StepTimes()
+    extra = dataclasses.replace(extra, parquet=folder.work_path(extra.parquet), rerun=folder.work_path(extra.rerun),
+                                mcap=folder.work_path(extra.mcap),
+                                birds_eye_video=folder.work_path(extra.birds_eye_video) or out / "birds_eye.mp4")
+    writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
-    sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
-        with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
+        outputs.guard = DiskGuard([out, *outside(extra, out)], len(rec))
+        sinks = extra.open()
+        live_address(sinks, summary, notice)
+        with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
             run_frames(rec.frames(), partial(_step, backend, model, timer), outputs.write, config=pipe,
                        done=outputs.done, stats=stats)
         _check_ended_early(rec, stats, summary)
+        finished = True
     finally:
         outputs.close()
+        summary["frames_done"] = writer.lines  # the frames whose every output was written
         _finish_summary(summary, out, backend, stats, timer, pipe, outputs, sinks)
-        (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
+        finish_run(folder, summary, sinks, finished=finished)
     return summary
 
 
 def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions, cfg: Config,
-              pipe: PipelineConfig, backend: PoseBackend | None) -> tuple[Recording | BagRecording, PoseBackend, Path]:
+              pipe: PipelineConfig, backend: PoseBackend | None,
+              config: Config | str | Path | None) -> tuple[Recording | BagRecording, PoseBackend, RunFolder]:
     """Everything checked before the output folder is touched (the extra outputs, ``--realtime``'s
-    timestamps, the recording, every frame of a folder or video), then the folder prepared and
-    ``config.json`` saved: (recording, pose backend, output folder)."""
+    timestamps, the recording, no output on an input, every frame of a folder or video), then the
+    folder prepared and ``config.json`` saved: (recording, pose backend, output folder)."""
     (output.extra or ExtraOutputs()).check()
     source.check_realtime(pipe.realtime)
     rec = source.load()
+    check_run_paths(source, rec, output, config)
     backend = backend or _make_backend(pose, cfg, rec)
     if hasattr(rec, "check") and holds_files(Path(output.folder)):  # an earlier run there: every frame's size
         rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
         # the frames before a bad one are run and stay on disk
-    out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
-    cfg.save(out / "config.json")
-    return rec, backend, out
+    folder = open_run_folder(output.folder, overwrite=output.overwrite, command="pedenv run")
+    cfg.save(folder.work / "config.json")
+    return rec, backend, folder
 
 
 #: ``pipeline.nice`` of ``pedenv run`` when none is given and its writer is lighter than the network.
@@ -126,7 +140,7 @@ def _pipeline(pipe: PipelineConfig, output: OutputOptions) -> PipelineConfig:
     share, docs/speed.md)."""
     if pipe.nice is not None:
         return pipe
-    light = output.video_out or output.png_compression == "none"
+    light = output.video_out or output.overlays == "jpeg" or output.png_compression == "none"
     return dataclasses.replace(pipe, nice=WRITER_NICE if light else 0)
 
 
@@ -158,7 +172,10 @@ def _finish_summary(summary: dict, out: Path, backend: PoseBackend, stats: Pipel
     summary["speed"] = {**stats.to_dict(), **timer.per_frame(backend), "pipeline": dataclasses.asdict(pipe)}
     if outputs.last is not None:
         state, frame = outputs.last
-        summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=summary["recording"]))
+        try:
+            summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=summary["recording"]))
+        except OSError as exc:  # a full disk: run.json is written all the same
+            summary["birds_eye"] = f"not written: {exc.strerror or exc}"
     summary["files"] = [str(p) for p in sinks.files]
 
 
@@ -208,26 +225,26 @@ class _Outputs:
     def __init__(self, out: Path, rec: Recording | BagRecording, output: OutputOptions, summary: dict,
                  progress: Callable[[int, int], None] | None) -> None:
         self.out, self.rec, self.summary, self.progress = out, rec, summary, progress
-        self.video_out, self.png_compression = output.video_out, output.png_compression
+        self.overlays = OverlayWriter(out, output, partial(_video_rate, rec))
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
-        self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
+        self.guard: DiskGuard | None = None
         self.last: tuple | None = None  # (state, frame) of the last frame written
 
     def write(self, result: tuple[EnvironmentState, Frame]) -> None:
+        """The overlay, the sinks, then the JSON Lines (so its lines count the frames fully written)."""
         state, frame = result
-        assert self.writer is not None and self.sinks is not None  # set before the run
-        self.writer.write(state)
-        self.sinks.write(state, frame)
-        if frame.image is None:
-            raise InputError(f"{self.rec.name}: frame {frame.index} has no image")
-        drawn = draw_environment(frame.image, state, frame)
-        if self.video_out:
-            if self.video is None:
-                self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)
-            self.video.write(cv2.cvtColor(drawn, cv2.COLOR_RGB2BGR))  # 0.2 ms; drawn[..., ::-1].copy() took 8
-        else:
-            write_png(self.out / "overlays" / f"{frame.index:06d}.png", drawn, self.png_compression)
+        assert self.writer is not None and self.sinks is not None and self.guard is not None  # set before the run
+        try:
+            self.guard.check(self.summary["frames_done"])
+            if frame.image is None:
+                raise InputError(f"{self.rec.name}: frame {frame.index} has no image")
+            self.overlays.write(frame.index, draw_environment(frame.image, state, frame))
+            self.sinks.write(state, frame)
+            self.writer.write(state)
+        except BaseException:
+            self.guard.release()  # the outputs close next: the room kept back is theirs
+            raise
         self.last = (state, frame)
 
     def done(self, result: tuple[EnvironmentState, Frame]) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
@@ -236,15 +253,14 @@ class _Outputs:
             self.progress(self.summary["frames_done"], self.summary["frames_total"])
 
     def close(self) -> None:
-        if self.video is not None:
-            self.video.release()
-            self.video = None
+        self.overlays.close()
 
 
-def _open_video(path: Path, rec: Recording | BagRecording, shape: tuple[int, ...]) -> VideoOut:
-    stamps = np.array([t for _, t in rec.images]) if rec.images else None
-    rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
+def _video_rate(rec: Recording | BagRecording) -> float:
+    """The overlay video's frame rate: the recording's (clamped by :class:`pedenv.video_files.VideoOut`)."""
+    step = float(np.median(np.diff([t for _, t in rec.images]))) if len(rec.images) > 1 else 0.0
+    rate = rec.fps or (1.0 / step if step > 0 else 10.0)
     if rec.video is not None and not rec.fps:
         with video_capture(rec.video) as cap:
             rate = cap.get(cv2.CAP_PROP_FPS) or rate
-    return VideoOut(path, rate, (shape[1], shape[0]), what="overlay video")
+    return rate

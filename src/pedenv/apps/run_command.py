@@ -42,6 +42,10 @@ def run_command(*, source: RecordingSource, output: OutputOptions, flags: Output
     """
     if manifest is not None:
         refuse_beside_manifest(source, flags, paced=realtime or pose.device != "auto")
+        from pedenv.apps.output_safety import check_paths
+
+        check_paths([("--manifest", manifest), ("--config", method.config if isinstance(method.config, (str, Path))
+                                                 else None)], [], output.folder)
         from pedenv.apps.batch import run_manifest
 
         summary = run_manifest(manifest, output, pose, executor=executor, config=method.config, method=method.method,
@@ -58,7 +62,8 @@ def run_command(*, source: RecordingSource, output: OutputOptions, flags: Output
     console = Console(stderr=True, soft_wrap=True, emoji=False, markup=False)
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(source, output, pose, config=method.config, method=method.method,
-                                pipeline=PipelineConfig(realtime=realtime), progress=progress)
+                                pipeline=PipelineConfig(realtime=realtime), progress=progress,
+                                notice=lambda line: console.print(line, highlight=False))
     return RunOutcome(summary)
 
 

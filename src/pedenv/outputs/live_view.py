@@ -8,6 +8,8 @@ is given (listening on every interface exposes the model to the network).
 
 from __future__ import annotations
 
+import threading
+import warnings
 from pathlib import Path
 
 import foxglove
@@ -17,6 +19,9 @@ from pedenv.outputs.mcap_log import McapWriter
 
 DEFAULT_PORT = 8765
 DEFAULT_HOST = "127.0.0.1"
+#: Seconds the end of a run waits for the server to stop: its ``stop()`` waits for every client's
+#: unfinished handshake (an idle connection, a port scanner), so it is left behind after this.
+STOP_TIMEOUT_S = 3.0
 
 
 class LiveViewer(McapWriter):
@@ -40,6 +45,12 @@ class LiveViewer(McapWriter):
         self._open_channels()
 
     def close(self) -> None:
+        """Stop serving, waiting at most :data:`STOP_TIMEOUT_S` (the server is left to the process's end)."""
         if self._server is not None:
-            self._server.stop()
-            self._server = None
+            server, self._server = self._server, None
+            stopping = threading.Thread(target=server.stop, name="pedenv-live-stop", daemon=True)
+            stopping.start()
+            stopping.join(STOP_TIMEOUT_S)
+            if stopping.is_alive():
+                warnings.warn(f"--live: a client of {self.path} holds the server; it is left to stop when pedenv "
+                              "exits", stacklevel=2)
