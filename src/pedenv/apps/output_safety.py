@@ -123,9 +123,10 @@ class RunFolder:
         except ValueError:
             return Path(path)
 
-    def list_files(self) -> None:
-        """Write the marker listing the names this run wrote (what a later ``--overwrite`` may delete)."""
-        names = sorted(p.name for p in self.work.iterdir() if p.name != MARKER)
+    def list_files(self, *more: str) -> None:
+        """Write the marker listing the names this run wrote and ``more`` (what a later ``--overwrite`` may
+        delete)."""
+        names = sorted({p.name for p in self.work.iterdir() if p.name != MARKER} | set(more))
         with contextlib.suppress(OSError):  # a full disk: the marker of prepare_output_dir stays
             (self.work / MARKER).write_text(RUN_MARKER_HEAD + "".join(f"{n}\n" for n in names))
 

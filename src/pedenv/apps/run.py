@@ -118,8 +118,8 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     folder prepared and ``config.json`` saved: (recording, pose backend, output folder)."""
     (output.extra or ExtraOutputs()).check()
     source.check_realtime(pipe.realtime)
+    check_run_paths(source, output, config)
     rec = source.load()
-    check_run_paths(source, rec, output, config)
     backend = backend or _make_backend(pose, cfg, rec)
     if hasattr(rec, "check") and holds_files(Path(output.folder)):  # an earlier run there: every frame's size
         rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder

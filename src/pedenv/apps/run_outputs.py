@@ -21,8 +21,6 @@ if TYPE_CHECKING:
     from pedenv.apps.options import OutputOptions, RecordingSource
     from pedenv.config import Config
     from pedenv.outputs.sinks import ExtraOutputs, Sinks
-    from pedenv.recordings.bag import BagRecording
-    from pedenv.recordings.footage import Recording
 
 class OverlayWriter:
     """Each frame's overlay: ``overlays/<index>.jpg`` (the default), ``.png`` or one ``overlay.mp4``
@@ -51,16 +49,15 @@ class OverlayWriter:
             self.video = None
 
 
-def check_run_paths(source: RecordingSource, rec: Recording | BagRecording, output: OutputOptions,
-                    config: Config | str | Path | None) -> None:
-    """No output of the run on one of its inputs (:func:`pedenv.apps.output_safety.check_paths`)."""
+def check_run_paths(source: RecordingSource, output: OutputOptions, config: Config | str | Path | None) -> None:
+    """No output of the run on one of its inputs (:func:`pedenv.apps.output_safety.check_paths`), before
+    the recording is read: the files given and those in the image and bag folders (links followed)."""
     extra = output.extra
-    images = getattr(rec, "images", ())
     inputs: list[tuple[str, Any]] = [("--images", source.images), ("--video", source.video),
                                      ("--calibration", source.calibration), ("--ego-poses", source.ego_poses),
                                      ("--bag", source.bag),
                                      ("--config", config if isinstance(config, (str, Path)) else None)]
-    inputs += [("--images", path) for path, _ in images]
+    inputs += [("--images", path) for path in input_files(source.images)]
     inputs += [("--bag", path) for path in input_files(source.bag)]
     outputs: list[tuple[str, Any]] = []
     if extra is not None:
@@ -91,7 +88,8 @@ def finish_run(folder: RunFolder, summary: dict, sinks: Sinks, *, finished: bool
     if "birds_eye" in summary and not summary["birds_eye"].startswith("not written"):
         summary["birds_eye"] = str(folder.final_path(summary["birds_eye"]))
     others = [Path(p) for p in sinks.files if folder.work not in Path(p).parents]
-    summary["bytes_written"] = bytes_written([folder.work, *others])
+    folder.list_files("run.json")
+    summary["bytes_written"] = bytes_written([folder.work, *others])  # all but run.json itself
     run_json = folder.work / "run.json"
     try:
         run_json.write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
@@ -99,7 +97,6 @@ def finish_run(folder: RunFolder, summary: dict, sinks: Sinks, *, finished: bool
         run_json.unlink(missing_ok=True)
         raise InputError(f"{run_json}: cannot be written: {exc.strerror or exc}") from None
     finally:
-        folder.list_files()
         if finished:
             folder.commit()
         else:

@@ -50,7 +50,7 @@ def main() -> None:
     _Stop.stopping = False
     handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
-        code = app(standalone_mode=False)
+        code = app(standalone_mode=False, prog_name="pedenv")
         sys.exit(code if isinstance(code, int) else 0)
     except click_errors.NoArgsIsHelpError as exc:  # the help is printed as it is made
         sys.exit(exc.exit_code)
