@@ -80,7 +80,7 @@ def test_an_output_on_the_input_bag_is_refused_with_overwrite(tmp_path, flag):
     bag = tmp_path / "in.mcap"
     bag.write_bytes(b"\x89MCAP0\r\n" + bytes(range(256)) * 64)
     before = digest(bag)
-    with pytest.raises(InputError, match=r"^--(ros-out|mcap) .*in\.mcap is or lies inside the input --bag"):
+    with pytest.raises(InputError, match=r"^--(ros-out|mcap) .*in\.mcap is the input --bag"):
         run_recording(Source(bag=bag), OutputOptions(tmp_path / "o", overwrite=True,
                                                      extra=ExtraOutputs(**{flag: bag}, overwrite=True)),
                       backend=Nobody())
@@ -105,7 +105,7 @@ def test_an_output_linked_to_an_input_image_is_refused(tmp_path):
     link = tmp_path / "elsewhere" / "same.mcap"
     link.symlink_to(rec["images"] / "f000.png")
     before = digest(tmp_path / "rec")
-    with pytest.raises(InputError, match="is or lies inside the input --images"):
+    with pytest.raises(InputError, match="is the input --images"):
         run(rec, tmp_path / "o", overwrite=True, extra=ExtraOutputs(mcap=link, overwrite=True))
     assert digest(tmp_path / "rec") == before
 
@@ -113,7 +113,7 @@ def test_an_output_linked_to_an_input_image_is_refused(tmp_path):
 def test_the_output_folder_inside_the_images_is_refused(tmp_path):
     rec = recording(tmp_path / "rec", frames=2)
     before = digest(tmp_path / "rec")
-    with pytest.raises(InputError, match="^--output .*images/out is or lies inside the input --images"):
+    with pytest.raises(InputError, match="^--output .*images/out lies inside the input --images"):
         run(rec, rec["images"] / "out")
     assert digest(tmp_path / "rec") == before
 

@@ -67,8 +67,9 @@ def check_paths(inputs: Iterable[tuple[str, str | Path | None]], outputs: Iterab
     for oflag, out in [("--output", out_folder), *outs]:
         for iflag, source in ins:
             if _same(out, source) or _inside(out, source):
-                raise InputError(f"{oflag} {out} is or lies inside the input {iflag} {source}: pedenv never writes "
-                                 "over its inputs; choose another path")
+                where = "is" if _same(out, source) else "lies inside"
+                raise InputError(f"{oflag} {out} {where} the input {iflag} {source}: pedenv never writes over its "
+                                 "inputs; choose another path")
             if _inside(source, out):
                 raise InputError(f"{oflag} {out} holds the input {iflag} {source}: pedenv never writes over or "
                                  "deletes its inputs; choose another output folder")

@@ -52,5 +52,5 @@ class LiveViewer(McapWriter):
             stopping.start()
             stopping.join(STOP_TIMEOUT_S)
             if stopping.is_alive():
-                warnings.warn(f"--live: a client of {self.path} holds the server; it is left to stop when pedenv "
-                              "exits", stacklevel=2)
+                warnings.warn(f"--live: a client of ws://{str(self.path)[5:]} holds the server; it is left to stop "
+                              "when pedenv exits", stacklevel=2)
