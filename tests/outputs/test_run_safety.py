@@ -287,24 +287,39 @@ def test_live_ends_with_an_idle_client_and_says_its_port(tmp_path, monkeypatch):
 
     monkeypatch.setattr(live, "STOP_TIMEOUT_S", 0.5)
     rec = recording(tmp_path / "rec", frames=3)
-    lines, clients = [], []
+    clients = []
 
-    def notice(line):
-        port = int(line.split(":")[3].split(" ")[0])
-        client = socket.create_connection(("127.0.0.1", port))
-        client.sendall(b"GET / HTTP/1.1\r\n")  # half a request, never finished
-        clients.append(client)
-        lines.append(line)
+    class Connecting(Nobody):
+        def __call__(self, frame):
+            if not clients:  # the server is up once frames run: a client that never finishes its handshake
+                import gc
 
-    with warnings.catch_warnings(record=True):
+                port = next(o.port for o in gc.get_objects() if isinstance(o, live.LiveViewer))
+                clients.append(socket.create_connection(("127.0.0.1", port)))
+                clients[0].sendall(b"GET / HTTP/1.1\r\n")
+            return super().__call__(frame)
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         summary = run_recording(Source(**rec), OutputOptions(tmp_path / "o", extra=ExtraOutputs(live=0)),
-                                backend=Nobody(), notice=notice)
-    for client in clients:
-        client.close()
-    assert lines == [f"live: {summary['live']} (connect Foxglove to it)"]
+                                backend=Connecting())
+    clients[0].close()
     assert summary["live"].startswith("ws://127.0.0.1:") and summary["frames_done"] == 3
     assert json.loads((tmp_path / "o" / "run.json").read_text())["live"] == summary["live"]
     assert frames_in_video(tmp_path / "o" / "birds_eye.mp4") == 3
+    assert any("holds the server" in str(w.message) for w in caught)
+
+
+def test_live_port_zero_is_chosen_and_printed_before_the_run(tmp_path, monkeypatch, capsys):
+    import pedenv.apps.run as run_module
+
+    monkeypatch.setattr(run_module, "_make_backend", lambda *_: Nobody())
+    rec = recording(tmp_path / "rec", frames=2)
+    code, _, err = pedenv(monkeypatch, capsys, "run", "--images", rec["images"], "--calibration", rec["calibration"],
+                          "--ego-poses", rec["ego_poses"], "--output", tmp_path / "o", "--live", "--live-port", "0")
+    address = json.loads((tmp_path / "o" / "run.json").read_text())["live"]
+    assert code == 0 and err.splitlines()[0] == f"live: {address} (connect Foxglove to it)"
+    assert int(address.rsplit(":", 1)[1]) > 0
 
 
 # item 15 ------------------------------------------------------------------------------------------

@@ -17,7 +17,14 @@ import numpy as np
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
-from pedenv.apps.run_outputs import OverlayWriter, check_run_paths, finish_run, live_address, outside
+from pedenv.apps.run_outputs import (
+    OverlayWriter,
+    check_run_paths,
+    finish_run,
+    in_work_folder,
+    live_address,
+    outside,
+)
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.model import PedestrianEnvironmentModel
@@ -41,25 +48,18 @@ if TYPE_CHECKING:
 def run_recording(source: RecordingSource, output: OutputOptions | str | Path, pose: PoseOptions | None = None, *,
                   config: Config | str | Path | None = None, method: str | None = None,
                   backend: PoseBackend | None = None, pipeline: PipelineConfig | None = None,
-                  progress: Callable[[int, int], None] | None = None,
-                  notice: Callable[[str], None] | None = None) -> dict:
+                  progress: Callable[[int, int], None] | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
-    Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
-    ``run.json`` (pose backend and the provider that ran it, recording, frames done, speed),
-    ``overlays/<index>.png`` (``output.png_compression``: stored by default, :mod:`pedenv.outputs.png`)
-    or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and distances, and
-    ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the ``output.extra``
-    outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra is missing).
+    Writes ``environment.jsonl`` (a line per frame), ``config.json``, ``run.json`` (pose backend,
+    frames done, speed, bytes written), ``overlays/<index>.jpg`` (``output.overlays``) or ``overlay.mp4``
+    (``output.video_out``), ``birds_eye.png`` and ``.mp4`` and the ``output.extra`` outputs asked for.
     Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`, ``pipeline``; its
     ``nice`` None: chosen by the outputs, :func:`_pipeline`); every output holds the frames in
     order. A bad frame stops the run with an InputError; what was computed before it stays on
-    disk. ``progress(done, total)`` is called per frame written; ``notice(line)`` with the
-    address ``--live`` serves on. No output may be, hold or lie inside an input, nor two outputs
-    share a file (:mod:`pedenv.apps.output_safety`).
-    ``output.folder`` must be empty or new, unless ``output.overwrite`` (then the new run is written
-    beside the earlier pedenv run there and replaces it when it has finished; a full disk stops
-    the run with every output valid: :mod:`pedenv.apps.output_safety`).
+    disk. ``progress(done, total)`` is called per frame written. ``output.folder``: empty or new,
+    or with ``output.overwrite`` an earlier run's, replaced when the new one has finished; no output on
+    an input, a full disk one error with every output valid (:mod:`pedenv.apps.output_safety`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``pose.detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
@@ -78,7 +78,6 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
     pipe = _pipeline(pipeline or PipelineConfig(), output)
-    extra = output.extra or ExtraOutputs()
     rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
     model = PedestrianEnvironmentModel(cfg)
@@ -87,15 +86,12 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(folder.final / "environment.jsonl")}
     stats, timer = PipelineStats(), _StepTimes()
-    extra = dataclasses.replace(extra, parquet=folder.work_path(extra.parquet), rerun=folder.work_path(extra.rerun),
-                                mcap=folder.work_path(extra.mcap),
-                                birds_eye_video=folder.work_path(extra.birds_eye_video) or out / "birds_eye.mp4")
+    extra = in_work_folder(output.extra or ExtraOutputs(), folder)
     writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
     try:
         outputs.guard = DiskGuard([out, *outside(extra, out)], len(rec))
-        sinks = extra.open()
-        live_address(sinks, summary, notice)
+        sinks = live_address(extra.open(), summary)
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
             run_frames(rec.frames(), partial(_step, backend, model, timer), outputs.write, config=pipe,

@@ -4,7 +4,9 @@ written, the swap of a run written beside an earlier one: :mod:`pedenv.apps.outp
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import socket
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -72,13 +74,27 @@ def outside(extra: ExtraOutputs, folder: Path) -> list[Path]:
     return [p.parent for p in paths if p is not None and folder not in p.parents]
 
 
-def live_address(sinks: Sinks, summary: dict, notice: Callable[[str], None] | None) -> None:
-    """``--live``: the address served on into ``summary["live"]`` and ``notice``."""
+def in_work_folder(extra: ExtraOutputs, folder: RunFolder) -> ExtraOutputs:
+    """``extra`` with the outputs inside the run's folder moved to where it writes, and the
+    bird's-eye video there by default."""
+    return dataclasses.replace(extra, parquet=folder.work_path(extra.parquet), rerun=folder.work_path(extra.rerun),
+                               mcap=folder.work_path(extra.mcap), birds_eye_video=folder.work_path(
+                                   extra.birds_eye_video) or folder.work / "birds_eye.mp4")
+
+
+def live_address(sinks: Sinks, summary: dict) -> Sinks:
+    """``sinks``, with ``--live``'s address served on into ``summary["live"]``."""
     for sink in sinks.sinks:
         if getattr(sink, "port", None) is not None:
             summary["live"] = str(sink.path).replace("ws:/", "ws://", 1)
-            if notice is not None:
-                notice(f"live: {summary['live']} (connect Foxglove to it)")
+    return sinks
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A TCP port free on ``host`` now (``--live-port 0``: chosen here, so that it is printed before the run)."""
+    with socket.socket() as probe:
+        probe.bind((host, 0))
+        return int(probe.getsockname()[1])
 
 
 def finish_run(folder: RunFolder, summary: dict, sinks: Sinks, *, finished: bool) -> None:
