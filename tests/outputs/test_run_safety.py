@@ -105,7 +105,7 @@ def test_an_output_linked_to_an_input_image_is_refused(tmp_path):
     link = tmp_path / "elsewhere" / "same.mcap"
     link.symlink_to(rec["images"] / "f000.png")
     before = digest(tmp_path / "rec")
-    with pytest.raises(InputError, match="is the input --images"):
+    with pytest.raises(InputError, match="f000.png lies inside the input --images"):
         run(rec, tmp_path / "o", overwrite=True, extra=ExtraOutputs(mcap=link, overwrite=True))
     assert digest(tmp_path / "rec") == before
 
