@@ -307,7 +307,7 @@ def test_live_ends_with_an_idle_client_and_says_its_port(tmp_path, monkeypatch):
     assert summary["live"].startswith("ws://127.0.0.1:") and summary["frames_done"] == 3
     assert json.loads((tmp_path / "o" / "run.json").read_text())["live"] == summary["live"]
     assert frames_in_video(tmp_path / "o" / "birds_eye.mp4") == 3
-    assert any("holds the server" in str(w.message) for w in caught)
+    assert any(f"a client of {summary['live']} holds the server" in str(w.message) for w in caught)
 
 
 def test_live_port_zero_is_chosen_and_printed_before_the_run(tmp_path, monkeypatch, capsys):

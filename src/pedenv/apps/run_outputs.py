@@ -86,7 +86,7 @@ def live_address(sinks: Sinks, summary: dict) -> Sinks:
     """``sinks``, with ``--live``'s address served on into ``summary["live"]``."""
     for sink in sinks.sinks:
         if getattr(sink, "port", None) is not None:
-            summary["live"] = str(sink.path).replace("ws:/", "ws://", 1)
+            summary["live"] = str(getattr(sink, "address", sink.path))
     return sinks
 
 

@@ -39,7 +39,8 @@ class LiveViewer(McapWriter):
         except Exception as exc:  # noqa: BLE001 - a port in use, a host not found
             raise InputError(f"--live: cannot serve on {host}:{port}: {exc}") from None
         self.port = self._server.port
-        self.path = Path(f"ws://{host}:{self.port}")
+        self.address = f"ws://{host}:{self.port}"
+        self.path = Path(self.address)
         self.files: list[Path] = []
         self._writer = None
         self._open_channels()
@@ -52,5 +53,5 @@ class LiveViewer(McapWriter):
             stopping.start()
             stopping.join(STOP_TIMEOUT_S)
             if stopping.is_alive():
-                warnings.warn(f"--live: a client of ws://{str(self.path)[5:]} holds the server; it is left to stop "
+                warnings.warn(f"--live: a client of {self.address} holds the server; it is left to stop "
                               "when pedenv exits", stacklevel=2)
