@@ -341,3 +341,28 @@ def test_detect_on_a_fifo_is_one_line(monkeypatch, capsys, tmp_path):
     code, _, err = pedenv(monkeypatch, capsys, "detect", fifo, "--output", tmp_path / "o")
     assert code == 2 and err.strip() == f"error: image {fifo} is not a regular file (a FIFO, a device or a folder); " \
                                         "give a file"
+
+
+def test_a_sink_that_cannot_be_finished_is_one_line_and_the_others_close(tmp_path):
+    from pedenv.outputs.sinks import Sinks
+
+    closed = []
+
+    class Sink:
+        def __init__(self, name, fail):
+            self.path, self.fail = tmp_path / name, fail
+
+        def write(self, state, frame):  # noqa: ARG002 - the sink protocol
+            raise OSError(errno.ENOSPC, "No space left on device")
+
+        def close(self):
+            closed.append(self.path.name)
+            if self.fail:
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+    sinks = Sinks([Sink("a.mcap", True), Sink("b.mp4", False)])
+    with pytest.raises(InputError, match=r"a.mcap: cannot be written: No space left on device"):
+        sinks.write(None, None)
+    with pytest.raises(InputError, match=r"a.mcap: cannot be finished: No space left on device"):
+        sinks.close()
+    assert closed == ["a.mcap", "b.mp4"]

@@ -45,11 +45,13 @@ class Sinks:
 
     def close(self) -> None:
         """Close every sink, even when one of them fails (the first failure is raised)."""
-        first = None
+        first: Exception | None = None
         for sink in self.sinks:
             self.files.extend(getattr(sink, "files", None) or ([] if getattr(sink, "port", None) else [sink.path]))
             try:
                 sink.close()
+            except OSError as exc:  # a full disk: one line naming the file
+                first = first or InputError(f"{sink.path}: cannot be finished: {exc.strerror or exc}")
             except Exception as exc:  # noqa: BLE001 - close the others first
                 first = first or exc
         self.files = list(dict.fromkeys(self.files))
