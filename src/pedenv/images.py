@@ -21,8 +21,7 @@ import numpy as np
 from PIL import Image, UnidentifiedImageError
 
 from pedenv.errors import InputError
-from pedenv.outputs.output_dir import writable_file
-from pedenv.paths import check_path
+from pedenv.paths import check_path, writable_file
 
 #: Most pixels (width x height) of an image pedenv reads: 64 megapixels, about 4 times an
 #: 8K frame (7680x4320 is 33 MP); one such image takes 200 MB decoded (RGB, 8 bits).

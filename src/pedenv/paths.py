@@ -7,12 +7,15 @@ hand OpenCV a file whose name is not UTF-8.
   UTF-8 text and crashes the process (a segfault) on a name with a non-UTF-8 byte
   (``x\\xff.png``, ``str`` with a surrogate escape); such a file is reached through a
   symbolic link with a plain name in a fresh temporary folder instead.
+* :func:`writable_file` and :data:`MARKER`: an output file's folder made, and the marker of
+  pedenv's own output folders (here, below the readers and the writers alike).
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -20,6 +23,9 @@ from pathlib import Path
 
 from pedenv.errors import InputError
 
+#: The file pedenv leaves in every output folder it prepares; ``--overwrite`` needs it
+#: (:func:`pedenv.outputs.output_dir.prepare_output_dir`).
+MARKER = ".pedenv-output"
 #: Longest file or folder name (one path component) in bytes: Linux's and macOS's NAME_MAX.
 MAX_NAME_BYTES = 255
 
@@ -33,6 +39,31 @@ def check_path(path: str | Path, what: str) -> Path:
         if size > MAX_NAME_BYTES:
             raise InputError(f"{what} {_short(path)}: the name {_short(part)} is {size} bytes long; file systems take "
                              f"at most {MAX_NAME_BYTES}")
+    return path
+
+
+def writable_file(path: str | Path, what: str = "output file") -> Path:
+    """``path`` with its folder created, checked to be no folder; InputError naming it otherwise."""
+    path = check_path(path, what)
+    if path.is_dir():
+        raise InputError(f"{what} {path} is a folder")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the folder of {what} {path}: {exc.strerror or exc}") from None
+    return path
+
+
+def refuse_special_file(path: str | Path, what: str) -> Path:
+    """``path``; InputError when it exists and is no regular file (a FIFO or a device would block
+    or never end a read; a folder is no ``what``)."""
+    path = check_path(path, what)
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        return path  # missing: the reader names it
+    if not stat.S_ISREG(mode):
+        raise InputError(f"{what} {path} is not a regular file (a FIFO, a device or a folder); give a file")
     return path
 
 

@@ -5,6 +5,7 @@ Frames are (H, W, 3) uint8 BGR, as OpenCV has them.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
@@ -15,11 +16,16 @@ import numpy as np
 from pedenv.errors import InputError
 from pedenv.paths import check_path, opencv_path
 
+#: Frame rates an mp4 is written at (Hz): OpenCV's mp4v encoder refuses below 0.5 and above 65535,
+#: and players stall above about 1000; a recording's rate outside (frames 10 µs apart) is clamped.
+VIDEO_FPS_RANGE = (1.0, 1000.0)
+
 
 class VideoOut:
     """An mp4 (``mp4v``) being written: ``write(bgr)`` per frame, ``release()`` at the end.
 
-    path: the file. fps: frames per second. size: (width, height) pixels of every frame.
+    path: the file. fps: frames per second, clamped to :data:`VIDEO_FPS_RANGE` (10 when not finite).
+    size: (width, height) pixels of every frame.
     ``what`` names the video in the InputError raised when it cannot be opened.
     """
 
@@ -27,7 +33,8 @@ class VideoOut:
         self.path = check_path(path, what)
         self._names = ExitStack()
         name = self._names.enter_context(opencv_path(self.path))
-        self._writer = cv2.VideoWriter(name, cv2.VideoWriter.fourcc(*"mp4v"), float(fps), size)
+        rate = min(max(float(fps), VIDEO_FPS_RANGE[0]), VIDEO_FPS_RANGE[1]) if math.isfinite(fps) else 10.0
+        self._writer = cv2.VideoWriter(name, cv2.VideoWriter.fourcc(*"mp4v"), rate, size)
         if not self._writer.isOpened():
             self.release()
             raise InputError(f"{self.path}: cannot write the {what}")

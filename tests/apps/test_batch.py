@@ -55,7 +55,7 @@ def test_a_bad_recording_is_named_the_other_written_and_resume_runs_only_it(requ
     assert summary["failed"] == 1 and json.loads((out / "summary.json").read_text()) == summary
     assert (good["name"], good["status"], good["frames_done"], good["frames_total"]) == ("good", "done", 3, 3)
     assert len((out / "good" / "environment.jsonl").read_text().splitlines()) == 3
-    assert sorted(p.name for p in (out / "good" / "overlays").iterdir()) == ["000000.png", "000001.png", "000002.png"]
+    assert sorted(p.name for p in (out / "good" / "overlays").iterdir()) == ["000000.jpg", "000001.jpg", "000002.jpg"]
     assert (bad["name"], bad["status"], bad["row"]) == ("bad", "failed", 2)
     assert "is 1242x375 pixels, the calibration says 1224x370" in bad["error"]
     # the data fixed, --resume keeps the good recording and runs the bad one

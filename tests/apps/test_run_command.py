@@ -72,7 +72,8 @@ def test_the_flags_of_one_recording_that_go_together_pass(source):
 
 
 def test_a_single_recordings_missing_files_are_named_after_the_flags_are_checked(tmp_path):
+    (tmp_path / "rec").mkdir()
     with pytest.raises(InputError, match="calibration.yaml"):
-        _run(tmp_path, source=Source(images=tmp_path, calibration=tmp_path / "calibration.yaml",
-                                     ego_poses=tmp_path / "poses.csv"))
+        _run(tmp_path, source=Source(images=tmp_path / "rec", calibration=tmp_path / "rec" / "calibration.yaml",
+                                     ego_poses=tmp_path / "rec" / "poses.csv"))
     assert not (tmp_path / "out").exists()

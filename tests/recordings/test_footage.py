@@ -289,7 +289,7 @@ def test_run_on_real_images_keeps_track_ids(tmp_path, pose_env, monkeypatch):
         positions = np.array([t[track_id] for t in tracks[1:]])
         assert np.ptp(positions[:, :2], axis=0).max() < 0.5
         assert 2.0 < positions[-1, 0] < 6.0  # metres ahead of the vehicle origin
-    assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(6)]
+    assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.jpg" for i in range(6)]
     for name in ("birds_eye.png", "config.json", "run.json"):
         assert (tmp_path / "out" / name).is_file()
     assert json.loads((tmp_path / "out" / "run.json").read_text())["pose_backend"]["input_size"] == [640, 640]

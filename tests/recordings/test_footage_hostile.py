@@ -125,7 +125,7 @@ def test_rerun_never_mixes_or_loses_runs(tmp_path, pose_env):  # noqa: F811
         shorter / "timestamps.csv", "filename,timestamp\nframe_000.jpg,50.0\nframe_001.jpg,50.1\nframe_002.jpg,50.2\n"
     )
     assert run("--overwrite", images=shorter).returncode == 0
-    assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.png" for i in range(3)]
+    assert sorted(p.name for p in (tmp_path / "out" / "overlays").iterdir()) == [f"{i:06d}.jpg" for i in range(3)]
     assert json.loads((tmp_path / "out" / "run.json").read_text())["frames_done"] == 3
 
 
@@ -193,7 +193,7 @@ def test_a_double_ctrl_c_keeps_run_json(tmp_path, pose_env, gap_s):  # noqa: F81
     out = tmp_path / "out"
     proc = _run_cli(["run", "--images", rec["images"], "--calibration", rec["calibration"], "--ego-poses",
                      rec["ego_poses"], "--output", out, "--detection", "fast"], env)
-    _wait_for("overlays/000002.png", out, proc)
+    _wait_for("overlays/000002.jpg", out, proc)
     proc.send_signal(signal.SIGINT)
     time.sleep(gap_s)
     proc.send_signal(signal.SIGINT)
@@ -214,7 +214,7 @@ def test_a_ctrl_c_manifest_run_writes_summary_json(tmp_path, pose_env):  # noqa:
     out = tmp_path / "out"
     proc = _run_cli(["run", "--manifest", manifest, "--output", out, "--detection", "fast"],
                     {**os.environ, "PEDENV_CACHE": pose_env["PEDENV_CACHE"]})
-    _wait_for("drive-1/overlays/000001.png", out, proc)  # the first recording done, the second running
+    _wait_for("drive-1/overlays/000001.jpg", out, proc)  # the first recording done, the second running
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "Traceback" not in err, err

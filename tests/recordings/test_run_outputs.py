@@ -26,7 +26,7 @@ def test_run_writes_every_output_of_the_bus_recording(tmp_path, pose_env, monkey
     out = tmp_path / "out"
     extra = ExtraOutputs(parquet=out / "environment.parquet", rerun=out / "run.rrd", mcap=out / "run.mcap")
     summary = run_recording(RecordingSource(**_bus_recording(tmp_path / "rec", pose_env["bus"])),
-                            OutputOptions(out, extra=extra))
+                            OutputOptions(out, extra=extra, overlays="png"))
     lines = [json.loads(line) for line in (out / "environment.jsonl").read_text().splitlines()]
     assert summary["frames_done"] == len(lines) == 6
     assert sorted(summary["files"]) == sorted(str(out / n) for n in ("environment.parquet", "run.rrd", "run.mcap",
@@ -62,7 +62,8 @@ def test_run_video_out_and_deflated_pngs_hold_the_same_overlays(tmp_path, pose_e
     rec = RecordingSource(**_bus_recording(tmp_path / "rec", pose_env["bus"], frames=3))
     pose = PoseOptions(detection="fast")
     runs = {name: run_recording(rec, OutputOptions(tmp_path / name, **options), pose)
-            for name, options in (("mp4", {"video_out": True}), ("stored", {}), ("fast", {"png_compression": "fast"}))}
+            for name, options in (("mp4", {"video_out": True}), ("stored", {"overlays": "png"}),
+                                  ("fast", {"overlays": "png", "png_compression": "fast"}))}
     assert [runs[n]["speed"]["pipeline"]["nice"] for n in ("mp4", "stored", "fast")] == [10, 10, 0]
     cap = cv2.VideoCapture(str(tmp_path / "mp4" / "overlay.mp4"))
     assert cap.get(cv2.CAP_PROP_FRAME_COUNT) == 3
@@ -94,7 +95,7 @@ def test_run_realtime_drops_the_frames_that_arrive_while_the_model_is_busy(tmp_p
     assert (summary["frames_done"], summary["frames_dropped"], summary["frames_total"]) == (2, 3, 5)
     lines = [json.loads(line) for line in (out / "environment.jsonl").read_text().splitlines()]
     assert [line["frame"] for line in lines] == [0, 3]
-    assert sorted(p.name for p in (out / "overlays").iterdir()) == ["000000.png", "000003.png"]
+    assert sorted(p.name for p in (out / "overlays").iterdir()) == ["000000.jpg", "000003.jpg"]
     assert json.loads((out / "run.json").read_text())["speed"]["pipeline"]["realtime"] is True
 
 
@@ -144,7 +145,7 @@ def test_ctrl_c_leaves_every_finished_frame_of_a_pipelined_run_on_disk(tmp_path,
     assert 4 <= done < 40 and [line["frame"] for line in lines] == list(range(done))
     assert json.loads((out / "run.json").read_text())["frames_done"] == done
     overlays = sorted((out / "overlays").iterdir())
-    assert [p.name for p in overlays] == [f"{i:06d}.png" for i in range(done)]
+    assert [p.name for p in overlays] == [f"{i:06d}.jpg" for i in range(done)]
     assert all(cv2.imread(str(p)) is not None for p in overlays)
     assert cv2.VideoCapture(str(out / "birds_eye.mp4")).get(cv2.CAP_PROP_FRAME_COUNT) == done
 

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.outputs.png import check_png_compression
+from pedenv.outputs.png import OVERLAY_FORMATS, check_png_compression
 from pedenv.outputs.sinks import ExtraOutputs
 
 if TYPE_CHECKING:
@@ -91,6 +91,7 @@ class OutputOptions:
     folder: the output folder (new or empty, or an earlier pedenv run's with ``overwrite``).
     video_out: ``overlay.mp4`` instead of one PNG per frame (``pedenv run``).
     extra: Parquet, Rerun, MCAP, ROS, live and bird's-eye outputs (None: none but the default ones).
+    overlays: ``jpeg`` (the default: about 0.3 MB per 1600x900 overlay) or ``png`` (lossless).
     png_compression: the overlay PNGs' deflate, ``none`` (the default) or ``fast``
         (:mod:`pedenv.outputs.png`: ``none`` writes a 1600x900 overlay in a tenth of the CPU
         time of ``fast``, 4.3 MB instead of about 1.5 MB).
@@ -101,9 +102,12 @@ class OutputOptions:
     video_out: bool = False
     extra: ExtraOutputs | None = None
     png_compression: str = "none"
+    overlays: str = "jpeg"
 
     def __post_init__(self) -> None:
         check_png_compression("output.png_compression", self.png_compression)
+        if self.overlays not in OVERLAY_FORMATS:
+            raise InputError(f"--overlays must be one of {', '.join(OVERLAY_FORMATS)}, got {self.overlays!r}")
 
     @classmethod
     def of(cls, output: OutputOptions | str | Path) -> OutputOptions:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 import warnings
 from collections.abc import Callable
@@ -17,20 +16,28 @@ import numpy as np
 
 from pedenv.apps.calibrate import estimate_for_source
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
+from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
+from pedenv.apps.run_outputs import (
+    OverlayWriter,
+    check_run_paths,
+    finish_run,
+    in_work_folder,
+    live_address,
+    outside,
+)
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
-from pedenv.outputs.output_dir import holds_files, prepare_output_dir
-from pedenv.outputs.png import write_png
+from pedenv.outputs.output_dir import holds_files
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pose.base import PoseBackend, create_pose_backend
 from pedenv.pose.models import backend_options, choose_input_size
 from pedenv.pose.redetect import with_redetection
 from pedenv.recordings.footage import Recording
 from pedenv.records import Frame
-from pedenv.video_files import VideoOut, video_capture
+from pedenv.video_files import video_capture
 from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
@@ -45,19 +52,15 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
                   progress: Callable[[int, int], None] | None = None) -> dict:
     """Run the environment model over a recording and write everything into ``output``.
 
-    Writes ``environment.jsonl`` (one line per frame, flushed as it goes), ``config.json``,
-    ``run.json`` (pose backend and the provider that ran it, recording, frames done, speed),
-    ``overlays/<index>.png`` (``output.png_compression``: stored by default, :mod:`pedenv.outputs.png`)
-    or ``overlay.mp4`` (``output.video_out``) with skeletons, track ids and distances, and
-    ``birds_eye.png`` of the last frame, ``birds_eye.mp4`` of every frame, and the ``output.extra``
-    outputs asked for (Parquet, Rerun, MCAP; refused before the run when their extra is missing).
+    Writes ``environment.jsonl`` (a line per frame), ``config.json``, ``run.json`` (pose backend,
+    frames done, speed, bytes written), ``overlays/<index>.jpg`` (``output.overlays``) or ``overlay.mp4``
+    (``output.video_out``), ``birds_eye.png`` and ``.mp4`` and the ``output.extra`` outputs asked for.
     Reading, the network and writing overlap (:mod:`pedenv.apps.pipeline`, ``pipeline``; its
     ``nice`` None: chosen by the outputs, :func:`_pipeline`); every output holds the frames in
     order. A bad frame stops the run with an InputError; what was computed before it stays on
-    disk. ``progress(done, total)`` is called per frame written.
-    ``output.folder`` must be empty or new, unless ``output.overwrite`` (then an earlier pedenv run there is
-    deleted once every frame's size and ego pose are checked:
-    :func:`pedenv.outputs.output_dir.prepare_output_dir`).
+    disk. ``progress(done, total)`` is called per frame written. ``output.folder``: empty or new,
+    or with ``output.overwrite`` an earlier run's, replaced when the new one has finished; no output on
+    an input, a full disk one error with every output valid (:mod:`pedenv.apps.output_safety`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
     ``pose.detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
@@ -78,47 +81,54 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     source, estimated = estimate_for_source(source, pose, backend)  # a static camera without one: its warm-up
     cfg = estimated.widen(cfg) if estimated is not None else cfg
     pipe = _pipeline(pipeline or PipelineConfig(), output)
-    extra = output.extra or ExtraOutputs()
-    rec, backend, out = _open_run(source, output, pose, cfg, pipe, backend)
+    rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
+    out = folder.work
     model = PedestrianEnvironmentModel(cfg)
     backend = with_redetection(backend, model, cfg.redetect)  # missed tracks searched in crops (fused preset)
     summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
-                               "environment": str(out / "environment.jsonl")}
+                               "environment": str(folder.final / "environment.jsonl")}
     if estimated is not None:
         summary["calibration"] = estimated.write(out)  # calibration.yaml (estimated: true), .json and .png
     stats, timer = PipelineStats(), _StepTimes()
+    extra = in_work_folder(output.extra or ExtraOutputs(), folder)
+    writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
-    sinks = dataclasses.replace(extra, birds_eye_video=extra.birds_eye_video or out / "birds_eye.mp4").open()
     try:
-        with EnvironmentWriter(out / "environment.jsonl") as writer, sinks:
+        outputs.guard = DiskGuard([out, *outside(extra, out)], len(rec))
+        sinks = live_address(extra.open(), summary)
+        with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
             write = estimated.widened(outputs.write) if estimated is not None else outputs.write
             run_frames(rec.frames(), partial(_step, backend, model, timer), write, config=pipe,
                        done=outputs.done, stats=stats)
         _check_ended_early(rec, stats, summary)
+        finished = True
     finally:
         outputs.close()
+        summary["frames_done"] = writer.lines  # the frames whose every output was written
         _finish_summary(summary, out, backend, stats, timer, pipe, outputs, sinks)
-        (out / "run.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n")
+        finish_run(folder, summary, sinks, finished=finished)
     return summary
 
 
 def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions, cfg: Config,
-              pipe: PipelineConfig, backend: PoseBackend | None) -> tuple[Recording | BagRecording, PoseBackend, Path]:
+              pipe: PipelineConfig, backend: PoseBackend | None,
+              config: Config | str | Path | None) -> tuple[Recording | BagRecording, PoseBackend, RunFolder]:
     """Everything checked before the output folder is touched (the extra outputs, ``--realtime``'s
-    timestamps, the recording, every frame of a folder or video), then the folder prepared and
-    ``config.json`` saved: (recording, pose backend, output folder)."""
+    timestamps, the recording, no output on an input, every frame of a folder or video), then the
+    folder prepared and ``config.json`` saved: (recording, pose backend, output folder)."""
     (output.extra or ExtraOutputs()).check()
     source.check_realtime(pipe.realtime)
+    check_run_paths(source, output, config)
     rec = source.load()
     backend = backend or _make_backend(pose, cfg, rec)
     if hasattr(rec, "check") and holds_files(Path(output.folder)):  # an earlier run there: every frame's size
         rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
         # the frames before a bad one are run and stay on disk
-    out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
-    cfg.save(out / "config.json")
-    return rec, backend, out
+    folder = open_run_folder(output.folder, overwrite=output.overwrite, command="pedenv run")
+    cfg.save(folder.work / "config.json")
+    return rec, backend, folder
 
 
 #: ``pipeline.nice`` of ``pedenv run`` when none is given and its writer is lighter than the network.
@@ -132,7 +142,7 @@ def _pipeline(pipe: PipelineConfig, output: OutputOptions) -> PipelineConfig:
     share, docs/speed.md)."""
     if pipe.nice is not None:
         return pipe
-    light = output.video_out or output.png_compression == "none"
+    light = output.video_out or output.overlays == "jpeg" or output.png_compression == "none"
     return dataclasses.replace(pipe, nice=WRITER_NICE if light else 0)
 
 
@@ -149,8 +159,12 @@ def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording)
 
 
 def _check_ended_early(rec: Recording | BagRecording, stats: PipelineStats, summary: dict) -> None:
-    """A video that ended before its header's frame count: warned about and noted in ``summary``."""
-    if rec.video is not None and stats.taken + stats.dropped < summary["frames_total"]:
+    """A video that ended before its header's frame count: warned about and noted in ``summary``; a bag
+    that gave fewer frames than it announces: noted (the bag warned when it found out)."""
+    bag_note = getattr(rec, "ended_early", None)
+    if bag_note:
+        summary["ended_early"] = bag_note
+    elif rec.video is not None and stats.taken + stats.dropped < summary["frames_total"]:
         summary["ended_early"] = (f"{rec.video}: the video ended after {stats.taken + stats.dropped} of the "
                                   f"{summary['frames_total']} frames its header announces (cut or damaged?)")
         warnings.warn(summary["ended_early"], stacklevel=3)
@@ -164,7 +178,10 @@ def _finish_summary(summary: dict, out: Path, backend: PoseBackend, stats: Pipel
     summary["speed"] = {**stats.to_dict(), **timer.per_frame(backend), "pipeline": dataclasses.asdict(pipe)}
     if outputs.last is not None:
         state, frame = outputs.last
-        summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=summary["recording"]))
+        try:
+            summary["birds_eye"] = str(plot_birds_eye(state, out / "birds_eye.png", frame, title=summary["recording"]))
+        except OSError as exc:  # a full disk: run.json is written all the same
+            summary["birds_eye"] = f"not written: {exc.strerror or exc}"
     summary["files"] = [str(p) for p in sinks.files]
 
 
@@ -214,26 +231,26 @@ class _Outputs:
     def __init__(self, out: Path, rec: Recording | BagRecording, output: OutputOptions, summary: dict,
                  progress: Callable[[int, int], None] | None) -> None:
         self.out, self.rec, self.summary, self.progress = out, rec, summary, progress
-        self.video_out, self.png_compression = output.video_out, output.png_compression
+        self.overlays = OverlayWriter(out, output, partial(_video_rate, rec))
         self.writer: EnvironmentWriter | None = None
         self.sinks: Sinks | None = None
-        self.video: Any = None  # the overlay video's cv2.VideoWriter, opened at the first frame
+        self.guard: DiskGuard | None = None
         self.last: tuple | None = None  # (state, frame) of the last frame written
 
     def write(self, result: tuple[EnvironmentState, Frame]) -> None:
+        """The overlay, the sinks, then the JSON Lines (so its lines count the frames fully written)."""
         state, frame = result
-        assert self.writer is not None and self.sinks is not None  # set before the run
-        self.writer.write(state)
-        self.sinks.write(state, frame)
-        if frame.image is None:
-            raise InputError(f"{self.rec.name}: frame {frame.index} has no image")
-        drawn = draw_environment(frame.image, state, frame)
-        if self.video_out:
-            if self.video is None:
-                self.video = _open_video(self.out / "overlay.mp4", self.rec, drawn.shape)
-            self.video.write(cv2.cvtColor(drawn, cv2.COLOR_RGB2BGR))  # 0.2 ms; drawn[..., ::-1].copy() took 8
-        else:
-            write_png(self.out / "overlays" / f"{frame.index:06d}.png", drawn, self.png_compression)
+        assert self.writer is not None and self.sinks is not None and self.guard is not None  # set before the run
+        try:
+            self.guard.check(self.summary["frames_done"])
+            if frame.image is None:
+                raise InputError(f"{self.rec.name}: frame {frame.index} has no image")
+            self.overlays.write(frame.index, draw_environment(frame.image, state, frame))
+            self.sinks.write(state, frame)
+            self.writer.write(state)
+        except BaseException:
+            self.guard.release()  # the outputs close next: the room kept back is theirs
+            raise
         self.last = (state, frame)
 
     def done(self, result: tuple[EnvironmentState, Frame]) -> None:  # noqa: ARG002 - the pipeline's done(result) callback
@@ -242,15 +259,14 @@ class _Outputs:
             self.progress(self.summary["frames_done"], self.summary["frames_total"])
 
     def close(self) -> None:
-        if self.video is not None:
-            self.video.release()
-            self.video = None
+        self.overlays.close()
 
 
-def _open_video(path: Path, rec: Recording | BagRecording, shape: tuple[int, ...]) -> VideoOut:
-    stamps = np.array([t for _, t in rec.images]) if rec.images else None
-    rate = rec.fps or (1.0 / float(np.median(np.diff(stamps))) if stamps is not None and len(stamps) > 1 else 10.0)
+def _video_rate(rec: Recording | BagRecording) -> float:
+    """The overlay video's frame rate: the recording's (clamped by :class:`pedenv.video_files.VideoOut`)."""
+    step = float(np.median(np.diff([t for _, t in rec.images]))) if len(rec.images) > 1 else 0.0
+    rate = rec.fps or (1.0 / step if step > 0 else 10.0)
     if rec.video is not None and not rec.fps:
         with video_capture(rec.video) as cap:
             rate = cap.get(cv2.CAP_PROP_FPS) or rate
-    return VideoOut(path, rate, (shape[1], shape[0]), what="overlay video")
+    return rate

@@ -43,6 +43,10 @@ def run_command(*, source: RecordingSource, output: OutputOptions, flags: Output
     """
     if manifest is not None:
         refuse_beside_manifest(source, flags, paced=realtime or pose.device != "auto")
+        from pedenv.apps.output_safety import check_paths
+
+        check_paths([("--manifest", manifest), ("--config", method.config if isinstance(method.config, (str, Path))
+                                                 else None)], [], output.folder)
         from pedenv.apps.batch import run_manifest
 
         summary = run_manifest(manifest, output, pose, executor=executor, config=method.config, method=method.method,
@@ -55,8 +59,14 @@ def run_command(*, source: RecordingSource, output: OutputOptions, flags: Output
     from pedenv.apps.progress import progress_callback
     from pedenv.apps.run import run_recording
 
+    if flags.live is not None:  # the port chosen and printed before the run (run.json gives it too)
+        from pedenv.apps.run_outputs import free_port
+
+        flags = dataclasses.replace(flags, live=flags.live or free_port())
     output = dataclasses.replace(output, extra=flags.extra_outputs(output))
     console = Console(stderr=True, soft_wrap=True, emoji=False, markup=False)
+    if flags.live is not None:
+        console.print(f"live: ws://127.0.0.1:{flags.live} (connect Foxglove to it)", highlight=False)
     with progress_callback("frames", console=console) as progress:
         summary = run_recording(source, output, pose, config=method.config, method=method.method,
                                 pipeline=PipelineConfig(realtime=realtime), progress=progress)

@@ -10,6 +10,7 @@ from types import FrameType
 
 import typer
 from rich.console import Console
+from typer._click import exceptions as click_errors  # typer's own click (typer >= 0.20 vendors it)
 
 from pedenv.errors import InputError
 from pedenv.paths import MAX_NAME_BYTES
@@ -37,8 +38,8 @@ def _one_line_warning(message: Warning | str, *_where: object, **_line: object) 
 
 
 def main() -> None:
-    """Entry point of the ``pedenv`` console script: bad input (InputError) is one ``error:`` line,
-    warnings one ``warning:`` line each.
+    """Entry point of the ``pedenv`` console script: bad input (InputError) and a bad flag are one
+    ``error:`` line each, warnings one ``warning:`` line each.
 
     SIGTERM (``kill``, ``timeout``) stops a run as Ctrl-C does (exit code 130): through the
     writers' ``close()``, so the outputs stay valid up to the last finished frame. A second
@@ -49,7 +50,17 @@ def main() -> None:
     _Stop.stopping = False
     handlers = {sig: signal.signal(sig, _stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
-        app()
+        code = app(standalone_mode=False, prog_name="pedenv")
+        sys.exit(code if isinstance(code, int) else 0)
+    except click_errors.NoArgsIsHelpError as exc:  # the help is printed as it is made
+        sys.exit(exc.exit_code)
+    except click_errors.ClickException as exc:  # a flag's value or name: one line, not a framed usage box
+        where = exc.ctx.command_path if isinstance(exc, click_errors.UsageError) and exc.ctx is not None else "pedenv"
+        console.print(f"error: {where}: {exc.format_message()} (see {where} --help)", style="red", highlight=False,
+                      markup=False)
+        sys.exit(exc.exit_code)
+    except typer.Abort:
+        sys.exit(1)
     except InputError as exc:  # bad input only: any other exception is a bug and keeps its traceback
         console.print(f"error: {exc}", style="red", highlight=False, markup=False)
         sys.exit(2)

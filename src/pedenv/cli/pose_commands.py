@@ -71,7 +71,11 @@ def detect(
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
+    from pedenv.paths import refuse_special_file
     from pedenv.pose.base import create_pose_backend
+
+    for image in images:
+        refuse_special_file(image, "image")
     from pedenv.pose.models import backend_options
 
     backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection,
@@ -109,10 +113,13 @@ def run(
     start_time: float | None = typer.Option(
         None, "--start-time", help="Timestamp of the first frame with --fps or a video (default: first ego pose)."
     ),
-    video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one PNG per frame."),
+    video_out: bool = typer.Option(False, "--video-out", help="Write overlay.mp4 instead of one image per frame."),
+    overlays: str = typer.Option(
+        "jpeg", "--overlays", help="Overlay images: jpeg (about 0.3 MB at 1600x900) or png (lossless, see "
+                                   "--png-compression)."),
     png_compression: str = typer.Option(
         "none", "--png-compression",
-        help="Overlay PNGs: none (stored: 4.3 MB at 1600x900) or fast (deflate: 3x smaller, 8x the CPU to write)."),
+        help="--overlays png: none (stored: 4.3 MB at 1600x900) or fast (deflate: 3x smaller, 8x the CPU to write)."),
     overwrite: Overwrite = False,
     detection: Detection = "stream",
     parquet: Parquet = False,
@@ -153,7 +160,8 @@ def run(
     topics = BagOptions(image_topic, camera_info_topic, odometry_topic, world_frame, vehicle_frame)
     outcome = run_command(
         source=Source(images, video, calibration, ego_poses, static, fps, start_time, bag=bag, bag_options=topics),
-        output=OutputOptions(output, overwrite=overwrite, video_out=video_out, png_compression=png_compression),
+        output=OutputOptions(output, overwrite=overwrite, video_out=video_out, png_compression=png_compression,
+                             overlays=overlays),
         flags=OutputFlags(parquet=parquet, rerun=rerun, mcap=mcap, ros=ros_out, live=live_port if live else None),
         pose=PoseOptions(pose_backend, pose_model, pose_input_size, detection, device),
         method=MethodOptions(config, method), manifest=manifest, realtime=realtime,
@@ -165,7 +173,8 @@ def run(
     summary = outcome.summary
     dropped = f", {summary['frames_dropped']} dropped: the model was busy" if realtime else ""
     rate = summary["speed"]["frames_per_second"]
-    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']} ({rate or 0:.1f} per second{dropped})")
+    typer.echo(f"{summary['frames_done']} frames -> {summary['environment']} ({rate or 0:.1f} per second{dropped}; "
+               f"{summary['bytes_written'] / 1e6:.1f} MB written)")
 
 
 def _print_manifest(summary: dict, output: Path) -> None:

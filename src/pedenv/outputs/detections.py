@@ -16,7 +16,7 @@ import json
 from pathlib import Path
 
 from pedenv.errors import InputError
-from pedenv.outputs.output_dir import writable_file
+from pedenv.paths import writable_file
 from pedenv.records import Detections
 from pedenv.skeleton import KEYPOINT_NAMES
 

@@ -8,6 +8,8 @@ is given (listening on every interface exposes the model to the network).
 
 from __future__ import annotations
 
+import threading
+import warnings
 from pathlib import Path
 
 import foxglove
@@ -17,6 +19,9 @@ from pedenv.outputs.mcap_log import McapWriter
 
 DEFAULT_PORT = 8765
 DEFAULT_HOST = "127.0.0.1"
+#: Seconds the end of a run waits for the server to stop: its ``stop()`` waits for every client's
+#: unfinished handshake (an idle connection, a port scanner), so it is left behind after this.
+STOP_TIMEOUT_S = 3.0
 
 
 class LiveViewer(McapWriter):
@@ -34,12 +39,19 @@ class LiveViewer(McapWriter):
         except Exception as exc:  # noqa: BLE001 - a port in use, a host not found
             raise InputError(f"--live: cannot serve on {host}:{port}: {exc}") from None
         self.port = self._server.port
-        self.path = Path(f"ws://{host}:{self.port}")
+        self.address = f"ws://{host}:{self.port}"
+        self.path = Path(self.address)
         self.files: list[Path] = []
         self._writer = None
         self._open_channels()
 
     def close(self) -> None:
+        """Stop serving, waiting at most :data:`STOP_TIMEOUT_S` (the server is left to the process's end)."""
         if self._server is not None:
-            self._server.stop()
-            self._server = None
+            server, self._server = self._server, None
+            stopping = threading.Thread(target=server.stop, name="pedenv-live-stop", daemon=True)
+            stopping.start()
+            stopping.join(STOP_TIMEOUT_S)
+            if stopping.is_alive():
+                warnings.warn(f"--live: a client of {self.address} holds the server; it is left to stop "
+                              "when pedenv exits", stacklevel=2)

@@ -19,10 +19,9 @@ import tempfile
 from pathlib import Path
 
 from pedenv.errors import InputError
-from pedenv.paths import check_path, is_utf8
+from pedenv.paths import MARKER, check_path, is_utf8, writable_file
 
-#: The file pedenv leaves in every output folder it prepares; ``overwrite`` needs it.
-MARKER = ".pedenv-output"
+__all__ = ["MARKER", "check_output_file", "glob_escape", "holds_files", "prepare_output_dir", "writable_file"]
 
 
 def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: str = "pedenv") -> Path:
@@ -71,17 +70,6 @@ def _clear(path: Path) -> None:
         raise InputError(f"output folder {path}: cannot delete the earlier run's {exc.filename}: "
                          f"{exc.strerror or exc}") from None
 
-
-def writable_file(path: str | Path, what: str = "output file") -> Path:
-    """``path`` with its folder created, checked to be no folder; InputError naming it otherwise."""
-    path = check_path(path, what)
-    if path.is_dir():
-        raise InputError(f"{what} {path} is a folder")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"cannot create the folder of {what} {path}: {exc.strerror or exc}") from None
-    return path
 
 
 def check_output_file(path: str | Path, flag: str, suffix: str, *, overwrite: bool = False) -> Path:

@@ -23,8 +23,12 @@ import cv2
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.outputs.output_dir import writable_file
+from pedenv.paths import writable_file
 
+#: The formats of ``pedenv run``'s overlays (``--overlays``): JPEG (the default, small) or PNG (lossless).
+OVERLAY_FORMATS = ("jpeg", "png")
+#: JPEG quality of the overlays: a 1600x900 overlay of a real street is about 0.3 MB (docs/outputs.md).
+JPEG_QUALITY = 90
 #: The valid values of ``png_compression``.
 PNG_COMPRESSIONS = ("fast", "none")
 _SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -48,14 +52,29 @@ def write_png(path: str | Path, image_rgb: np.ndarray, compression: str = "none"
     one InputError when it cannot be written. ``none`` writes the file piece by piece, so no
     copy of the whole image is made (each would cost the 1000 page faults of 4 MB here)."""
     path = writable_file(Path(path), "image")
-    parts = _png_parts(image_rgb, compression)
+    _write_parts(path, _png_parts(image_rgb, compression))
+    return path
+
+
+def write_jpeg(path: str | Path, image_rgb: np.ndarray, quality: int = JPEG_QUALITY) -> Path:
+    """Write ``image_rgb`` ((H, W, 3) uint8 RGB) as the JPEG ``path`` (its folder created); one
+    InputError when it cannot be written (a file cut by a full disk is removed)."""
+    path = writable_file(Path(path), "image")
+    ok, data = cv2.imencode(".jpg", cv2.cvtColor(image_rgb, cv2.COLOR_RGB2BGR), [cv2.IMWRITE_JPEG_QUALITY, quality])
+    if not ok:
+        raise InputError(f"{path}: cannot encode the image as JPEG")
+    _write_parts(path, [data.data])
+    return path
+
+
+def _write_parts(path: Path, parts: Iterator[bytes | memoryview] | list[bytes | memoryview]) -> None:
     try:
         with path.open("wb") as f:
             for part in parts:
                 f.write(part)
     except OSError as exc:
+        path.unlink(missing_ok=True)  # no cut image is left behind
         raise InputError(f"{path}: cannot write the image: {exc.strerror or exc}") from None
-    return path
 
 
 def _png_parts(image_rgb: np.ndarray, compression: str) -> Iterator[bytes | memoryview]:

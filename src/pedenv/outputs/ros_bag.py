@@ -18,15 +18,16 @@ file with every frame written, also when the run stopped at a bad frame.
 from __future__ import annotations
 
 import shutil
+import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.outputs.output_dir import writable_file
 from pedenv.outputs.ros_messages import detections, markers, tracked_objects, transforms
 from pedenv.outputs.ros_types import ros2_typestore
+from pedenv.paths import writable_file
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 
@@ -47,8 +48,11 @@ class RosBagWriter:
         self.path = writable_file(Path(path), "ROS 2 bag")
         if self.path.suffix != ".mcap":
             raise InputError(f"--ros-out {self.path}: the file must end in .mcap (a rosbag2 in MCAP storage)")
-        self._folder = self.path.with_name(self.path.name + ".partial")
-        shutil.rmtree(self._folder, ignore_errors=True)
+        try:  # a fresh folder of its own beside the file: nothing there is replaced or deleted
+            self._partial = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.partial-", dir=self.path.parent))
+        except OSError as exc:
+            raise InputError(f"--ros-out {self.path}: cannot be written: {exc.strerror or exc}") from None
+        self._folder = self._partial / "bag"
         self._store = ros2_typestore()
         self._writer: Any = Writer(self._folder, version=9, storage_plugin=StoragePlugin.MCAP)
         self._writer.open()
@@ -80,4 +84,4 @@ class RosBagWriter:
         writer.close()
         inner = self._folder / f"{self._folder.name}.mcap"
         shutil.move(str(inner), str(self.path))
-        shutil.rmtree(self._folder, ignore_errors=True)
+        shutil.rmtree(self._partial, ignore_errors=True)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
-from pedenv.errors import require_extra
+from pedenv.errors import InputError, require_extra
 from pedenv.outputs.output_dir import check_output_file
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
@@ -36,16 +36,22 @@ class Sinks:
         self.files: list[Path] = []  # what the sinks wrote, known after close()
 
     def write(self, state: EnvironmentState, frame: Frame) -> None:
+        """One frame to every sink; a sink that cannot write (a full disk) is one InputError naming its file."""
         for sink in self.sinks:
-            sink.write(state, frame)
+            try:
+                sink.write(state, frame)
+            except OSError as exc:
+                raise InputError(f"{sink.path}: cannot be written: {exc.strerror or exc}") from None
 
     def close(self) -> None:
         """Close every sink, even when one of them fails (the first failure is raised)."""
-        first = None
+        first: Exception | None = None
         for sink in self.sinks:
             self.files.extend(getattr(sink, "files", None) or ([] if getattr(sink, "port", None) else [sink.path]))
             try:
                 sink.close()
+            except OSError as exc:  # a full disk: one line naming the file
+                first = first or InputError(f"{sink.path}: cannot be finished: {exc.strerror or exc}")
             except Exception as exc:  # noqa: BLE001 - close the others first
                 first = first or exc
         self.files = list(dict.fromkeys(self.files))
@@ -108,6 +114,8 @@ class ExtraOutputs:
             check_output_file(self.mcap, "--mcap", ".mcap", overwrite=self.overwrite)
         if self.ros:
             check_output_file(self.ros, "--ros-out", ".mcap", overwrite=self.overwrite)
+        if self.mcap and self.ros and Path(self.mcap).resolve() == Path(self.ros).resolve():
+            raise InputError(f"--mcap and --ros-out name one file, {Path(self.ros).resolve()}: give each its own file")
 
     def open(self) -> Sinks:
         """The sinks for the frame-by-frame outputs (all but ``matches_parquet``)."""

@@ -28,8 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pedenv.errors import InputError
-from pedenv.outputs.output_dir import MARKER
-from pedenv.paths import MAX_NAME_BYTES, check_path
+from pedenv.paths import MARKER, MAX_NAME_BYTES, check_path
 from pedenv.structured_text import parse_yaml, read_limited_text
 
 FIELDS = ("name", "images", "video", "calibration", "ego_poses", "fps", "start_time")

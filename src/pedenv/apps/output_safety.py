@@ -1,0 +1,261 @@
+"""What ``pedenv run`` does so that it never loses a user's data (docs/outputs.md).
+
+* :func:`check_paths`: every output (the folder, ``--rerun``, ``--mcap``, ``--ros-out``) is
+  resolved and checked against every input (images and each image file, video, calibration,
+  ego poses, bag and its files, config, manifest) and against the other outputs before anything
+  is written: an output that is, holds or lies inside an input, or two outputs on one file, is
+  one InputError, ``--overwrite`` or not.
+* :class:`RunFolder`: an earlier run in the folder (``--overwrite``) is replaced only when the
+  new one has finished: the new run is written into a sibling folder and swapped in at the end;
+  a run that stops leaves the earlier one as it was. Only what pedenv wrote is removed: the
+  marker file lists a run's own files, and a folder holding anything else is refused.
+* :class:`DiskGuard`: a full disk stops the run at a frame boundary with one line, with room
+  kept back (a reserve file) so that every output can still be closed valid; a run that will
+  not fit at its measured rate is warned about after its first frames; the bytes written go to
+  ``run.json``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import tempfile
+import warnings
+from collections.abc import Iterable
+from pathlib import Path
+
+from pedenv.errors import InputError
+from pedenv.paths import MARKER
+
+#: Bytes kept back on the output's disk while a run writes (a file of zeros, deleted before the
+#: outputs close): room for the mp4 indexes, the last Parquet row group, the MCAP summary, the
+#: bird's-eye plot and run.json, which together stay under 1 MB for 10,000 frames; at most a
+#: quarter of the space free at the start.
+RESERVE_BYTES = 4 * 2**20
+#: Frames after which the bytes per frame are measured and a run that will not fit is warned about.
+ESTIMATE_AFTER = 3
+#: The first line of the marker file of a ``pedenv run`` folder; the names it wrote follow, one a line.
+RUN_MARKER_HEAD = "written by pedenv run; --overwrite may delete the files listed below\n"
+
+
+def _resolved(path: str | Path) -> Path:
+    return Path(os.path.abspath(path)).resolve()
+
+
+def _same(a: Path, b: Path) -> bool:
+    if a == b:
+        return True
+    try:
+        return os.path.samefile(a, b)  # hard links
+    except OSError:
+        return False
+
+
+def _inside(inner: Path, outer: Path) -> bool:
+    return inner != outer and outer in inner.parents
+
+
+def check_paths(inputs: Iterable[tuple[str, str | Path | None]], outputs: Iterable[tuple[str, str | Path | None]],
+                folder: str | Path) -> None:
+    """Refuse (one InputError) an output that is an input, lies inside an input folder, or is the
+    output folder holding an input; and two outputs on one file. ``inputs``/``outputs``: (flag,
+    path) pairs (None: not given); ``folder``: the output folder (``--output``)."""
+    ins = [(flag, _resolved(p)) for flag, p in inputs if p is not None]
+    outs = [(flag, _resolved(p)) for flag, p in outputs if p is not None]
+    out_folder = _resolved(folder)
+    for oflag, out in [("--output", out_folder), *outs]:
+        for iflag, source in ins:
+            if _same(out, source) or _inside(out, source):
+                where = "is" if _same(out, source) else "lies inside"
+                raise InputError(f"{oflag} {out} {where} the input {iflag} {source}: pedenv never writes over its "
+                                 "inputs; choose another path")
+            if _inside(source, out):
+                raise InputError(f"{oflag} {out} holds the input {iflag} {source}: pedenv never writes over or "
+                                 "deletes its inputs; choose another output folder")
+    for i, (aflag, a) in enumerate(outs):
+        for bflag, b in outs[i + 1:]:
+            if _same(a, b):
+                raise InputError(f"{aflag} and {bflag} name one file, {a}: give each output its own file")
+
+
+def input_files(folder: str | Path | None, limit: int = 100_000) -> list[Path]:
+    """The files inside an input folder (a rosbag2 folder's database and metadata), at most ``limit``."""
+    if folder is None or not Path(folder).is_dir():
+        return []
+    found: list[Path] = []
+    for root, _dirs, files in os.walk(folder):
+        found.extend(Path(root) / f for f in files)
+        if len(found) >= limit:
+            break
+    return found[:limit]
+
+
+class RunFolder:
+    """The output folder of one run: ``work`` is where it writes, ``final`` where it ends up.
+
+    A new or empty ``final`` is written in place. An earlier pedenv run there (``overwrite``) is
+    kept until :meth:`commit`: the new run goes to a fresh sibling folder, swapped in at the end;
+    :meth:`abandon` (a run that stopped) leaves the earlier run as it was and the new one beside it.
+    """
+
+    def __init__(self, final: Path, work: Path) -> None:
+        self.final, self.work = final, work
+
+    @property
+    def beside(self) -> bool:
+        """Whether the run is written beside an earlier one (swapped in by :meth:`commit`)."""
+        return self.work != self.final
+
+    def final_path(self, path: str | Path) -> Path:
+        """Where ``path`` (in ``work``) will be once the run is committed."""
+        path = Path(path)
+        try:
+            return self.final / path.relative_to(self.work)
+        except ValueError:
+            return path
+
+    def work_path(self, path: str | Path | None) -> Path | None:
+        """``path`` in ``final`` moved to ``work`` (others as they are)."""
+        if path is None:
+            return None
+        try:
+            return self.work / _resolved(path).relative_to(_resolved(self.final))
+        except ValueError:
+            return Path(path)
+
+    def list_files(self, *more: str) -> None:
+        """Write the marker listing the names this run wrote and ``more`` (what a later ``--overwrite`` may
+        delete)."""
+        names = sorted({p.name for p in self.work.iterdir() if p.name != MARKER} | set(more))
+        with contextlib.suppress(OSError):  # a full disk: the marker of prepare_output_dir stays
+            (self.work / MARKER).write_text(RUN_MARKER_HEAD + "".join(f"{n}\n" for n in names))
+
+    def commit(self) -> None:
+        """The new run in place of the earlier one (nothing to do when written in place)."""
+        if not self.beside:
+            return
+        old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.pedenv-old-", dir=self.final.parent))
+        try:
+            self.final.rename(old / "run")
+            self.work.rename(self.final)
+        except OSError as exc:
+            if (old / "run").exists() and not self.final.exists():
+                (old / "run").rename(self.final)
+            raise InputError(f"output folder {self.final}: cannot put the new run in place of the earlier one "
+                             f"({exc.strerror or exc}); the new run is in {self.work}") from None
+        shutil.rmtree(old, ignore_errors=True)
+
+    def abandon(self, frames: int) -> None:
+        """A run that stopped: the earlier run stays; the new one's frames stay beside it (or none, removed)."""
+        if not self.beside:
+            return
+        if frames == 0:
+            shutil.rmtree(self.work, ignore_errors=True)
+            return
+        warnings.warn(f"the run stopped; the earlier run in {self.final} is kept as it was, this run's {frames} "
+                      f"frames are in {self.work}", stacklevel=2)
+
+
+def open_run_folder(folder: str | Path, *, overwrite: bool, command: str) -> RunFolder:
+    """Prepare ``folder`` for a run (:func:`pedenv.outputs.output_dir.prepare_output_dir`), or, when it holds
+    an earlier pedenv run and ``overwrite`` is given, a fresh sibling to write beside it. A folder whose
+    marker lists the run's files refuses anything else found there."""
+    from pedenv.outputs.output_dir import holds_files, prepare_output_dir
+
+    final = Path(folder)
+    if not (overwrite and holds_files(final) and (final / MARKER).is_file()):
+        return RunFolder(final, prepare_output_dir(final, overwrite=overwrite, command=command))
+    _refuse_foreign_files(final)
+    try:
+        work = Path(tempfile.mkdtemp(prefix=f"{final.name}.pedenv-new-", dir=final.parent))
+    except OSError as exc:
+        raise InputError(f"output folder {final}: cannot write the new run beside the earlier one: "
+                         f"{exc.strerror or exc}") from None
+    prepare_output_dir(work, command=command)
+    return RunFolder(final, work)
+
+
+def _refuse_foreign_files(folder: Path) -> None:
+    """InputError naming the first thing in ``folder`` its marker does not list (when it lists names)."""
+    text = (folder / MARKER).read_text(errors="replace")
+    if not text.startswith(RUN_MARKER_HEAD):
+        return  # an older marker, or another command's: the whole folder is pedenv's
+    listed = set(text[len(RUN_MARKER_HEAD):].splitlines()) | {MARKER}
+    foreign = sorted(p.name for p in folder.iterdir() if p.name not in listed)
+    if foreign:
+        raise InputError(f"output folder {folder} holds {folder / foreign[0]}, which pedenv did not write; "
+                         "--overwrite only replaces pedenv's own files: move it or choose another folder")
+
+
+class DiskGuard:
+    """Watches the free space of the folders a run writes to (see the module doc).
+
+    ``folders``: where the outputs go (one reserve file in the first, the output folder).
+    ``total``: the frames of the recording (0: not known).
+    """
+
+    def __init__(self, folders: Iterable[Path], total: int) -> None:
+        self.folders = list(dict.fromkeys(Path(f) for f in folders))
+        self.total = total
+        self.reserve: Path | None = self.folders[0] / ".pedenv-reserve"
+        size = min(RESERVE_BYTES, _free(self.folders[0]) // 4)
+        try:
+            with self.reserve.open("wb") as f:
+                os.posix_fallocate(f.fileno(), 0, max(size, 1))
+        except (OSError, AttributeError):
+            self.release()  # no reserve (a file system without fallocate): the margin alone
+        self.start = {f: _free(f) for f in self.folders}  # after the reserve: what the outputs take is measured
+        self.rate = 0.0  # bytes per frame, measured
+        self.warned = False
+
+    def check(self, frames_done: int) -> None:
+        """Before a frame is written: InputError (the reserve released) when its outputs would not fit."""
+        for folder in self.folders:
+            free = _free(folder)
+            used = max(self.start[folder] - free, 0)
+            if frames_done:
+                self.rate = max(self.rate, used / frames_done)
+            if free < 2 * self.rate + 2**16:
+                self.release()
+                raise InputError(f"{folder}: the disk is full ({free / 1e6:.1f} MB free, a frame takes "
+                                 f"{self.rate / 1e6:.2f} MB); the run stopped after {frames_done} frames, every output "
+                                 "is valid up to there")
+            left = self.total - frames_done
+            if not self.warned and frames_done >= ESTIMATE_AFTER and left > 0 and self.rate * left > free:
+                self.warned = True
+                warnings.warn(f"{folder}: at {self.rate / 1e6:.2f} MB per frame the {left} frames left need "
+                              f"{self.rate * left / 1e6:.0f} MB and {free / 1e6:.0f} MB are free: the run will stop "
+                              "when the disk is full (--video-out writes the overlays as one small video)",
+                              stacklevel=2)
+
+    def release(self) -> None:
+        """Give the reserved room back (before the outputs close)."""
+        if self.reserve is not None:
+            with contextlib.suppress(OSError):
+                self.reserve.unlink(missing_ok=True)
+            self.reserve = None
+
+    def __enter__(self) -> DiskGuard:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+
+def _free(folder: Path) -> int:
+    """Bytes free to an unprivileged writer under ``folder`` (its nearest existing parent)."""
+    existing = next(p for p in (folder, *folder.parents) if p.exists())
+    st = os.statvfs(existing)
+    return st.f_bavail * st.f_frsize
+
+
+def bytes_written(paths: Iterable[Path]) -> int:
+    """Bytes in ``paths`` (files, or folders counted whole)."""
+    total = 0
+    for path in dict.fromkeys(paths):
+        if path.is_file():
+            total += path.stat().st_size
+        elif path.is_dir():
+            total += sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+    return total
