@@ -5,6 +5,7 @@ Each case is the tiny synthetic bag of ``bag_tiny`` with one thing set wrong; ea
 InputError line naming the bag (and the topic, message index and field where there is one).
 """
 
+import json
 import re
 import sqlite3
 import struct
@@ -294,3 +295,18 @@ def test_a_compressed_ros1_chunk_is_bounded(tmp_path, fmt):
                         r"decompresses to more than bag.max_message_bytes \(1048576\); a decompression bomb or a "
                         "corrupt chunk", _error(bag, BagOptions(max_message_bytes=2**20)))
     assert "has no transform" in _error(bag)  # within the default bound the chunk is read (this bag has no /tf)
+
+
+@pytest.mark.onnx_model
+def test_a_bag_short_of_its_count_says_so_in_run_json(tmp_path, monkeypatch, capsys):
+    bag = tiny_bag(tmp_path / "a")
+    with sqlite3.connect(bag / "a.db3") as db:  # 2 of the 3 image rows lost
+        db.execute("DELETE FROM messages WHERE topic_id = (SELECT id FROM topics WHERE name = ?) AND timestamp > 1",
+                   (IMAGE_TOPIC,))
+    with pytest.warns(UserWarning):
+        code, _, err = pedenv(monkeypatch, capsys, "run", "--bag", bag, "--output", tmp_path / "out",
+                              "--detection", "fast")
+    assert code == 0, err
+    summary = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert summary["frames_done"] == 1
+    assert summary["ended_early"].startswith(f"{bag}: the storage holds fewer or more messages than metadata.yaml")
