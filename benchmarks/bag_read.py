@@ -82,9 +82,9 @@ def main() -> None:
     parser.add_argument("--detection", default="far", choices=("far", "fast"))
     args = parser.parse_args()
     os.environ.setdefault("YOLO_OFFLINE", "1")
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
-    backend = create_pose_backend("onnx", detection=args.detection)
+    backend = create_detector("onnx", detection=args.detection)
     print(f"load: {os.getloadavg()[0]:.1f} (1 min), {os.cpu_count()} CPUs; detection {args.detection}")
     print(f"{'bag':<36} {'frames':>6} {'open ms':>8} {'frame ms':>9} {'folder ms':>10} {'run ms':>8} "
           f"{'read/run':>9}")

@@ -3,7 +3,7 @@
     PYTHONPATH=src python benchmarks/cascade_real.py [--samples ../shared/samples/real] [--json out.json]
 
 Prints recall by goal height (40-80 px, >= 80 px), precision and network units per image for
-``far`` with the cascade off and on (:class:`pedenv.pose.stream_config.CascadeConfig`), and
+``far`` with the cascade off and on (:class:`pedenv.detection.config.CascadeConfig`), and
 optionally for variants of its fields (``--variant verify_score=0.25,person_px=96``).
 """
 
@@ -28,7 +28,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     from pedenv.apps.evaluate_detections import evaluate_detections
-    from pedenv.pose.tiling import DetectionConfig
+    from pedenv.detection.config import DetectionConfig
 
     base = DetectionConfig.named("far")
     variants = {"far, no cascade": replace(base, cascade=replace(base.cascade, enabled=False)), "far + cascade": base}

@@ -24,11 +24,11 @@ def main(argv=None) -> int:
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
     args = parser.parse_args(argv)
 
+    from pedenv.detection import create_detector
     from pedenv.evaluation.detections import kitti_samples, match_detections, nuscenes_samples, summarize
     from pedenv.images import read_image_rgb
-    from pedenv.pose.onnx_backend import OnnxPose
 
-    pose = OnnxPose(detection="far")
+    pose = create_detector("onnx", detection="far")
     print(f"load {os.getloadavg()[0]:.1f}")
     for dataset, samples in (("kitti", kitti_samples(args.samples / "kitti")),
                              ("nuscenes", nuscenes_samples(args.samples / "nuscenes-0061"))):

@@ -150,14 +150,14 @@ def recall_rows(models: dict[str, Path], modes: tuple[str, ...], int8_score: flo
     """Prints recall (all, 40-80 px, >= 80 px) and precision on the samples per model and mode;
     the int8 models decode with score threshold ``int8_score`` (fp32 with pedenv's 0.25)."""
     from pedenv.apps.evaluate_detections import evaluate_detections
-    from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.tiling import DetectionConfig
+    from pedenv.detection import create_detector
+    from pedenv.detection.config import DetectionConfig
 
     for mode in modes:  # "far-nocascade": far without the cascade's verified low-score persons
         detection = DetectionConfig.named("far", cascade={"enabled": False}) if mode == "far-nocascade" else mode
         for name, path in models.items():
             score = 0.25 if name == "fp32" else int8_score
-            backend = create_pose_backend("onnx", model_path=path, detection=detection, threads=2,
+            backend = create_detector("onnx", model_path=path, detection=detection, threads=2,
                                           score_threshold=score)
             report = evaluate_detections(SAMPLES, detection=detection, backend=backend, threads=2)
             s = report["summary"]["all"]
@@ -180,11 +180,11 @@ def _iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def keypoint_gaps(reference: Path, other: Path) -> dict[str, float]:
     """Keypoint distance between two models' ``far`` detections of the same persons on the samples:
     persons matched greedily by IoU >= 0.5; keypoints seen by both (visibility > 0.5)."""
+    from pedenv.detection import create_detector
     from pedenv.evaluation.detections import load_samples
     from pedenv.images import read_image_rgb
-    from pedenv.pose.base import create_pose_backend
 
-    backends = [create_pose_backend("onnx", model_path=p, detection="far", threads=2) for p in (reference, other)]
+    backends = [create_detector("onnx", model_path=p, detection="far", threads=2) for p in (reference, other)]
     px, rel, persons, unmatched = [], [], 0, 0
     for sample in load_samples(SAMPLES):
         image = read_image_rgb(sample.image_path)

@@ -37,11 +37,11 @@ IMAGES = {"1600x900": REAL / "nuscenes-0061" / "n015-2018-07-24-11-22-45+0800__C
 
 def per_call(calls: int) -> None:
     """Part 1 of the module doc."""
+    from pedenv.detection import create_detector
     from pedenv.images import read_image_rgb
     from pedenv.pose import postprocess as pp
-    from pedenv.pose.base import create_pose_backend
 
-    backend = create_pose_backend("onnx", detection="fast", threads=2)
+    backend = create_detector("onnx", detection="fast", threads=2)
     for name, path in IMAGES.items():
         image = read_image_rgb(path)
         for size in [(384, 640), (224, 640)]:
@@ -62,11 +62,11 @@ def per_call(calls: int) -> None:
 
 def in_the_loop(frames: int, rounds: int) -> None:
     """Part 2 of the module doc."""
-    import pedenv.pose.multipass as multipass
+    import pedenv.detection.passes as multipass
     from pedenv.config import Config
+    from pedenv.detection import create_detector
+    from pedenv.detection.redetect import with_redetection
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.redetect import with_redetection
     from pedenv.recordings.footage import load_recording
 
     wall: dict[str, float] = defaultdict(float)
@@ -86,7 +86,7 @@ def in_the_loop(frames: int, rounds: int) -> None:
         setattr(multipass, name, clocked(name, getattr(multipass, name)))
     work = Path(tempfile.mkdtemp())
     rec = run_pipeline.write_recording(run_pipeline.VTEST, work, frames, (900, 1600))
-    backend = create_pose_backend("onnx", detection="fast", score_threshold=Config().tracking.pose_score_threshold,
+    backend = create_detector("onnx", detection="fast", score_threshold=Config().tracking.pose_score_threshold,
                                   threads=2)
     backend.infer = clocked("network", backend.infer)
     for r in range(rounds + 1):  # the first warms up

@@ -100,8 +100,8 @@ def run_sequence(frames, gt, main, config, backend):
     import motmetrics as mm
 
     from pedenv.boxes import iou_matrix
+    from pedenv.detection.redetect import RedetectingPose
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose.redetect import RedetectingPose
 
     model = PedestrianEnvironmentModel(config)
     redetect = RedetectingPose(backend, model, config.redetect) if config.redetect.enabled else None
@@ -161,12 +161,12 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
 
     from pedenv.config import Config
+    from pedenv.detection import create_detector
     from pedenv.localization import configure
-    from pedenv.pose import create_pose_backend
     from pedenv.pose.postprocess import frame_image
 
     fused = configure(Config(), "fused")
-    backend = create_pose_backend("onnx", detection=args.detection,
+    backend = create_detector("onnx", detection=args.detection,
                                   score_threshold=fused.tracking.pose_score_threshold)
     image_only = {"ground_gate": 0.0, "memory_s": 0.0}
     settings = {k: json.loads(v) for k, v in (item.split("=", 1) for item in args.set)}

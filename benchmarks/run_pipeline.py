@@ -110,8 +110,8 @@ def network_alone(rec: dict, backend, clock: NetworkClock) -> dict:
     from dataclasses import replace
 
     from pedenv.config import Config
+    from pedenv.detection.redetect import with_redetection
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose.redetect import with_redetection
     from pedenv.recordings.footage import load_recording
 
     cfg = Config()
@@ -165,11 +165,11 @@ def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, thread
     backend each with ``threads`` intra-op threads, made before any clock starts): the network
     alone, then a run of each of ``variants`` (module doc), one after the other."""
     from pedenv.config import Config
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
     detection = variants[0]["detection"]
     score = Config().tracking.pose_score_threshold
-    backends = {side: create_pose_backend("onnx", detection=detection, score_threshold=score, threads=threads,
+    backends = {side: create_detector("onnx", detection=detection, score_threshold=score, threads=threads,
                                           **({} if side is None else {"side_by_side": side}))
                 for side in side_by_side}
     alone, runs = [], []

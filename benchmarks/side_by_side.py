@@ -28,10 +28,10 @@ REAL = Path(__file__).resolve().parents[2] / "shared" / "samples" / "real"
 
 def passes(rounds: int, threads: int) -> None:
     """Part 1 of the module doc."""
-    from pedenv.pose.onnx_backend import OnnxPose
+    from pedenv.detection import create_detector
 
-    side = OnnxPose(detection="fast", threads=threads)
-    alone = OnnxPose(detection="fast", threads=threads, side_by_side=False)
+    side = create_detector("onnx", detection="fast", threads=threads)
+    alone = create_detector("onnx", detection="fast", threads=threads, side_by_side=False)
     rng = np.random.default_rng(0)
     for shape in ((1, 3, 384, 640), (1, 3, 288, 640)):
         tensors = [rng.random(shape, dtype=np.float32) for _ in range(2)]
@@ -53,8 +53,8 @@ def passes(rounds: int, threads: int) -> None:
 
 def frames_of(name: str, count: int) -> list[tuple[np.ndarray, object]]:
     """``count`` frames (image, geometry) of the benchmark frame or a MOT17 sample sequence."""
+    from pedenv.detection.geometry import CameraGeometry
     from pedenv.images import read_image_rgb
-    from pedenv.pose.tiling import CameraGeometry
     from pedenv.pose.timing import benchmark_image
     from pedenv.records import Camera
 
@@ -67,10 +67,10 @@ def frames_of(name: str, count: int) -> list[tuple[np.ndarray, object]]:
 
 def modes(frames: int, threads: int) -> None:
     """Part 2 of the module doc."""
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
     for mode, scene in (("far", "street"), ("stream", "street"), ("stream", "MOT17-04-FRCNN")):
-        pose = {side: create_pose_backend("onnx", detection=mode, threads=threads, side_by_side=side)
+        pose = {side: create_detector("onnx", detection=mode, threads=threads, side_by_side=side)
                 for side in (True, False)}
         times: dict[bool, list[float]] = {True: [], False: []}
         same, runs = True, []

@@ -167,17 +167,16 @@ def run_scene(name: str, samples: Path, fused: dict) -> Rows:
     from pedenv.apps.scene_result import SceneHooks, evaluate_scene
     from pedenv.config import Config
     from pedenv.datasets.ucmctrack import mot17_static_scene
+    from pedenv.detection import backend_options, create_detector
     from pedenv.localization import configure
     from pedenv.localization.fused.ground import ankle_height
-    from pedenv.pose import create_pose_backend
-    from pedenv.pose.models import backend_options
 
     root = samples / "mot17"
     scene = mot17_static_scene(root / name, root / "ucmctrack_cam_para" / f"{name}.txt")
     config = configure(Config(), "fused")
     config = dataclasses.replace(config, fused=dataclasses.replace(config.fused, **fused))
     rows = Rows(ankle_height(config.fused), config.fused.min_keypoint_confidence)
-    backend = create_pose_backend("onnx", **backend_options("onnx", detection="far", score_threshold=0.1))
+    backend = create_detector("onnx", **backend_options("onnx", detection="far", score_threshold=0.1))
     evaluate_scene(scene.name, scene.frames, config=config, backend=backend, hooks=SceneHooks(on_frame=rows.on_frame))
     return rows
 

@@ -3,13 +3,13 @@
     PYTHONPATH=src python benchmarks/stream_crops.py [--samples ../shared/samples/real/mot17]
         [--score-threshold 0.1] 96,0.35,16 80,0.25,8 ...
 
-Each setting is ``track_person_px,track_margin,track_edge_px`` (:class:`~pedenv.pose.stream_config.StreamConfig`).
+Each setting is ``track_person_px,track_margin,track_edge_px`` (:class:`~pedenv.detection.config.StreamConfig`).
 For every MOT17 sample frame after a sequence's first, the ground-truth people with visibility
 >= 0.5 stand in for tracks: their boxes, moved by a seeded error of 5 % of their height (a
 prediction), are cropped as ``stream`` crops its tracks, packed tallest first
-(:func:`pedenv.pose.mosaic.pack_tallest_first`) and run through the network. A person counts as
+(:func:`pedenv.detection.packing.pack_tallest_first`) and run through the network. A person counts as
 found when a person in its crop, not cut by an inner crop edge, sure (score >= 0.5) or
-plausible (mean keypoint confidence >= 0.5) as :class:`~pedenv.pose.stream_accounts.TrackFinder`
+plausible (mean keypoint confidence >= 0.5) as :class:`~pedenv.detection.track_search.TrackFinder`
 asks, overlaps the truth by IoU >= 0.5. Printed per setting: packed inputs (each one network
 unit), people, the share found (by true height: < 60, 60-100, 100-160, >= 160 px) and found per input.
 The score threshold is the fused preset's two-band one (what ``pedenv run`` decodes at).
@@ -36,12 +36,12 @@ def main(argv=None) -> int:
 
     from pedenv.boxes import iou_matrix
     from pedenv.datasets import mot17
+    from pedenv.detection import create_detector
+    from pedenv.detection.packing import crop_around, pack_tallest_first, run_mosaics
+    from pedenv.detection.track_search import PLAUSIBLE_KEYPOINT_CONF, SURE_SCORE
     from pedenv.images import read_image_rgb
-    from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.mosaic import crop_around, pack_tallest_first, run_mosaics
-    from pedenv.pose.stream_accounts import PLAUSIBLE_KEYPOINT_CONF, SURE_SCORE
 
-    backend = create_pose_backend("onnx", detection="fast")
+    backend = create_detector("onnx", detection="fast")
     settings = [tuple(float(x) for x in s.split(",")) for s in args.settings]
     hits = {s: np.zeros(len(BINS) - 1) for s in settings}
     people = {s: np.zeros(len(BINS) - 1) for s in settings}

@@ -5,7 +5,7 @@
 
 ``DIR`` is ``benchmarks/stream_video.py --keep DIR``'s folder (the recording and far's run). The
 script runs ``stream`` over the recording as ``pedenv run`` does (:func:`pedenv.apps.run.run_recording`,
-the fused preset) with its :class:`~pedenv.pose.stream.StreamPose` traced: per frame the tracks it
+the fused preset) with its :class:`~pedenv.detection.stream.StreamPose` traced: per frame the tracks it
 was given, the whole-frame pass's persons, the band tiles it ran, the tracks it searched in packed
 crops and whether their crop got into an input, and the persons it returned. Every person far
 reported (a track's detection, IoU >= 0.5 with none of stream's reports in that frame) is then put
@@ -44,15 +44,15 @@ NEAR_IOU = 0.3
 
 
 class Trace:
-    """Per frame what :class:`~pedenv.pose.stream.StreamPose` saw and did (lists of dicts, frame order)."""
+    """Per frame what :class:`~pedenv.detection.stream.StreamPose` saw and did (lists of dicts, frame order)."""
 
     def __init__(self) -> None:
         self.frames: list[dict] = []
 
     def install(self) -> None:
         """Wrap ``StreamPose.detect_frame``, ``StreamPose._packed`` and the module's ``run_level``."""
-        import pedenv.pose.stream as stream
-        from pedenv.pose.mosaic import pack_tallest_first
+        import pedenv.detection.stream as stream
+        from pedenv.detection.packing import pack_tallest_first
 
         trace, run_level, detect_frame, packed = self, stream.run_level, stream.StreamPose.detect_frame, \
             stream.StreamPose._packed

@@ -6,18 +6,16 @@ import pytest
 from pedenv.apps.run import detection_mode
 from pedenv.config import (
     DEFAULT_METHOD,
+    METHOD_PRESETS,
     SECTIONS,
     Config,
-    DetectionConfig,
     KalmanConfig,
-    MergeConfig,
     PaperConfig,
     TrackingConfig,
 )
+from pedenv.detection import DetectionConfig, MergeConfig, backend_options
 from pedenv.errors import InputError
-from pedenv.localization import configure
-from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.models import backend_options
+from pedenv.localization import LOCATORS, configure
 
 from cli_in_process import pedenv
 
@@ -69,8 +67,9 @@ def test_method_presets_fill_only_defaults():
     assert configure(mine, "paper").kalman.restart_gate == 9.0
     with pytest.raises(ValueError, match="unknown position method 'magic'; valid: paper, fused"):
         configure(Config(), "magic")
-    with pytest.raises(ValueError, match="unknown position method 'magic'"):
-        PedestrianEnvironmentModel(Config(method="magic"))
+    with pytest.raises(ValueError, match="unknown position method 'magic'; valid: paper, fused"):
+        Config(method="magic")  # refused where it is made, not later by the model
+    assert set(METHOD_PRESETS) == set(LOCATORS)  # the methods Config accepts are those that exist
 
 
 def test_the_default_is_the_fused_method_as_the_commands_run_it():

@@ -2,8 +2,10 @@
 
 Defaults are the paper's (Holzbock et al., Sections III-B and III-C) where it gives one.
 ``Config.to_dict()`` is saved next to every result (``config.json``) so a run can be
-repeated: the tracker, the position methods, the re-detection, and the pose network's
-detection passes and their merge. Every section checks its fields with
+repeated: the tracker, the position methods, the behaviour cues, and the sections of the
+stages above the core that register theirs (:func:`register_section`: the detection stage's
+``redetect``, ``detection`` and ``merge``, from :mod:`pedenv.detection.config`, which
+``import pedenv`` loads). The core imports nothing of those stages. Every section checks its fields with
 :mod:`pedenv.validation` (type, finiteness, a range with a documented upper bound) and
 raises :class:`~pedenv.errors.InputError` naming ``section.field``; ``Config.load`` reads
 the file through :mod:`pedenv.structured_text` (size and nesting limits) and names it.
@@ -22,15 +24,11 @@ from pedenv.behaviour.config import BehaviourConfig
 from pedenv.config_position import FUSED_CUES, INITIAL_ESTIMATES, FusedConfig, PaperConfig
 from pedenv.config_tracking import KalmanConfig, TrackingConfig
 from pedenv.errors import InputError
-from pedenv.pose.merge import MergeConfig
-from pedenv.pose.redetect_config import RedetectConfig
-from pedenv.pose.tiling import DetectionConfig
 from pedenv.structured_text import load_json
 from pedenv.validation import shown
 
 __all__ = ["DEFAULT_METHOD", "FUSED_CUES", "INITIAL_ESTIMATES", "METHOD_PRESETS", "SECTIONS", "Config",
-           "BehaviourConfig", "DetectionConfig", "FusedConfig", "KalmanConfig", "MergeConfig", "PaperConfig",
-           "RedetectConfig", "TrackingConfig"]
+           "BehaviourConfig", "FusedConfig", "KalmanConfig", "PaperConfig", "TrackingConfig", "register_section"]
 
 #: The position method of ``Config()`` and of every command without ``--method``: the
 #: most accurate one (``paper`` reproduces the paper's figures).
@@ -40,7 +38,7 @@ DEFAULT_METHOD = "fused"
 #: (which are the paper's values). ``fused`` turns on the tracker's height-ratio rule,
 #: low-score second pass, motion prediction, ground gate and track memory, and the
 #: filter's restart gate, the re-detection of missed tracks in crops (onnx backend,
-#: :mod:`pedenv.pose.redetect`) and the behaviour cues (:mod:`pedenv.behaviour`) (on the golden
+#: :mod:`pedenv.detection.redetect`) and the behaviour cues (:mod:`pedenv.behaviour`) (on the golden
 #: ``terrain2/fused/detector-model`` case 75 identity
 #: switches with them, 200 without).
 METHOD_PRESETS: dict[str, dict[str, dict]] = {
@@ -56,8 +54,8 @@ class Config:
     """Everything the environment model needs besides the data.
 
     method: the position method, a name of :data:`pedenv.localization.LOCATORS`:
-        ``fused`` (the default, the best one) or ``paper`` (reproduces the paper).
-        Each method's constants are in its own section.
+        ``fused`` (the default, the best one) or ``paper`` (reproduces the paper); another
+        name is refused here, naming the valid ones. Each method's constants are in its own section.
 
     A section not given starts from the method's defaults (:data:`METHOD_PRESETS` over the
     section class's defaults), so ``Config()`` is the fused method as every command runs it
@@ -66,11 +64,10 @@ class Config:
     field existed) loads as ``fused``; the fields it names keep their values.
 
     behaviour: the behaviour cues (:class:`pedenv.behaviour.config.BehaviourConfig`; on in ``fused``).
-    detection, merge: the pose network's passes and their merge (``onnx`` backend,
-    :class:`pedenv.pose.tiling.DetectionConfig`, :class:`pedenv.pose.merge.MergeConfig`),
-    saved with the run so its detection is recorded; ``pedenv run --detection`` sets
-    ``detection.mode``. A saved config without them (written before they were) loads
-    their defaults.
+    redetect, detection, merge: the detection stage's sections (``onnx`` backend,
+    :mod:`pedenv.detection.config`, registered by it), saved with the run so its detection is
+    recorded; ``pedenv run --detection`` sets ``detection.mode``. A saved config without them
+    (written before they were) loads their defaults.
     """
 
     method: str = DEFAULT_METHOD
@@ -79,14 +76,19 @@ class Config:
     paper: PaperConfig = None  # type: ignore[assignment]
     kalman: KalmanConfig = None  # type: ignore[assignment]
     fused: FusedConfig = None  # type: ignore[assignment]
-    redetect: RedetectConfig = None  # type: ignore[assignment]
-    detection: DetectionConfig = None  # type: ignore[assignment]
-    merge: MergeConfig = None  # type: ignore[assignment]
+    redetect: Any = None  # the detection stage's sections (register_section): pedenv.detection.config
+    detection: Any = None
+    merge: Any = None
     behaviour: BehaviourConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method or len(self.method) > 64:
             raise InputError(f"method must be the name of a position method, got {shown(self.method)}")
+        if self.method not in METHOD_PRESETS:
+            raise InputError(f"unknown position method {shown(self.method)}; valid: {', '.join(METHOD_PRESETS)}")
+        missing = [name for name in STAGE_SECTIONS if name not in SECTIONS]
+        if missing:
+            raise InputError(f"config section(s) {', '.join(missing)} not registered: import pedenv first")
         preset = METHOD_PRESETS.get(self.method, {})
         for name, kind in SECTIONS.items():
             if getattr(self, name) is None:
@@ -155,7 +157,18 @@ def _names(names: Iterable[object]) -> str:
     return ", ".join(listed[:5]) + (f" and {len(listed) - 5} more" if len(listed) > 5 else "")
 
 
-#: Section name -> its class.
+#: Section name -> its class, in the order ``config.json`` lists them: the core's, then those the
+#: stages above it register (:func:`register_section`).
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
-                             "fused": FusedConfig, "redetect": RedetectConfig, "detection": DetectionConfig,
-                             "merge": MergeConfig, "behaviour": BehaviourConfig}
+                             "fused": FusedConfig, "behaviour": BehaviourConfig}
+#: The sections a :class:`Config` has that a stage above the core registers.
+STAGE_SECTIONS = ("redetect", "detection", "merge")
+
+
+def register_section(name: str, kind: type) -> None:
+    """Make ``kind`` (a frozen dataclass of validated fields) the class of section ``name``
+    (one of :data:`STAGE_SECTIONS`), saved in ``config.json`` and loaded from it. Called by
+    :mod:`pedenv.detection.config` when it is imported (``import pedenv`` does)."""
+    if name not in STAGE_SECTIONS:
+        raise ValueError(f"unknown stage section {name!r}; valid: {', '.join(STAGE_SECTIONS)}")
+    SECTIONS[name] = kind

@@ -5,9 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from pedenv.pose.levels import HeightLine, Level, plan_level, pyramid
-from pedenv.pose.multipass import level_filter
-from pedenv.pose.tiling import DetectionConfig, Pass
+from pedenv.detection.config import DetectionConfig
+from pedenv.detection.levels import HeightLine, Level, plan_level, pyramid
+from pedenv.detection.passes import level_filter
+from pedenv.detection.tiling import Pass
 from pedenv.records import Detections
 
 

@@ -8,7 +8,7 @@ when they are not too tall for it (``max_person_px``: fragments of someone the c
 levels see whole) and, below ``sure_score``, when the skeleton looks like a person
 (mean keypoint confidence at least ``plausible_keypoint_conf``). Without a usable
 calibration each level's rows come from a line fitted to the people found so far
-(:mod:`pedenv.pose.levels`). :func:`merge_detections` merges everything.
+(:mod:`pedenv.detection.levels`). :func:`merge_detections` merges everything.
 """
 
 from __future__ import annotations
@@ -18,12 +18,14 @@ from functools import partial
 
 import numpy as np
 
-from pedenv.pose.cascade import candidates, concat, verify
-from pedenv.pose.levels import HeightLine, calibrated, plan_level, pyramid
-from pedenv.pose.merge import MergeConfig, merge_detections
-from pedenv.pose.mosaic import cut_by_inner_edge
+from pedenv.detection.cascade import candidates, verify
+from pedenv.detection.config import DetectionConfig, MergeConfig
+from pedenv.detection.geometry import CameraGeometry
+from pedenv.detection.levels import HeightLine, placing_geometry, plan_level, pyramid
+from pedenv.detection.merge import merge_detections
+from pedenv.detection.packing import cut_by_inner_edge
+from pedenv.detection.tiling import Pass, full_pass
 from pedenv.pose.postprocess import DecodeSettings, InferMany, Letterbox, decode, letterbox, to_input_tensor
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
 #: The default merge settings (frozen, shared).
@@ -136,7 +138,8 @@ def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
     max_detections = settings.max_detections
     run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, config=config, low=low)
     levels = pyramid(width, height, config)[1:]
-    if calibrated(geometry, width, height, config):  # every level's rows known now: one network call for all
+    geometry = placing_geometry(geometry, width, height, config)  # the ground band, once per frame
+    if geometry is not None:  # every level's rows known now: one network call for all
         planned = [plan_level(level, width, height, config, geometry, None) for level in levels]
         passes = [first, *(p for more, _ in planned for p in more)]
         parts, notes = run(passes), [note for _, note in planned]
@@ -153,8 +156,8 @@ def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
         passes += more
     dets = parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)
     if low is not None:
-        verified, more = verify(infer, image, candidates(concat(low), dets, config.cascade), config.cascade,
-                                config.stream.mosaic_size, settings)
+        verified, more = verify(infer, image, candidates(Detections.concat(low), dets, config.cascade), config.cascade,
+                                config.stream.packed_size, settings)
         if more:
             notes.append(f"cascade: {len(verified)} confirmed in {len(more)} packed inputs")
             passes += more

@@ -1,15 +1,15 @@
 """``stream`` detection: far-seeing over consecutive frames for about the cost of one pass.
 
-A stateful pose backend that sees each frame's model state (the tracks' predicted boxes,
-:meth:`~pedenv.model.PedestrianEnvironmentModel.predicted_boxes`). Every frame: the
-whole-frame pass; the live tracks it missed, in crops around their predicted boxes packed
-tallest first, about ten to one input, twenty in a crowd (:mod:`pedenv.pose.mosaic`); the far
-band's tiles in rotation, the oldest first (:mod:`pedenv.pose.schedule`); the cascade's
-low-scoring candidates in the room left in the packed inputs (:mod:`pedenv.pose.cascade`). A
-credit bank (:class:`~pedenv.pose.schedule.CreditBank`) lends a crowded frame what quiet frames
+The state a ``stream`` detector keeps between frames; each frame it is given the tracks the
+model predicts (:class:`~pedenv.records.PredictedTracks`). Every frame: the whole-frame pass;
+the live tracks it missed, in crops around their predicted boxes packed tallest first, about
+ten to one packed input, twenty in a crowd (:mod:`pedenv.detection.packing`); the far band's
+tiles in rotation, the oldest first (:mod:`pedenv.detection.budget`); the cascade's low-scoring
+candidates in the room left in the packed inputs (:mod:`pedenv.detection.cascade`). A credit
+bank (:class:`~pedenv.detection.budget.CreditBank`) lends a crowded frame what quiet frames
 saved. A time step longer than ``max_gap_s`` (or backwards) or a new frame size restarts the
 state; the first frame after a (re)start scans the whole band when ``cold_start``.
-:meth:`StreamPose.describe` (saved in ``run.json``) says how the budget was spent.
+:attr:`StreamState.accounts` (saved in ``run.json``) says how the budget was spent.
 """
 
 from __future__ import annotations
@@ -17,27 +17,25 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from functools import partial
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.errors import InputError
-from pedenv.pose.cascade import candidate_placements, candidates, concat, confirmed
-from pedenv.pose.levels import HeightLine
-from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import Crop, crop_around, merge_crops, mosaic_units, pack_tallest_first, run_mosaics
-from pedenv.pose.multipass import run_level
-from pedenv.pose.postprocess import frame_image
+from pedenv.detection.accounts import StreamAccounts
+from pedenv.detection.budget import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk
+from pedenv.detection.cascade import candidate_placements, candidates, confirmed
+from pedenv.detection.config import DetectionConfig, MergeConfig, RedetectConfig
+from pedenv.detection.geometry import CameraGeometry
+from pedenv.detection.levels import HeightLine
+from pedenv.detection.merge import merge_detections
+from pedenv.detection.packing import Crop, crop_around, merge_crops, pack_tallest_first, packed_units, run_packed
+from pedenv.detection.passes import run_level
+from pedenv.detection.tiling import Pass, full_pass, units
+from pedenv.detection.track_search import TrackFinder
+from pedenv.pose.onnx_backend import OnnxPose
+from pedenv.pose.postprocess import DecodeSettings
 from pedenv.pose.providers import CPU
-from pedenv.pose.schedule import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk, units
-from pedenv.pose.stream_accounts import StreamAccounts, TrackFinder
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
-from pedenv.records import Detections, Frame
-
-if TYPE_CHECKING:
-    from pedenv.pose.postprocess import DecodeSettings
-    from pedenv.pose.redetect import TrackPredictor
+from pedenv.records import Detections, PredictedTracks
 
 #: Crops and, per crop, the indices of the tracks (of those searched) it holds.
 Grouped = tuple[list[Crop], list[list[int]]]
@@ -45,44 +43,28 @@ Grouped = tuple[list[Crop], list[list[int]]]
 FIT_MEMORY = 60
 
 
-class StreamPose:
-    """The ``onnx`` backend in ``stream`` mode (``create_pose_backend("onnx", detection="stream")``).
+class StreamState:
+    """What ``stream`` remembers between frames, and the frame's passes (module doc).
 
-    options: those of :class:`~pedenv.pose.onnx_backend.OnnxPose`; ``detection`` ``"stream"``
-    or a :class:`DetectionConfig` in mode ``stream`` (its ``stream`` and ``cascade`` fields).
-    The tracks come from the model given to :meth:`attach_model` (``pedenv run`` and
-    ``evaluate`` attach theirs); without one only the band rotation and the cascade run.
+    network: the pose network that runs the passes; config: a :class:`DetectionConfig` in mode
+    ``stream``; decoding: the passes' score threshold, NMS and cut margin; merge: the merge of the
+    passes; match: the track search's matching (the run's ``redetect`` section).
     """
 
-    name = "onnx"
-
-    def __init__(self, **options: Any) -> None:  # options: OnnxPose's keywords
-        from pedenv.pose.onnx_backend import OnnxPose
-
-        detection = options.pop("detection", "stream")
-        config = DetectionConfig.named("stream") if detection == "stream" else detection
-        if not isinstance(config, DetectionConfig) or config.mode != "stream":
-            raise InputError(f"StreamPose needs detection 'stream' or a DetectionConfig in mode stream, "
-                             f"got {detection!r}")
-        self.backend = OnnxPose(detection=config, **options)
-        self.config: DetectionConfig = config
-        self.model: TrackPredictor | None = None
-        self.finder = TrackFinder()
+    def __init__(self, network: OnnxPose, config: DetectionConfig, decoding: DecodeSettings, merge: MergeConfig,
+                 match: RedetectConfig) -> None:
+        self.network, self.config, self.decoding, self.merge, self.match = network, config, decoding, merge, match
         self.accounts = StreamAccounts()
-        self.last_passes: list = []
+        self.last_passes: list[Pass] = []
         self.last_note = ""
         self._reset(None)
 
     @property
     def _trim(self) -> bool:
-        """Whether packed inputs are cut to the room their crops use (``stream.trim_mosaics``, a
+        """Whether packed inputs are cut to the room their crops use (``stream.trim_packed``, a
         dynamic model, the CPU: on a GPU a pass costs about the same whatever its size, and every
         new input shape costs a session and cuDNN's set-up, :meth:`OnnxPose._session_for`)."""
-        return self.config.stream.trim_mosaics and self.backend.dynamic and self.backend.provider == CPU
-
-    def attach_model(self, model: TrackPredictor) -> None:
-        """Take the tracks' predicted boxes from ``model`` (anything with ``predicted_boxes(frame)``)."""
-        self.model = model
+        return self.config.stream.trim_packed and self.network.dynamic and self.network.provider == CPU
 
     def restart(self) -> None:
         """Forget the stream: the next frame is a first frame (a cold start)."""
@@ -94,22 +76,9 @@ class StreamPose:
         self._tile_seen: dict[tuple[int, int], float] = {}
         self._fit_boxes = np.zeros((0, 4))
         self._dt = 0.1
-        self.finder = TrackFinder()
+        self.finder = TrackFinder(self.match)
         self.bank = CreditBank()
         self._untracked = np.zeros((0, 4))
-
-    def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
-        """One image on its own (no stream): as ``far`` (the whole band), the cascade included."""
-        dets = self.backend.detect(image_rgb, geometry)
-        self.last_passes, self.last_note = self.backend.last_passes, self.backend.last_note
-        return dets
-
-    def __call__(self, frame: Frame) -> Detections:
-        tracks = None
-        if self.model is not None:
-            ids, boxes, hits = self.model.predicted_boxes(frame)
-            tracks = (ids, boxes, hits)
-        return self.detect_frame(frame_image(frame), CameraGeometry.from_frame(frame), frame.timestamp, tracks)
 
     def _restart_if_needed(self, size: tuple[int, int], timestamp: float) -> bool:
         gap = None if self._last_t is None else timestamp - self._last_t
@@ -125,32 +94,31 @@ class StreamPose:
         return restart
 
     def detect_frame(self, image: np.ndarray, geometry: CameraGeometry | None, timestamp: float,
-                     tracks: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> Detections:
+                     tracks: PredictedTracks | None = None) -> Detections:
         """The persons in ``image`` (H, W, 3) uint8 RGB, px of that image, at ``timestamp`` s.
 
-        tracks: ``(ids (T,), predicted boxes (T, 4) px, hits (T,))`` of the live tracks in this
-        frame (the model's prediction); None: no tracks.
+        tracks: the live tracks where the model expects them in this frame; None: no tracks.
         """
-        b, cfg = self.backend, self.config
+        b, cfg = self.network, self.config
         height, width = image.shape[:2]
         cold = self._restart_if_needed((height, width), float(timestamp)) and cfg.stream.cold_start
         first = full_pass(width, height, cfg)
         low: list[Detections] = []
-        settings = b.decoding
+        settings = self.decoding
         fixed = None if b.dynamic else b.input_size
         run = partial(run_level, b.infer_many, image, fixed_input=fixed, settings=settings, config=cfg,
                       low=low if cfg.cascade.enabled else None)
         parts = run([first])
         line = HeightLine.fit(self._fit_boxes, cfg.fit_min_people, height)
         tiles, note = band_tiles(width, height, cfg, geometry, line)
-        ids, predicted, hits = tracks if tracks is not None else (np.zeros(0, np.int64), np.zeros((0, 4)),
-                                                                 np.zeros(0, np.int64))
-        ids, predicted, hits = self._with_untracked(ids, np.asarray(predicted, float).reshape(-1, 4), hits)
+        tracks = tracks if tracks is not None else PredictedTracks.none()
+        ids, predicted, hits = self._with_untracked(tracks.ids, tracks.boxes, tracks.hits)
         unseen = self.finder.unseen_s(ids, timestamp)
         known, last = self.finder.search_boxes(ids, predicted, cfg.stream.track_max_shift)
         rows = tracks_at_risk(known, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
-        early = candidates(concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled else Detections.empty()
-        early_crops = candidate_placements(early, (height, width), cfg.cascade, cfg.stream.mosaic_size)
+        early = (candidates(Detections.concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled
+                 else Detections.empty())
+        early_crops = candidate_placements(early, (height, width), cfg.cascade, cfg.stream.packed_size)
         ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])
         track_crops, plan = self._plan_tracks((known[rows], last[rows]), early_crops, (height, width),
                                               (units(first.input_size), np.array([t.units for t in tiles]), ages))
@@ -160,13 +128,13 @@ class StreamPose:
         parts += run(steps)
         for i in chosen:
             self._tile_seen[tiles[i].key] = timestamp
-        dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, max_detections=b.max_detections)
+        dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, self.merge, b.max_detections)
         extra, passes, found_tracks, verified = self._packed(image, dets, low, (known, last), held, track_crops,
-                                                             plan.mosaics + (cfg.cascade.max_units if cold else 0),
+                                                             plan.packed + (cfg.cascade.max_units if cold else 0),
                                                              settings)
         if len(extra):
             dets = merge_detections([(dets, np.zeros(len(dets), bool)), (extra, np.zeros(len(extra), bool))],
-                                    max_detections=b.max_detections)
+                                    self.merge, b.max_detections)
         self.finder.update(ids, known, dets.boxes, timestamp, cfg.stream.missed_iou)
         tracked = known[ids >= 0]
         free = iou_matrix(dets.boxes, tracked).max(axis=1) <= cfg.stream.missed_iou if len(tracked) and len(dets) \
@@ -188,24 +156,24 @@ class StreamPose:
         (K, 4) px each, most at risk first) and the frame's plan; ``costs``: the whole-frame
         pass's units, the band tiles' units and ages (s). The first of these the plan pays for
         in full: the usual crops, the usual crops with neighbours joined
-        (:func:`~pedenv.pose.mosaic.merge_crops`), the crowd's smaller crops, those joined; per
+        (:func:`~pedenv.detection.packing.merge_crops`), the crowd's smaller crops, those joined; per
         crop the rows of ``boxes`` it holds."""
         cfg = self.config
-        mosaic = cfg.stream.mosaic_size
+        packed = cfg.stream.packed_size
         searched, last = (np.asarray(b, float).reshape(-1, 4) for b in boxes)
         for person_px, margin, edge_px in cfg.stream.crop_styles:
-            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, mosaic, also,
+            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, packed, also,
                                          cfg.stream.crop_min_width), edge_px=edge_px)
                      for box, also in zip(searched, last)]
             for crops, groups in self._arrangements(apart, crowd=person_px == cfg.stream.crowd_person_px):
-                needed = len({p.mosaic for p in pack_tallest_first(crops, mosaic)})
-                with_cascade = pack_tallest_first(crops + early_crops, mosaic,
-                                                  max_mosaics=needed + cfg.cascade.max_units)
-                wanted = max(needed, len({p.mosaic for p in with_cascade}))
-                per_mosaic = mosaic_units(with_cascade, mosaic, self._trim)
-                plan = plan_frame(costs[0], per_mosaic, wanted, costs[1], costs[2], self._dt, cfg.stream,
+                needed = len({p.packed for p in pack_tallest_first(crops, packed)})
+                with_cascade = pack_tallest_first(crops + early_crops, packed,
+                                                  max_inputs=needed + cfg.cascade.max_units)
+                wanted = max(needed, len({p.packed for p in with_cascade}))
+                per_packed = packed_units(with_cascade, packed, self._trim)
+                plan = plan_frame(costs[0], per_packed, wanted, costs[1], costs[2], self._dt, cfg.stream,
                                   self.bank.credit)
-                if plan.mosaics >= needed:
+                if plan.packed >= needed:
                     return (crops, groups), plan
         return (crops, groups), plan
 
@@ -215,9 +183,9 @@ class StreamPose:
         apart = (crops, [[i] for i in range(len(crops))])
         if not crowd or not self.config.stream.merge_crops:
             return [apart]
-        mosaic = self.config.stream.mosaic_size
-        joined = merge_crops(crops, self.config.stream.merge_scale_ratio, mosaic)
-        needed = [len({p.mosaic for p in pack_tallest_first(c, mosaic)}) for c in (joined[0], crops)]
+        packed = self.config.stream.packed_size
+        joined = merge_crops(crops, self.config.stream.merge_scale_ratio, packed)
+        needed = [len({p.packed for p in pack_tallest_first(c, packed)}) for c in (joined[0], crops)]
         return [joined if needed[0] <= needed[1] else apart]
 
     def _with_untracked(self, ids: np.ndarray, predicted: np.ndarray,
@@ -239,14 +207,14 @@ class StreamPose:
         in the room left (best score first). boxes: all tracks' search boxes and last detections
         ((T, 4) px each); rows: per crop of ``track_crops``, the rows of the tracks it holds."""
         cfg = self.config
-        mosaic = cfg.stream.mosaic_size
-        cands = candidates(concat(low), dets, cfg.cascade) if cfg.cascade.enabled else Detections.empty()
-        cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), cfg.cascade, mosaic)
-        tracks = sorted(pack_tallest_first(track_crops[0], mosaic, max_mosaics=limit), key=lambda p: p.item)
-        placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, mosaic, max_mosaics=limit)
+        packed = cfg.stream.packed_size
+        cands = candidates(Detections.concat(low), dets, cfg.cascade) if cfg.cascade.enabled else Detections.empty()
+        cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), cfg.cascade, packed)
+        tracks = sorted(pack_tallest_first(track_crops[0], packed, max_inputs=limit), key=lambda p: p.item)
+        placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, packed, max_inputs=limit)
         if not placements:
             return Detections.empty(), [], 0, 0
-        results, passes = run_mosaics(self.backend.infer_many, image, placements, mosaic, settings, trim=self._trim)
+        results, passes = run_packed(self.network.infer_many, image, placements, packed, settings, trim=self._trim)
         n = len(tracks)
         track_parts = [(int(row), r) for p, r in zip(placements, results) if p.item < n
                        for row in rows[tracks[p.item].item]]
@@ -254,8 +222,4 @@ class StreamPose:
         cand_parts = [(p, r) for p, r in zip(placements, results) if p.item >= n]
         verified = confirmed(cands, [p.item - n for p, _ in cand_parts], [p for p, _ in cand_parts],
                              [r for _, r in cand_parts], cfg.cascade)
-        return concat([found, verified]), passes, len(found), len(verified)
-
-    def describe(self) -> dict:
-        """The backend's description with the stream's accounts: how the budget was spent."""
-        return {**self.backend.describe(), "stream": self.accounts.to_dict()}
+        return Detections.concat([found, verified]), passes, len(found), len(verified)

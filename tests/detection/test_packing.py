@@ -1,4 +1,4 @@
-"""Packed crops: packing, rendering, and persons found in a mosaic landing at the right image pixels."""
+"""Packed crops: packing, rendering, and persons found in a packed landing at the right image pixels."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 
 from pedenv.datasets.mot17 import read_sequence
-from pedenv.pose.mosaic import (
+from pedenv.detection.packing import (
     GAP_PX,
     Crop,
     crop_around,
     cut_by_inner_edge,
     merge_crops,
-    mosaic_units,
     pack,
     pack_tallest_first,
+    packed_units,
     render,
     unpack,
     used_size,
@@ -26,7 +26,7 @@ MOSAIC = (384, 640)
 
 
 def person_in_mosaic(box_image: np.ndarray, placement) -> np.ndarray:
-    """Where the image box (4,) px lies in the mosaic, input px."""
+    """Where the image box (4,) px lies in the packed, input px."""
     x0, y0 = placement.crop.region[:2]
     ox, oy = placement.offset
     s = placement.crop.scale
@@ -38,7 +38,7 @@ def test_ten_far_people_fit_one_input_without_overlapping():
     boxes = [np.array([100.0 + 140 * i, 400, 118 + 140 * i, 445]) for i in range(10)]  # 45 px tall people
     crops = [crop_around(b, (900, 1600), 96.0, 0.35, 3.5, MOSAIC) for b in boxes]
     placed = pack(crops, MOSAIC)
-    assert len(placed) == 10 and {p.mosaic for p in placed} == {0}
+    assert len(placed) == 10 and {p.packed for p in placed} == {0}
     rects = [(p.offset[0], p.offset[1], p.offset[0] + p.crop.size[1], p.offset[1] + p.crop.size[0]) for p in placed]
     for i, a in enumerate(rects):
         assert a[0] >= GAP_PX and a[1] >= GAP_PX and a[2] <= MOSAIC[1] and a[3] <= MOSAIC[0]
@@ -48,9 +48,9 @@ def test_ten_far_people_fit_one_input_without_overlapping():
 
 
 def test_pack_keeps_order_and_limits_the_mosaics():
-    crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(12)]  # 300x200 input px each: 3 per mosaic
-    placed = pack(crops, MOSAIC, max_mosaics=2)
-    assert [p.item for p in placed] == list(range(6)) and [p.mosaic for p in placed] == [0, 0, 0, 1, 1, 1]
+    crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(12)]  # 300x200 input px each: 3 per packed input
+    placed = pack(crops, MOSAIC, max_inputs=2)
+    assert [p.item for p in placed] == list(range(6)) and [p.packed for p in placed] == [0, 0, 0, 1, 1, 1]
     assert pack([Crop((0, 0, 700, 100), 1.0)], MOSAIC) == []  # larger than the input: left out
 
 
@@ -74,10 +74,10 @@ def test_a_packed_input_is_trimmed_to_the_room_its_crops_use():
     assert [p.offset for p in placed] == [(GAP_PX, GAP_PX), (GAP_PX + 75 + GAP_PX, GAP_PX)]
     # extent: 4 + 120 = 124 rows, 4 + 75 + 4 + 60 = 143 columns, the gap after them, up to 32 px
     assert used_size(placed, MOSAIC) == (128, 160)
-    assert mosaic_units(placed, MOSAIC, trim=True) == pytest.approx(128 * 160 / (384 * 640))
-    assert mosaic_units(placed, MOSAIC, trim=False) == 1.0
-    full = pack([Crop((0, 0, 200, 100), 3.0)] * 4, MOSAIC)  # four 300x600: two mosaics, each whole
-    assert {used_size([p for p in full if p.mosaic == m], MOSAIC) for m in (0, 1)} == {(320, 608)}  # 308 x 608
+    assert packed_units(placed, MOSAIC, trim=True) == pytest.approx(128 * 160 / (384 * 640))
+    assert packed_units(placed, MOSAIC, trim=False) == 1.0
+    full = pack([Crop((0, 0, 200, 100), 3.0)] * 4, MOSAIC)  # four 300x600: two packed inputs, each whole
+    assert {used_size([p for p in full if p.packed == m], MOSAIC) for m in (0, 1)} == {(320, 608)}  # 308 x 608
     image = np.random.default_rng(0).integers(0, 255, (200, 300, 3), dtype=np.uint8)
     trimmed = render(image, placed, used_size(placed, MOSAIC))
     np.testing.assert_array_equal(trimmed, render(image, placed, MOSAIC)[:128, :160])  # the same crops
@@ -126,9 +126,9 @@ def mot17_boxes(sequence: str, frame: int) -> tuple[np.ndarray, tuple[int, int]]
 def test_tallest_first_packs_a_real_crowd_into_fewer_inputs(sequence, frame, first_fit, tallest_first):
     boxes, size = mot17_boxes(sequence, frame)
     crops = [crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
-    assert len({p.mosaic for p in pack(crops, MOSAIC)}) == first_fit
+    assert len({p.packed for p in pack(crops, MOSAIC)}) == first_fit
     placed = pack_tallest_first(crops, MOSAIC)
-    assert len(placed) == len(boxes) and len({p.mosaic for p in placed}) == tallest_first
+    assert len(placed) == len(boxes) and len({p.packed for p in placed}) == tallest_first
     assert sorted(p.item for p in placed) == list(range(len(boxes)))
 
 
@@ -136,13 +136,13 @@ def test_denser_track_crops_hold_a_real_crowd_in_two_inputs():
     boxes, size = mot17_boxes("MOT17-04-FRCNN", 2)  # the crowd the whole-frame pass misses at night
     old = [crop_around(b, size, 96.0, 0.35, 3.5, MOSAIC) for b in boxes]
     new = [crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
-    assert len(pack_tallest_first(old, MOSAIC, max_mosaics=2)) == 26  # of 42: 4 inputs for all
-    assert len(pack_tallest_first(new, MOSAIC, max_mosaics=2)) == 42
+    assert len(pack_tallest_first(old, MOSAIC, max_inputs=2)) == 26  # of 42: 4 inputs for all
+    assert len(pack_tallest_first(new, MOSAIC, max_inputs=2)) == 42
 
 
 def test_with_a_limit_the_first_crops_in_priority_order_are_kept():
     crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(5)] + [Crop((0, 0, 50, 50), 1.0)]
-    placed = pack_tallest_first(crops, MOSAIC, max_mosaics=1)  # 3 tall ones fill the input's width
+    placed = pack_tallest_first(crops, MOSAIC, max_inputs=1)  # 3 tall ones fill the input's width
     assert sorted(p.item for p in placed) == [0, 1, 2, 5]  # the small one still fits beside them
 
 

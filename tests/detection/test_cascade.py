@@ -5,10 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from pedenv.detection.cascade import accept, candidates
+from pedenv.detection.config import CascadeConfig, DetectionConfig, StreamConfig
 from pedenv.errors import InputError
-from pedenv.pose.cascade import accept, candidates
-from pedenv.pose.stream_config import CascadeConfig, StreamConfig
-from pedenv.pose.tiling import DetectionConfig
 from pedenv.records import Detections
 
 #: Measured on MOT17-13 frame 1: far finds 2 of its 8 people 40-80 px tall (1 false positive),
@@ -54,7 +53,7 @@ def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, c
     ("stream", {"budget_units": 0.5}, "detection.stream.budget_units"),  # below one pass
     ("stream", {"scan_period_s": 0.0}, "detection.stream.scan_period_s"),
     ("stream", {"scan_period_s": math.nan}, "detection.stream.scan_period_s"),
-    ("stream", {"mosaic_width": 600}, "detection.stream.mosaic_width"),
+    ("stream", {"packed_width": 600}, "detection.stream.packed_width"),
     ("stream", {"cold_start": "yes"}, "detection.stream.cold_start"),
     ("stream", {"credit_units": -1.0}, "detection.stream.credit_units"),
     ("stream", {"credit_units": math.nan}, "detection.stream.credit_units"),
@@ -96,10 +95,10 @@ def test_the_cascade_finds_more_small_people_on_a_real_frame(pose_cache):
     from dataclasses import replace
     from pathlib import Path
 
+    from pedenv.detection import create_detector
     from pedenv.evaluation.detections import match_detections, mot17_samples
     from pedenv.images import read_image_rgb
     from pedenv.pose.models import find_onnx_model
-    from pedenv.pose.onnx_backend import OnnxPose
 
     root = Path(__file__).resolve().parents[2].parent / "shared" / "samples" / "real" / "mot17"
     sample = next(s for s in mot17_samples(root) if s.name == "MOT17-13-FRCNN/000001")
@@ -109,7 +108,7 @@ def test_the_cascade_finds_more_small_people_on_a_real_frame(pose_cache):
     for cascade in (False, True):
         config = DetectionConfig.named("far")
         config = replace(config, cascade=replace(config.cascade, enabled=cascade))
-        pose = OnnxPose(find_onnx_model(None, cache=pose_cache), detection=config)
+        pose = create_detector("onnx", model_path=find_onnx_model(None, cache=pose_cache), detection=config)
         dets = pose.detect(image, sample.geometry)
         match = match_detections(sample, dets.boxes, dets.scores)
         found[cascade] = (int((match.hit & small).sum()), match.false_positives)

@@ -3,7 +3,7 @@
 A small, far person often scores below the network's threshold in a pass where they are
 40-80 px tall. Such candidates (scores ``min_score`` up to the threshold, boxes of the
 sizes the cascade is for, not a duplicate of a person already kept) are cropped, zoomed
-about x3 and packed several to one network input (:mod:`pedenv.pose.mosaic`); a candidate
+about x3 and packed several to one network input (:mod:`pedenv.detection.packing`); a candidate
 is kept only when the zoomed pass finds a whole, plausible skeleton at the same place, and
 the zoomed detection (sharper keypoints) replaces it. Settings: :class:`CascadeConfig`.
 """
@@ -12,26 +12,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from pedenv.boxes import iou_matrix
-from pedenv.pose.merge import merge_detections
-from pedenv.pose.mosaic import Placement, crop_around, pack, run_mosaics
+from pedenv.boxes import containment_matrix, iou_matrix
+from pedenv.detection.config import CascadeConfig
+from pedenv.detection.merge import merge_detections
+from pedenv.detection.packing import Placement, crop_around, pack, run_packed
+from pedenv.detection.tiling import Pass
 from pedenv.pose.postprocess import DecodeSettings, InferMany
-from pedenv.pose.stream_config import CascadeConfig
-from pedenv.pose.tiling import Pass
 from pedenv.records import Detections
 
 #: A candidate overlapping a kept person by more than this IoU, or lying this much inside one, is that person.
 DUPLICATE_IOU = 0.3
 DUPLICATE_CONTAINMENT = 0.6
-
-
-def concat(parts: list[Detections]) -> Detections:
-    """One :class:`Detections` of several (image px)."""
-    parts = [d for d in parts if len(d)]
-    if not parts:
-        return Detections.empty()
-    return Detections(*(np.concatenate([getattr(d, k) for d in parts])
-                        for k in ("keypoints", "confidences", "boxes", "scores")))
 
 
 def candidates(low: Detections, kept: Detections, config: CascadeConfig) -> Detections:
@@ -44,13 +35,9 @@ def candidates(low: Detections, kept: Detections, config: CascadeConfig) -> Dete
     low = low.take((heights >= config.min_height_px) & (heights <= config.max_height_px)
                    & (low.scores >= config.min_score))
     if len(low) and len(kept):
-        iou = iou_matrix(low.boxes, kept.boxes)
-        lo, ke = low.boxes, kept.boxes
-        iw = np.clip(np.minimum(lo[:, None, 2], ke[None, :, 2]) - np.maximum(lo[:, None, 0], ke[None, :, 0]), 0, None)
-        ih = np.clip(np.minimum(lo[:, None, 3], ke[None, :, 3]) - np.maximum(lo[:, None, 1], ke[None, :, 1]), 0, None)
-        area = np.maximum((lo[:, 2] - lo[:, 0]) * (lo[:, 3] - lo[:, 1]), 1e-9)
-        inside = (iw * ih / area[:, None]).max(axis=1)
-        low = low.take((iou.max(axis=1) <= DUPLICATE_IOU) & (inside <= DUPLICATE_CONTAINMENT))
+        iou = iou_matrix(low.boxes, kept.boxes).max(axis=1)
+        inside = containment_matrix(low.boxes, kept.boxes).max(axis=1)
+        low = low.take((iou <= DUPLICATE_IOU) & (inside <= DUPLICATE_CONTAINMENT))
     if len(low) > 1:
         low = merge_detections([(low, np.zeros(len(low), bool))])
     return low.take(np.argsort(-low.scores, kind="stable"))
@@ -69,23 +56,23 @@ def accept(candidate_box: np.ndarray, found: Detections, cut: np.ndarray, config
 
 
 def candidate_placements(cands: Detections, image_size: tuple[int, int], config: CascadeConfig,
-                         mosaic_size: tuple[int, int]) -> list:
+                         packed_size: tuple[int, int]) -> list:
     """One crop per candidate (image px boxes ``cands.boxes``), zoomed to ``person_px``."""
-    return [crop_around(b, image_size, config.person_px, config.margin, config.max_zoom, mosaic_size)
+    return [crop_around(b, image_size, config.person_px, config.margin, config.max_zoom, packed_size)
             for b in cands.boxes]
 
 
 def verify(infer: InferMany, image: np.ndarray, cands: Detections, config: CascadeConfig,
-           mosaic_size: tuple[int, int], settings: DecodeSettings) -> tuple[Detections, list[Pass]]:
+           packed_size: tuple[int, int], settings: DecodeSettings) -> tuple[Detections, list[Pass]]:
     """The candidates (image px) that the zoomed pass confirms, as found there (image px), and the
-    passes run (at most ``config.max_units`` mosaics over ``image`` (H, W, 3) uint8 RGB)."""
+    passes run (at most ``config.max_units`` packed inputs over ``image`` (H, W, 3) uint8 RGB)."""
     if not len(cands):
         return Detections.empty(), []
     image_size = (image.shape[0], image.shape[1])
-    crops = candidate_placements(cands, image_size, config, mosaic_size)
-    placements = pack(crops, mosaic_size, max_mosaics=config.max_units)
+    crops = candidate_placements(cands, image_size, config, packed_size)
+    placements = pack(crops, packed_size, max_inputs=config.max_units)
     rows = [p.item for p in placements]
-    results, passes = run_mosaics(infer, image, placements, mosaic_size, settings)
+    results, passes = run_packed(infer, image, placements, packed_size, settings)
     return confirmed(cands, rows, placements, results, config), passes
 
 
@@ -95,4 +82,4 @@ def confirmed(cands: Detections, rows: list[int], placements: list[Placement],
     kept = []
     for row, _, (found, cut) in zip(rows, placements, results):
         kept.append(found.take(accept(cands.boxes[row], found, cut, config)))
-    return concat(kept)
+    return Detections.concat(kept)

@@ -5,14 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from pedenv.detection.config import DetectionConfig
+from pedenv.detection.geometry import CameraGeometry, far_band
+from pedenv.detection.levels import plan_passes
+from pedenv.detection.tiling import fit_input
 from pedenv.errors import InputError
-from pedenv.pose.levels import plan_passes
-from pedenv.pose.tiling import (
-    CameraGeometry,
-    DetectionConfig,
-    far_band,
-    fit_input,
-)
 
 NUSCENES_K = np.array([[1266.4, 0, 816.3], [0, 1266.4, 491.5], [0, 0, 1]])
 KITTI_K = np.array([[707.05, 0, 604.08], [0, 707.05, 180.51], [0, 0, 1]])

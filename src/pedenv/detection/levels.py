@@ -19,16 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.pose.tiling import (
-    Band,
-    CameraGeometry,
-    DetectionConfig,
-    Pass,
-    far_band,
-    full_pass,
-    ground_rows,
-    tile_region,
-)
+from pedenv.detection.config import DetectionConfig
+from pedenv.detection.geometry import Band, CameraGeometry, far_band, ground_rows
+from pedenv.detection.tiling import Pass, full_pass, tile_region
 
 
 @dataclass(frozen=True)
@@ -93,10 +86,12 @@ class HeightLine:
         return Band(top, bottom) if bottom - top >= 8 else None
 
 
-def calibrated(geometry: CameraGeometry | None, width: int, height: int, config: DetectionConfig) -> bool:
-    """Whether the calibration places the levels: usable, and the ground ``near_m``..``far_m``
-    away lies in the image (else the rows come from a fit, or the whole image)."""
-    return far_band(geometry, width, height, config) is not None
+def placing_geometry(geometry: CameraGeometry | None, width: int, height: int,
+                     config: DetectionConfig) -> CameraGeometry | None:
+    """``geometry`` when its calibration places the levels (usable, and the ground ``near_m``..``far_m``
+    away lies in the image), else None (the rows come from a fit, or the whole image). Derived once
+    per frame and handed to :func:`plan_level`."""
+    return geometry if far_band(geometry, width, height, config) is not None else None
 
 
 def calibrated_rows(level: Level, geometry: CameraGeometry, width: int, height: int,
@@ -115,11 +110,11 @@ def calibrated_rows(level: Level, geometry: CameraGeometry, width: int, height: 
 def plan_level(level: Level, width: int, height: int, config: DetectionConfig, geometry: CameraGeometry | None,
                line: HeightLine | None, finest: bool = False) -> tuple[list[Pass], str]:
     """The passes of one finer level and a note on how its rows were chosen (no passes: skipped).
+    geometry: the camera when its calibration places the levels (:func:`placing_geometry`), else None.
     ``finest``: the pyramid's finest level, which covers the whole image when its rows are
     unknown (at a scale lowered to ``whole_image_finest_mpx``) instead of being skipped."""
     scale = level.scale
-    if calibrated(geometry, width, height, config):
-        assert geometry is not None
+    if geometry is not None:
         band, how = calibrated_rows(level, geometry, width, height, config), "calibration"
     elif line is not None:
         margin = config.fit_margin * min(level.max_height_px, height) + config.band_margin_px
@@ -146,11 +141,12 @@ def plan_passes(width: int, height: int, config: DetectionConfig,
     passes = [full_pass(width, height, config)]
     if config.mode == "fast":
         return passes, "one pass"
-    notes = [] if calibrated(geometry, width, height, config) else [
+    placing = placing_geometry(geometry, width, height, config)
+    notes = [] if placing is not None else [
         "no calibration" if geometry is None else "no usable calibration (camera looks down or up, or the band "
                                                   "misses the image)"]
     for level in pyramid(width, height, config)[1:]:  # the finest level's whole-image fallback waits for the fit
-        more, note = plan_level(level, width, height, config, geometry, None)
+        more, note = plan_level(level, width, height, config, placing, None)
         passes += more
         notes.append(note)
     return passes, "; ".join(notes)

@@ -2,9 +2,9 @@
 
 import pytest
 
+from pedenv.detection.config import DetectionConfig
 from pedenv.evaluation.detections import match_detections, mot17_samples
 from pedenv.images import read_image_rgb
-from pedenv.pose.tiling import DetectionConfig
 
 from shared_paths import REAL_SAMPLES
 
@@ -18,15 +18,16 @@ def test_a_dark_frame_fits_the_x2_rows_to_less_sure_people_and_finds_more(pose_c
     of the 9 people >= 80 px then counted); counting those scoring >= fit_min_score (0.35) fits
     the rows: the same people found (measured: 13 of 13 >= 80 px both ways) for half the cost
     (measured: 17.0 vs 35.4 units)."""
+    from pedenv.detection import create_detector
     from pedenv.pose.models import find_onnx_model
-    from pedenv.pose.onnx_backend import OnnxPose
 
     sample = next(s for s in mot17_samples(REAL_SAMPLES / "mot17") if s.name == "MOT17-10-FRCNN/000002")
     image = read_image_rgb(sample.image_path)
     tall = sample.required & (sample.heights >= 80)
     found, notes, units = {}, {}, {}
     for fit_min_score in (0.5, DetectionConfig().fit_min_score):
-        pose = OnnxPose(find_onnx_model(None, cache=pose_cache), detection=DetectionConfig(fit_min_score=fit_min_score))
+        pose = create_detector("onnx", model_path=find_onnx_model(None, cache=pose_cache),
+                               detection=DetectionConfig(fit_min_score=fit_min_score))
         dets = pose.detect(image)  # no calibration: the finer levels' rows come from the fit
         found[fit_min_score] = int(match_detections(sample, dets.boxes, dets.scores).hit[tall].sum())
         notes[fit_min_score] = pose.last_note

@@ -6,17 +6,12 @@ import numpy as np
 import pytest
 
 from pedenv.boxes import iou_matrix
-from pedenv.config import Config, RedetectConfig
+from pedenv.config import Config
+from pedenv.detection import RedetectConfig
+from pedenv.detection.redetect import Redetection, crop_pass, missed_tracks
+from pedenv.detection.track_search import nearest_person, nearest_track
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.redetect import (
-    RedetectingPose,
-    crop_pass,
-    missed_tracks,
-    nearest_person,
-    nearest_track,
-    with_redetection,
-)
 from pedenv.records import Detections, EgoPose, Frame
 
 ON = RedetectConfig(enabled=True)
@@ -116,57 +111,55 @@ def _person(box) -> Detections:
     return Detections(kp[None], np.full((1, 17), 0.9), np.array([box], float), np.array([0.9]))
 
 
-def test_predicted_boxes_move_with_the_tracks_image_velocity(camera):
+def test_predicted_tracks_move_with_the_tracks_image_velocity(camera):
     model = PedestrianEnvironmentModel(configure(Config(), "fused"))  # predict_motion on
     ego = EgoPose.from_xy_yaw(0.0, 0.0, 0.0)
     frame = Frame(0, 0.0, camera, ego, _person([800, 400, 840, 500]))
-    assert model.predicted_boxes(frame)[1].shape == (0, 4)
+    assert model.predict_tracks(frame).boxes.shape == (0, 4)
     model.update(frame)
     model.update(Frame(1, 0.1, camera, ego, _person([810, 400, 850, 500])))
-    ids, boxes, hits = model.predicted_boxes(Frame(2, 0.2, camera, ego))
-    assert ids.tolist() == [1] and hits.tolist() == [2]
+    tracks = model.predict_tracks(Frame(2, 0.2, camera, ego))
+    assert tracks.ids.tolist() == [1] and tracks.hits.tolist() == [2]
     # smoothed velocity 0.5 * 10 px per frame: the tracker's own prediction
-    np.testing.assert_allclose(boxes[0], [815, 400, 855, 500])
+    np.testing.assert_allclose(tracks.boxes[0], [815, 400, 855, 500])
     np.testing.assert_allclose(model.tracks.tracks.boxes[0], [810, 400, 850, 500])  # the model is unchanged
-
-
-def test_backends_without_a_network_are_left_alone():
-    from pedenv.pose import create_pose_backend
-
-    model = PedestrianEnvironmentModel()
-    truth = create_pose_backend("ground-truth")
-    assert with_redetection(truth, model, ON) is truth
-    assert with_redetection(truth, model, RedetectConfig()) is truth
 
 
 @pytest.mark.onnx_model
 def test_a_person_the_main_pass_missed_is_found_again_in_a_crop():
     from pedenv.datasets.kitti import KittiTrackingDataset
-    from pedenv.pose import create_pose_backend
+    from pedenv.detection import create_detector
+    from pedenv.pose.postprocess import frame_image
 
     from shared_paths import REAL_SAMPLES
 
     config = configure(Config(), "fused")
-    backend = create_pose_backend("onnx", score_threshold=config.tracking.pose_score_threshold)
+    backend = create_detector("onnx", score_threshold=config.tracking.pose_score_threshold)
+    assert backend.redetection is None  # no re-detection unless the run's settings turn it on
+    on = create_detector("onnx", score_threshold=config.tracking.pose_score_threshold, redetect=config.redetect)
+    assert on.redetection is not None and on.redetection.config == config.redetect
+    assert create_detector("onnx", detection="stream", redetect=config.redetect).redetection is None  # its own search
     frame = next(KittiTrackingDataset(REAL_SAMPLES / "kitti" / "tracking_mini").frames("0016"))
     main = backend(frame)
     model = PedestrianEnvironmentModel(config)
-    redetect = with_redetection(backend, model, config.redetect)
-    assert isinstance(redetect, RedetectingPose)
+    redetect = Redetection(config.redetect)
     for k in range(2):  # two frames with everyone seen: tracks with 2 hits
         before = model.update(replace(frame, index=k, timestamp=0.1 * k, detections=main))
     # the third frame's main pass "misses" the tallest person who started a track (score >= 0.25)
     tallest = int(np.argmax(np.where(main.scores >= 0.25, main.boxes[:, 3] - main.boxes[:, 1], 0.0)))
     missing = main.take(np.delete(np.arange(len(main)), tallest))
     third = replace(frame, index=2, timestamp=0.2)
-    found = redetect.redetect(third, missing)
+    tracks, image = model.predict_tracks(third), frame_image(third)
+    size = (image.shape[0], image.shape[1])
+    found = redetect(backend.network, image, size, missing, tracks, backend.decoding)
     assert redetect.crops == 1 and redetect.redetected == 1
     assert len(found) == len(main)
     assert iou_matrix(main.boxes[[tallest]], found.boxes).max() > 0.8
     iou = iou_matrix(found.boxes, found.boxes)
     assert (np.triu(iou, 1) <= 0.5).all()  # nobody twice
     # with everyone detected, no crop runs and nothing changes
-    assert len(redetect.redetect(third, main)) == len(main) and redetect.crops == 1
+    assert len(redetect(backend.network, image, size, main, tracks, backend.decoding)) == len(main)
+    assert redetect.crops == 1
     # every track continues, the re-found person's included, and no new one starts
     state = model.update(replace(third, detections=found))
     assert len(before.pedestrians) >= 6

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from pedenv.pose.merge import MergeConfig, keypoint_similarity, merge_detections
-from pedenv.pose.multipass import cut_by_inner_edge, spans_the_region
+from pedenv.detection.config import MergeConfig
+from pedenv.detection.merge import keypoint_similarity, merge_detections
+from pedenv.detection.passes import cut_by_inner_edge, spans_the_region
 from pedenv.records import Detections
 
 # A standing person 100 px tall, COCO-17, box (0, 0)-(40, 100) before shifting.
