@@ -65,7 +65,6 @@ def in_the_loop(frames: int, rounds: int) -> None:
     import pedenv.detection.passes as multipass
     from pedenv.config import Config
     from pedenv.detection import create_detector
-    from pedenv.detection.redetect import with_redetection
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.recordings.footage import load_recording
 
@@ -87,8 +86,8 @@ def in_the_loop(frames: int, rounds: int) -> None:
     work = Path(tempfile.mkdtemp())
     rec = run_pipeline.write_recording(run_pipeline.VTEST, work, frames, (900, 1600))
     backend = create_detector("onnx", detection="fast", score_threshold=Config().tracking.pose_score_threshold,
-                                  threads=2)
-    backend.infer = clocked("network", backend.infer)
+                              threads=2, redetect=Config().redetect)
+    backend.network.infer = clocked("network", backend.network.infer)
     for r in range(rounds + 1):  # the first warms up
         wall.clear()
         cpu.clear()
@@ -96,7 +95,7 @@ def in_the_loop(frames: int, rounds: int) -> None:
         model = PedestrianEnvironmentModel(cfg)
         frames_in = iter(load_recording(**rec).frames())
         read = clocked("read frame", partial(next, frames_in, None))
-        detect = clocked("detect", with_redetection(backend, model, cfg.redetect))
+        detect = clocked("detect", lambda frame, model=model: backend(frame, model.predict_tracks(frame)))
         update = clocked("model.update", model.update)
         n, start = 0, time.perf_counter()
         while (frame := read()) is not None:

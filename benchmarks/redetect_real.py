@@ -100,17 +100,19 @@ def run_sequence(frames, gt, main, config, backend):
     import motmetrics as mm
 
     from pedenv.boxes import iou_matrix
-    from pedenv.detection.redetect import RedetectingPose
+    from pedenv.detection.redetect import Redetection
     from pedenv.model import PedestrianEnvironmentModel
+    from pedenv.pose.postprocess import frame_image
 
     model = PedestrianEnvironmentModel(config)
-    redetect = RedetectingPose(backend, model, config.redetect) if config.redetect.enabled else None
+    redetect = Redetection(config.redetect) if config.redetect.enabled else None
     acc = mm.MOTAccumulator(auto_id=True)
     seconds, duplicates = 0.0, 0
     for frame, (ids, boxes), det in zip(frames, gt, main):
         if redetect is not None:
             t0 = time.perf_counter()
-            det = redetect.redetect(frame, det)
+            image = frame_image(frame)
+            det = redetect(backend.network, image, image.shape[:2], det, model.predict_tracks(frame), backend.decoding)
             seconds += time.perf_counter() - t0
         peds = model.update(replace(frame, detections=det)).pedestrians
         dist = 1.0 - iou_matrix(boxes, peds.boxes)
@@ -166,8 +168,7 @@ def main(argv=None) -> int:
     from pedenv.pose.postprocess import frame_image
 
     fused = configure(Config(), "fused")
-    backend = create_detector("onnx", detection=args.detection,
-                                  score_threshold=fused.tracking.pose_score_threshold)
+    backend = create_detector("onnx", detection=args.detection, score_threshold=fused.tracking.pose_score_threshold)
     image_only = {"ground_gate": 0.0, "memory_s": 0.0}
     settings = {k: json.loads(v) for k, v in (item.split("=", 1) for item in args.set)}
     cache = load_cache(args.cache)

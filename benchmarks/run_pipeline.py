@@ -88,7 +88,7 @@ class NetworkClock:
     and ``network_runs``: passes run side by side count once, as the group's wall time)."""
 
     def __init__(self, backend) -> None:
-        self.backend = backend if hasattr(backend, "infer") else backend.backend  # stream: its OnnxPose
+        self.backend = backend.network  # the detector's OnnxPose
         self.reset()
 
     def reset(self) -> None:
@@ -110,17 +110,15 @@ def network_alone(rec: dict, backend, clock: NetworkClock) -> dict:
     from dataclasses import replace
 
     from pedenv.config import Config
-    from pedenv.detection.redetect import with_redetection
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.recordings.footage import load_recording
 
     cfg = Config()
     clock.reset()
     frames, model = 0, PedestrianEnvironmentModel(cfg)
-    middle = with_redetection(backend, model, cfg.redetect)
     start, cpu = time.perf_counter(), time.process_time()
     for frame in load_recording(**rec).frames():
-        model.update(replace(frame, detections=middle(frame)))
+        model.update(replace(frame, detections=backend(frame, model.predict_tracks(frame))))
         frames += 1
     return {"frames": frames, "ms_per_frame": 1e3 * (time.perf_counter() - start) / frames,
             "network_ms_per_frame": 1e3 * clock.seconds / frames,
@@ -170,7 +168,7 @@ def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, thread
     detection = variants[0]["detection"]
     score = Config().tracking.pose_score_threshold
     backends = {side: create_detector("onnx", detection=detection, score_threshold=score, threads=threads,
-                                          **({} if side is None else {"side_by_side": side}))
+                                      redetect=Config().redetect, **({} if side is None else {"side_by_side": side}))
                 for side in side_by_side}
     alone, runs = [], []
     for r in range(rounds):

@@ -37,7 +37,7 @@ def main(argv=None) -> int:
     from pedenv.boxes import iou_matrix
     from pedenv.datasets import mot17
     from pedenv.detection import create_detector
-    from pedenv.detection.packing import crop_around, pack_tallest_first, run_mosaics
+    from pedenv.detection.packing import crop_around, pack_tallest_first, run_packed
     from pedenv.detection.track_search import PLAUSIBLE_KEYPOINT_CONF, SURE_SCORE
     from pedenv.images import read_image_rgb
 
@@ -61,7 +61,7 @@ def main(argv=None) -> int:
                 crops = [replace(crop_around(b, size, s[0], s[1], 3.5, (384, 640)), edge_px=s[2]) for b in predicted]
                 placed = pack_tallest_first(crops, (384, 640))
                 decoding = replace(backend.decoding, score_threshold=args.score_threshold)
-                results, passes = run_mosaics(backend.infer_many, image, placed, (384, 640), decoding)
+                results, passes = run_packed(backend.network.infer_many, image, placed, (384, 640), decoding)
                 inputs[s] += len(passes)
                 for p, (found, cut) in zip(placed, results):
                     b = np.digitize(heights[p.item], BINS) - 1

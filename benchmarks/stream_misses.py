@@ -5,7 +5,7 @@
 
 ``DIR`` is ``benchmarks/stream_video.py --keep DIR``'s folder (the recording and far's run). The
 script runs ``stream`` over the recording as ``pedenv run`` does (:func:`pedenv.apps.run.run_recording`,
-the fused preset) with its :class:`~pedenv.detection.stream.StreamPose` traced: per frame the tracks it
+the fused preset) with its :class:`~pedenv.detection.stream.StreamState` traced: per frame the tracks it
 was given, the whole-frame pass's persons, the band tiles it ran, the tracks it searched in packed
 crops and whether their crop got into an input, and the persons it returned. Every person far
 reported (a track's detection, IoU >= 0.5 with none of stream's reports in that frame) is then put
@@ -44,22 +44,22 @@ NEAR_IOU = 0.3
 
 
 class Trace:
-    """Per frame what :class:`~pedenv.detection.stream.StreamPose` saw and did (lists of dicts, frame order)."""
+    """Per frame what :class:`~pedenv.detection.stream.StreamState` saw and did (lists of dicts, frame order)."""
 
     def __init__(self) -> None:
         self.frames: list[dict] = []
 
     def install(self) -> None:
-        """Wrap ``StreamPose.detect_frame``, ``StreamPose._packed`` and the module's ``run_level``."""
+        """Wrap ``StreamState.detect_frame``, ``StreamState._packed`` and the module's ``run_level``."""
         import pedenv.detection.stream as stream
         from pedenv.detection.packing import pack_tallest_first
 
-        trace, run_level, detect_frame, packed = self, stream.run_level, stream.StreamPose.detect_frame, \
-            stream.StreamPose._packed
-        run_mosaics = stream.run_mosaics
+        trace, run_level, detect_frame, packed = self, stream.run_level, stream.StreamState.detect_frame, \
+            stream.StreamState._packed
+        run_packed = stream.run_packed
 
         def traced_run_mosaics(*args, **kwargs):
-            results, passes = run_mosaics(*args, **kwargs)
+            results, passes = run_packed(*args, **kwargs)
             trace.frames[-1]["crop_found"] = [(d.boxes.copy(), d.scores.copy(), cut.copy()) for d, cut in results]
             return results, passes
 
@@ -71,7 +71,8 @@ class Trace:
             return parts
 
         def traced_detect_frame(self, image, geometry, timestamp, tracks=None):
-            ids, boxes, hits = tracks if tracks is not None else (np.zeros(0), np.zeros((0, 4)), np.zeros(0))
+            ids, boxes, hits = (tracks.ids, tracks.boxes, tracks.hits) if tracks is not None else (
+                np.zeros(0), np.zeros((0, 4)), np.zeros(0))
             trace.frames.append({"t": float(timestamp), "ids": np.asarray(ids).copy(),
                                  "predicted": np.asarray(boxes, float).reshape(-1, 4).copy(),
                                  "hits": np.asarray(hits).copy(), "passes": [], "searched": np.zeros((0, 4)),
@@ -84,8 +85,8 @@ class Trace:
             return dets
 
         def traced_packed(self, image, dets, low, boxes, rows, track_crops, limit, settings):
-            mosaic = self.config.stream.mosaic_size
-            placed = {p.item for p in pack_tallest_first(track_crops[0], mosaic, max_mosaics=limit)}
+            size = self.config.stream.packed_size
+            placed = {p.item for p in pack_tallest_first(track_crops[0], size, max_inputs=limit)}
             searched = boxes[0]
             rows_in = [r for i, group in enumerate(rows) if i in placed for r in group]
             rows_out = [r for i, group in enumerate(rows) if i not in placed for r in group]
@@ -95,9 +96,9 @@ class Trace:
 
         self.cold_seen = 0
         stream.run_level = traced_run_level
-        stream.run_mosaics = traced_run_mosaics
-        stream.StreamPose.detect_frame = traced_detect_frame
-        stream.StreamPose._packed = traced_packed
+        stream.run_packed = traced_run_mosaics
+        stream.StreamState.detect_frame = traced_detect_frame
+        stream.StreamState._packed = traced_packed
 
 
 def _hit(box: np.ndarray, boxes: np.ndarray, iou: float) -> bool:
