@@ -4,7 +4,7 @@ Defaults are the paper's (Holzbock et al., Sections III-B and III-C) where it gi
 ``Config.to_dict()`` is saved next to every result (``config.json``) so a run can be
 repeated: the tracker, the position methods, the behaviour cues, and the sections of the
 stages above the core that register theirs (:func:`register_section`: the detection stage's
-``redetect``, ``detection`` and ``merge``, from :mod:`pedenv.detection.config`, which
+``redetect`` and ``detection``, from :mod:`pedenv.detection.config`, which
 ``import pedenv`` loads). The core imports nothing of those stages. Every section checks its fields with
 :mod:`pedenv.validation` (type, finiteness, a range with a documented upper bound) and
 raises :class:`~pedenv.errors.InputError` naming ``section.field``; ``Config.load`` reads
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -64,10 +64,12 @@ class Config:
     field existed) loads as ``fused``; the fields it names keep their values.
 
     behaviour: the behaviour cues (:class:`pedenv.behaviour.config.BehaviourConfig`; on in ``fused``).
-    redetect, detection, merge: the detection stage's sections (``onnx`` backend,
+    redetect, detection: the detection stage's sections (``onnx`` backend,
     :mod:`pedenv.detection.config`, registered by it), saved with the run so its detection is
     recorded; ``pedenv run --detection`` sets ``detection.mode``. A saved config without them
-    (written before they were) loads their defaults.
+    (written before they were) loads their defaults; one with settings that are no longer
+    settings loads when they hold today's fixed values (:func:`drop_retired`; the ``merge``
+    section is such a one).
     """
 
     method: str = DEFAULT_METHOD
@@ -78,7 +80,6 @@ class Config:
     fused: FusedConfig = None  # type: ignore[assignment]
     redetect: Any = None  # the detection stage's sections (register_section): pedenv.detection.config
     detection: Any = None
-    merge: Any = None
     behaviour: BehaviourConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
@@ -103,6 +104,15 @@ class Config:
         lists stand for the tuple fields (``fused.cues``, ``detection.level_scales``)."""
         if not isinstance(data, dict):
             raise InputError(f"a config must be an object of sections, got {type(data).__name__}")
+        for name in sorted(set(data) & set(RETIRED_SECTIONS)):  # a section that is no longer saved
+            values = data[name]
+            if not isinstance(values, dict):
+                raise InputError(f"config.{name} must be an object of fields, got {type(values).__name__}")
+            extra = set(values) - set(RETIRED_SECTIONS[name])
+            if extra:
+                raise InputError(f"unknown field(s) in config.{name}: {_names(extra)}")
+            drop_retired(name, values, RETIRED_SECTIONS[name])
+        data = {k: v for k, v in data.items() if k not in RETIRED_SECTIONS}
         unknown = set(data) - set(SECTIONS) - {"method"}
         if unknown:
             raise InputError(f"unknown config section(s): {_names(unknown)}; valid: method, {', '.join(SECTIONS)}")
@@ -113,6 +123,7 @@ class Config:
             values = data.get(name, {})
             if not isinstance(values, dict):
                 raise InputError(f"config.{name} must be an object of fields, got {type(values).__name__}")
+            values = drop_retired(name, values, RETIRED_FIELDS.get(name, {}))
             names = {f.name for f in dataclasses.fields(kind)}
             extra = set(values) - names
             if extra:
@@ -162,13 +173,42 @@ def _names(names: Iterable[object]) -> str:
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
                              "fused": FusedConfig, "behaviour": BehaviourConfig}
 #: The sections a :class:`Config` has that a stage above the core registers.
-STAGE_SECTIONS = ("redetect", "detection", "merge")
+STAGE_SECTIONS = ("redetect", "detection")
 
 
-def register_section(name: str, kind: type) -> None:
+#: Per section, fields that are no longer settings and their fixed values (:func:`drop_retired`).
+RETIRED_FIELDS: dict[str, Mapping[str, object]] = {}
+#: Whole sections that are no longer settings, with their fields' fixed values.
+RETIRED_SECTIONS: dict[str, Mapping[str, object]] = {}
+
+
+def register_section(name: str, kind: type, retired: Mapping[str, object] | None = None) -> None:
     """Make ``kind`` (a frozen dataclass of validated fields) the class of section ``name``
-    (one of :data:`STAGE_SECTIONS`), saved in ``config.json`` and loaded from it. Called by
+    (one of :data:`STAGE_SECTIONS`), saved in ``config.json`` and loaded from it; ``retired``: its
+    fields that are no longer settings and their fixed values. Called by
     :mod:`pedenv.detection.config` when it is imported (``import pedenv`` does)."""
     if name not in STAGE_SECTIONS:
         raise ValueError(f"unknown stage section {name!r}; valid: {', '.join(STAGE_SECTIONS)}")
     SECTIONS[name] = kind
+    RETIRED_FIELDS[name] = dict(retired or {})
+
+
+def retire_section(name: str, retired: Mapping[str, object]) -> None:
+    """Section ``name`` is no longer saved; a ``config.json`` holding it at the fixed values ``retired`` still loads."""
+    RETIRED_SECTIONS[name] = dict(retired)
+
+
+def drop_retired(where: str, values: dict, retired: Mapping[str, object]) -> dict:
+    """``values`` (a section of a saved config, named ``where``) without the fields that are no
+    longer settings; such a field holding another value than its fixed one is refused, named."""
+    for field, fixed in retired.items():
+        if field in values:
+            given = values[field]
+            if isinstance(given, bool) or isinstance(fixed, bool):
+                same = given is fixed
+            else:
+                same = isinstance(given, int | float) and given == fixed
+            if not same:
+                raise InputError(f"{where}.{field} is no longer a setting (fixed at {fixed!r}); remove it from "
+                                 f"the config, got {shown(given)}")
+    return {k: v for k, v in values.items() if k not in retired}

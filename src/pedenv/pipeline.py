@@ -32,9 +32,9 @@ class Pipeline:
     config: the run's settings (default ``Config()``, the fused method).
     detector: anything called ``detector(frame, tracks)`` that returns the frame's
         :class:`~pedenv.records.Detections` (:func:`pedenv.detection.create_detector`); None: the
-        ``onnx`` network in ``stream`` mode with the config's detection, merge and re-detection
-        settings, as ``pedenv run`` runs without ``--detection`` (``config.detection.mode`` is then
-        set to ``stream`` in :attr:`config`, which is what to save with the results).
+        ``onnx`` network in ``stream`` mode with the config's detection and track-search settings,
+        as ``pedenv run`` runs without ``--detection`` (``config.detection.mode`` is then set to
+        ``stream`` in :attr:`config`, which is what to save with the results).
 
     ``detection_s`` and ``model_s`` add up the seconds spent detecting and in the model's update,
     over ``frames`` frames.
@@ -46,7 +46,7 @@ class Pipeline:
             config = config.replace(detection={"mode": "stream"})
             detector = create_detector("onnx", **backend_options(
                 "onnx", detection=config.detection, score_threshold=config.tracking.pose_score_threshold,
-                merge=config.merge, redetect=config.redetect))
+                redetect=config.redetect))
         self.config, self.detector = config, detector
         self.model = PedestrianEnvironmentModel(config)
         self.detection_s = self.model_s = 0.0

@@ -132,7 +132,7 @@ def test_credit_from_quiet_frames_is_spent_on_a_crowded_one():
 def test_tracks_at_risk_order(unseen, hits, found, expected):
     predicted = np.array([[100, 100, 140, 200], [300, 100, 340, 200], [500, 100, 540, 200]], float)
     rows = tracks_at_risk(predicted, np.array(hits), np.array(unseen), np.array(found, float).reshape(-1, 4),
-                          (480, 640), StreamConfig(track_min_hits=2))
+                          (480, 640), min_hits=2)
     assert rows.tolist() == expected
 
 

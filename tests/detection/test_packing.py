@@ -11,7 +11,6 @@ from pedenv.detection.packing import (
     GAP_PX,
     Crop,
     crop_around,
-    cut_by_inner_edge,
     merge_crops,
     pack,
     pack_tallest_first,
@@ -169,20 +168,10 @@ def test_a_crop_can_cover_a_second_place_at_the_first_boxs_scale():
     assert crop.scale == pytest.approx(96.0 / 60.0)
 
 
-def test_a_narrow_box_gets_a_crop_as_wide_as_a_walkers_stride():
+def test_a_narrow_box_gets_a_crop_around_its_own_width():
     box = np.array([254.0, 220, 284, 309])  # 89 px tall, 30 px wide: legs together (vtest.avi frame 0)
     plain = crop_around(box, (576, 768), 96.0, 0.35, 3.5, MOSAIC)
-    wide = crop_around(box, (576, 768), 96.0, 0.35, 3.5, MOSAIC, min_width=0.6)
-    assert plain.region == (222, 188, 316, 341)
-    # 0.6 x 89 = 53.4 px wide about the centre (269), then 0.35 x 89 = 31.15 px of context on each side
-    assert wide.region == (211, 188, 327, 341) and wide.scale == plain.scale
-    # the same person one frame later, legs apart (far's box): cut by the plain crop's edge, whole in the wide one
-    later = np.array([[257.3, 219.8, 308.2, 308.1]])
-    for crop, cut in ((plain, True), (wide, False)):
-        assert bool(cut_by_inner_edge(later, crop.region, (576, 768), 16.0 / crop.scale)[0]) is cut
-    wide_box = np.array([100.0, 100, 160, 190])  # already wider than 0.6 of its height: unchanged
-    assert crop_around(wide_box, (576, 768), 96.0, 0.35, 3.5, MOSAIC, min_width=0.6) == \
-        crop_around(wide_box, (576, 768), 96.0, 0.35, 3.5, MOSAIC)
+    assert plain.region == (222, 188, 316, 341)  # 0.35 x 89 = 31.15 px of context on each side
 
 
 @pytest.mark.parametrize("second, ratio, joined", [

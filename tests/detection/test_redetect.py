@@ -66,30 +66,24 @@ def test_nearest_track_measures_in_each_tracks_heights():
 
 def test_crop_pass_holds_the_box_with_context_inside_the_image():
     # a 60 px person: margin 0.5 -> 60 + 60 px tall, min 128 px; scale 2 -> input 256
-    step = crop_pass(np.array([500.0, 200, 524, 260]), (370, 1224), ON)
+    step = crop_pass(np.array([500.0, 200, 524, 260]), (370, 1224))
     x0, y0, x1, y1 = step.region
     assert (x1 - x0, y1 - y0) == (128, 128)
     assert x0 <= 500 and x1 >= 524 and y0 <= 200 and y1 >= 260
     assert step.input_size == (256, 256)
     # near the image corner: moved inside, never past the edges
-    x0, y0, x1, y1 = crop_pass(np.array([-10.0, 300, 20, 380]), (370, 1224), ON).region
+    x0, y0, x1, y1 = crop_pass(np.array([-10.0, 300, 20, 380]), (370, 1224)).region
     assert x0 == 0 and y1 == 370 and y1 - y0 == 160
     # a tall person: the input is capped at max_input_px, a multiple of 32
-    step = crop_pass(np.array([100.0, 0, 300, 600]), (1080, 1920), ON)
+    step = crop_pass(np.array([100.0, 0, 300, 600]), (1080, 1920))
     assert max(step.input_size) == 640 and all(s % 32 == 0 for s in step.input_size)
     assert step.region[3] - step.region[1] == 960  # 600 + 2 * 300, clamped to max_crop_px
 
 
 @pytest.mark.parametrize("field, value, message", [
-    ("crop_margin", -0.1, r"redetect.crop_margin must be in \[0.0, 2.0\]"),
-    ("crop_scale", 5.0, "redetect.crop_scale"),
+    ("match_distance", -0.1, r"redetect.match_distance must be in \[0.0, 2.0\]"),
     ("max_crops", 65, r"redetect.max_crops must be an integer in \[0, 64\]"),
-    ("min_crop_px", 2000, "redetect.min_crop_px .* must not exceed redetect.max_crop_px"),
-    ("max_input_px", 650, "redetect.max_input_px must be a multiple of 32"),
-    ("missed_iou", 1.5, "redetect.missed_iou"),
     ("match_distance", 3.0, "redetect.match_distance"),
-    ("match_height_ratio", 0.5, "redetect.match_height_ratio"),
-    ("min_hits", 0, "redetect.min_hits"),
     ("enabled", "yes", "redetect.enabled must be true or false"),
 ])
 def test_bad_settings_are_refused(field, value, message):

@@ -1,6 +1,5 @@
 """``stream`` detection with the real network on KITTI tracking 0016's real consecutive frames."""
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -86,11 +85,10 @@ def test_packed_inputs_trimmed_to_their_crops_find_the_tracks_for_fewer_units(po
 
     images, samples = frames
     model = find_onnx_model(None, cache=pose_cache)
-    whole = DetectionConfig.named("stream")
-    whole = replace(whole, stream=replace(whole.stream, trim_packed=False))
     found, packed_units = {}, {}
-    for trim, config in ((True, "stream"), (False, whole)):
-        pose = create_detector("onnx", model_path=model, detection=config)
+    for trim in (True, False):
+        pose = create_detector("onnx", model_path=model, detection="stream")
+        pose.stream.trim = trim
         hits, units = 0, 0.0
         for i, (image, sample) in enumerate(zip(images, samples)):
             truth = sample.boxes[sample.required]
@@ -153,13 +151,8 @@ def test_persons_no_track_holds_are_searched_again_in_the_next_frame(stream, fra
     assert held >= 6  # measured: 7 (of the frame's 8 pedestrians)
     # those the whole-frame pass misses (all 7) are searched in packed inputs and found there again
     assert accounts["tracks_at_risk_searched"] >= 6 and accounts["tracks_found_in_crops"] >= 6  # measured: 7, 7
-    from pedenv.detection import create_detector
 
-    config = replace(stream.config, stream=replace(stream.config.stream, search_untracked=False))
-    off = create_detector("onnx", model_path=stream.network.model_path, detection=config)
-    off.detect_frame(images[0], samples[0].geometry, 0.0)
-    off.detect_frame(images[0], samples[0].geometry, 0.1)
-    assert len(off.stream._untracked) == 0 and off.describe()["stream"]["tracks_at_risk_searched"] == 0
+
 
 
 def test_packed_inputs_are_cut_on_the_cpu_only(stream):

@@ -121,7 +121,7 @@ def _make_backend(pose: PoseOptions, config: Config) -> PoseBackend:
     cfg = detection_mode(config, name, pose.detection)
     return create_detector(name, **backend_options(
         name, pose.model, pose.input_size, cfg.detection if pose.detection else None,
-        cfg.tracking.pose_score_threshold, cfg.merge, redetect=cfg.redetect))
+        cfg.tracking.pose_score_threshold, redetect=cfg.redetect))
 
 
 def _complete(folder: Path, partial: bool = False) -> dict:

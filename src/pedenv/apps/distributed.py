@@ -54,7 +54,7 @@ def make_backend(spec: BackendSpec, config: Config) -> PoseBackend:
     """The backend of ``spec``: created by name (onnx: with ``config``'s merge and re-detection
     settings), called as a factory, or ``spec`` itself."""
     if isinstance(spec, str):
-        return create_detector(spec, merge=config.merge, redetect=config.redetect)
+        return create_detector(spec, redetect=config.redetect)
     if isinstance(spec, PoseBackend):
         return spec
     return spec()

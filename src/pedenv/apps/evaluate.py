@@ -116,4 +116,4 @@ def _matches_writer(path: Path | None, sinks: Sinks) -> MatchesTableWriter | Non
 
 def _backend(spec: str | PoseBackend, config: Config) -> PoseBackend:
     """The backend ``spec`` names (onnx: with the run's merge and re-detection settings), or ``spec``."""
-    return create_detector(spec, merge=config.merge, redetect=config.redetect) if isinstance(spec, str) else spec
+    return create_detector(spec, redetect=config.redetect) if isinstance(spec, str) else spec

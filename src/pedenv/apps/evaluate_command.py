@@ -101,7 +101,7 @@ def onnx_backend(data: Dataset, cfg: Config, pose: PoseOptions) -> tuple[Config,
     threshold = {} if cfg.tracking.pose_score_threshold is None else {
         "score_threshold": cfg.tracking.pose_score_threshold}
     cfg = cfg.replace(detection={"mode": pose.detection or "far"})
-    return cfg, partial(create_detector, "onnx", detection=cfg.detection, merge=cfg.merge, redetect=cfg.redetect,
+    return cfg, partial(create_detector, "onnx", detection=cfg.detection, redetect=cfg.redetect,
                         device=pose.device, **threshold)
 
 

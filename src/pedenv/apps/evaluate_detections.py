@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pedenv.detection.config import STREAM_MIN_HITS
 from pedenv.evaluation.detections import DetectionSample, load_samples, match_detections, summarize
 from pedenv.evaluation.metrics import strict_json
 from pedenv.images import read_image_rgb
@@ -81,14 +82,13 @@ def stream_frame(pose: Detector, image: np.ndarray, sample: DetectionSample,
                  previous: tuple[DetectionSample, Detections] | None) -> Detections:
     """``pose.detect_frame`` on one sample as the next frame of its sequence; the tracks stand-in
     is the previous sample's persons where it is the frame before in the same sequence (not moved,
-    ``track_min_hits`` hits each); a sample of another sequence, or of none, restarts the stream.
+    ``STREAM_MIN_HITS`` hits each); a sample of another sequence, or of none, restarts the stream.
     ``image``: (H, W, 3) uint8 RGB."""
     if previous is None or not sample.sequence or previous[0].sequence != sample.sequence:
         pose.restart()
         return pose.detect_frame(image, sample.geometry, sample.timestamp)
     boxes = previous[1].boxes
-    assert pose.config is not None  # a stream detector has its config
-    hits = np.full(len(boxes), pose.config.stream.track_min_hits)
+    hits = np.full(len(boxes), STREAM_MIN_HITS)
     tracks = PredictedTracks(np.arange(len(boxes)), boxes, hits)
     return pose.detect_frame(image, sample.geometry, sample.timestamp, tracks)
 

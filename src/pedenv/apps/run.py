@@ -137,7 +137,7 @@ def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording)
         input_size = choose_input_size(rec.camera.width, rec.camera.height)
     return create_detector(name, **backend_options(
         name, pose.model, input_size, cfg.detection if pose.detection else None,
-        cfg.tracking.pose_score_threshold, cfg.merge, device=pose.device, redetect=cfg.redetect))
+        cfg.tracking.pose_score_threshold, device=pose.device, redetect=cfg.redetect))
 
 
 def _check_ended_early(rec: Recording | BagRecording, stats: PipelineStats, summary: dict) -> None:

@@ -2,7 +2,7 @@
 
 ``pose/`` is the network (one pass over an image, and raw runs of inputs); this package decides
 where it looks. :func:`create_detector` picks the mode (:mod:`pedenv.detection.detector`); the
-settings are :mod:`pedenv.detection.config` (sections ``detection``, ``redetect``, ``merge`` of
+settings are :mod:`pedenv.detection.config` (sections ``detection`` and ``redetect`` of
 ``config.json``). Each word below means one thing in the code, the settings and the docs.
 
 pass
@@ -19,7 +19,7 @@ band
     the coarser levels found.
 tile
     A piece of a level's band at most ``tile_width`` input px wide (neighbours overlap by
-    ``tile_overlap``), so that each person is whole in one tile.
+    ``TILE_OVERLAP``), so that each person is whole in one tile.
 unit
     The cost measure: the network input pixels of one 384x640 input (:data:`~pedenv.detection.tiling.UNIT_PX`).
 crop
@@ -49,8 +49,8 @@ merge
     (:mod:`pedenv.detection.merge`).
 """
 
-from pedenv.detection.config import CascadeConfig, DetectionConfig, MergeConfig, RedetectConfig, StreamConfig
+from pedenv.detection.config import CascadeConfig, DetectionConfig, RedetectConfig, StreamConfig
 from pedenv.detection.detector import Detector, backend_options, create_detector
 
-__all__ = ["CascadeConfig", "DetectionConfig", "Detector", "MergeConfig", "RedetectConfig", "StreamConfig",
+__all__ = ["CascadeConfig", "DetectionConfig", "Detector", "RedetectConfig", "StreamConfig",
            "backend_options", "create_detector"]

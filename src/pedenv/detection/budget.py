@@ -21,15 +21,19 @@ tracks' further packed inputs, so the average over many frames stays at the budg
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.detection.config import DetectionConfig, StreamConfig
+from pedenv.detection.config import BAND_ROW_STRETCH, STREAM_MIN_HITS, STREAM_MISSED_IOU, DetectionConfig, StreamConfig
 from pedenv.detection.geometry import CameraGeometry
 from pedenv.detection.levels import HeightLine, placing_geometry, plan_level, pyramid
 from pedenv.detection.tiling import Pass, round32, units
 from pedenv.detection.track_search import MIN_BOX_HEIGHT_PX, searchable
+
+#: Most tiles of one level's band in ``stream``'s rotation (it visits them over several frames; a
+#: bound against an absurd band only: 64 packed-input-wide tiles cover a 4K frame at x2 twice over).
+BAND_MAX_TILES = 64
 
 
 @dataclass(frozen=True)
@@ -49,13 +53,13 @@ def band_tiles(width: int, height: int, config: DetectionConfig, geometry: Camer
     """The finer levels' tiles of a ``width`` x ``height`` frame, each at most one packed input
     (``stream.packed_width`` px wide), over the rows from the calibration, the fitted ``line``
     or the whole image (:func:`pedenv.detection.levels.plan_level`), and a note per level."""
-    small = replace(config, tile_width=config.stream.packed_width, max_tiles=64)
     tiles, notes = [], []
     geometry = placing_geometry(geometry, width, height, config)  # the ground band, once per frame
     levels = pyramid(width, height, config)[1:]
     for li, level in enumerate(levels):
-        passes, note = plan_level(level, width, height, small, geometry, line, finest=li == len(levels) - 1)
-        passes = one_row(passes, config.stream.band_row_stretch)
+        passes, note = plan_level(level, width, height, config, geometry, line, finest=li == len(levels) - 1,
+                                  tiles=(config.stream.packed_width, BAND_MAX_TILES))
+        passes = one_row(passes, BAND_ROW_STRETCH)
         tiles += [Tile((li, ti), p) for ti, p in enumerate(passes)]
         notes.append(note)
     return tiles, "; ".join(notes)
@@ -81,20 +85,20 @@ def one_row(passes: list[Pass], stretch: float) -> list[Pass]:
 
 
 def tracks_at_risk(predicted: np.ndarray, hits: np.ndarray, unseen_s: np.ndarray, found: np.ndarray,
-                   image_size: tuple[int, int], config: StreamConfig) -> np.ndarray:
+                   image_size: tuple[int, int], min_hits: int = STREAM_MIN_HITS) -> np.ndarray:
     """Rows of the tracks to look for in crops, most at risk first.
 
     predicted: (T, 4) px, the tracks' expected boxes; hits: (T,) detections so far;
     unseen_s: (T,) seconds since each was last detected; found: (N, 4) px, the whole-frame
     pass's boxes; image_size: (height, width). A track is looked for when detected at least
-    ``track_min_hits`` times, mostly inside the image, and overlapped by no found box by
+    ``min_hits`` times, mostly inside the image, and overlapped by no found box by
     more than ``missed_iou``. Order: longest unseen first, then most hits.
     """
     predicted = np.asarray(predicted, float).reshape(-1, 4)
     if not len(predicted):
         return np.zeros(0, np.int64)
-    usable = searchable(predicted, hits, found, image_size, min_hits=config.track_min_hits,
-                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=config.missed_iou)
+    usable = searchable(predicted, hits, found, image_size, min_hits=min_hits,
+                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=STREAM_MISSED_IOU)
     rows = np.flatnonzero(usable)
     return rows[np.lexsort((-np.asarray(hits)[rows], -np.asarray(unseen_s, float)[rows]))]
 

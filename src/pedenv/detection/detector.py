@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from pedenv.detection.config import DetectionConfig, MergeConfig, RedetectConfig
+from pedenv.detection.config import EDGE_MARGIN_PX, DetectionConfig, RedetectConfig
 from pedenv.detection.geometry import CameraGeometry
 from pedenv.detection.levels import plan_passes
 from pedenv.detection.passes import detect_levels
@@ -37,7 +37,7 @@ class Detector:
 
     network: the network (its passes' score threshold, NMS and max persons are its own).
     config: the mode and its settings (:class:`DetectionConfig`); None: one pass at the
-        network's input size. merge: the merge of the passes (None: its defaults).
+        network's input size.
     redetect: the re-detection of missed tracks (``far``, ``fast``, one pass; on when
         ``redetect.enabled``) and the track search's matching (all modes, ``stream`` included);
         None: its defaults, re-detection off.
@@ -45,14 +45,13 @@ class Detector:
 
     name = "onnx"
 
-    def __init__(self, network: OnnxPose, config: DetectionConfig | None = None, *, merge: MergeConfig | None = None,
+    def __init__(self, network: OnnxPose, config: DetectionConfig | None = None, *,
                  redetect: RedetectConfig | None = None) -> None:
         self.network, self.config = network, config
-        self.merge = merge if merge is not None else MergeConfig()
         match = redetect if redetect is not None else RedetectConfig()
         #: The passes' decoding; the cut margin at inner edges is the config's (none for one pass).
-        self.decoding = replace(network.decoding, edge_margin_px=config.edge_margin_px if config is not None else 0.0)
-        self.stream = (StreamState(network, config, self.decoding, self.merge, match)
+        self.decoding = replace(network.decoding, edge_margin_px=EDGE_MARGIN_PX if config is not None else 0.0)
+        self.stream = (StreamState(network, config, self.decoding, match)
                        if config is not None and config.mode == "stream" else None)
         self.redetection = Redetection(match) if self.stream is None and match.enabled else None
         #: The passes the last frame ran, and how their rows were chosen.
@@ -87,7 +86,7 @@ class Detector:
             return net.detect(image_rgb)
         dets, self.last_passes, self.last_note = detect_levels(
             net.infer_many, image_rgb, self.config, geometry, fixed_input=None if net.dynamic else net.input_size,
-            decoding=self.decoding, base_input=net.requested_input, merge=self.merge)
+            decoding=self.decoding, base_input=net.requested_input)
         return dets
 
     def detect_frame(self, image_rgb: np.ndarray, geometry: CameraGeometry | None, timestamp: float,
@@ -131,15 +130,15 @@ class Detector:
 
 
 def create_detector(name: str = "onnx", *, detection: str | DetectionConfig | None = None,
-                    merge: MergeConfig | None = None, redetect: RedetectConfig | None = None,
+                    redetect: RedetectConfig | None = None,
                     **options: Any) -> PoseBackend:  # options: the backend's keywords
     """The detector ``name`` names, in the mode ``detection`` names (the one place that picks it).
 
     ``onnx``: a :class:`Detector` over :class:`~pedenv.pose.onnx_backend.OnnxPose` (``options``:
     its keywords: ``model_path``, ``input_size``, ``device``, ``score_threshold``, ...);
     ``detection`` ``fast``, ``far``, ``stream`` or a :class:`DetectionConfig`; None: ``far``,
-    or one pass when ``input_size`` is given. ``merge`` and ``redetect``: the run's sections
-    (``Config.merge``, ``Config.redetect``). Another backend: as
+    or one pass when ``input_size`` is given. ``redetect``: the run's section (``Config.redetect``:
+    the re-detection and the track search's matching). Another backend: as
     :func:`pedenv.pose.create_pose_backend` makes it (``options`` its keywords).
     """
     if name != "onnx":
@@ -150,13 +149,12 @@ def create_detector(name: str = "onnx", *, detection: str | DetectionConfig | No
         detection = DetectionConfig.named(detection)
     elif detection is not None and not isinstance(detection, DetectionConfig):
         raise InputError(f"detection must be 'fast', 'far', 'stream' or a DetectionConfig, got {detection!r}")
-    return Detector(OnnxPose(**options), detection, merge=merge, redetect=redetect)
+    return Detector(OnnxPose(**options), detection, redetect=redetect)
 
 
 def backend_options(backend: str, model: str | Path | None = None, input_size: int | str | Sequence[int] | None = None,
                     detection: str | DetectionConfig | None = None, score_threshold: float | None = None,
-                    merge: MergeConfig | None = None, device: str = "auto",
-                    redetect: RedetectConfig | None = None) -> dict:
+                    device: str = "auto", redetect: RedetectConfig | None = None) -> dict:
     """Keyword options for :func:`create_detector` ``(backend, ...)`` from a model file, input size,
     detection mode (``fast``, ``far`` or ``stream``, onnx only) and device (``auto``, ``cpu`` or ``cuda``:
     :mod:`pedenv.pose.providers`; ultralytics runs on the CPU, ``cuda`` is refused for it).
@@ -165,15 +163,14 @@ def backend_options(backend: str, model: str | Path | None = None, input_size: i
     dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
     score_threshold: the network's person score threshold (onnx, ultralytics); None keeps
     the backend's own (0.25). The tracker's low-score band needs it lowered
-    (``TrackingConfig.pose_score_threshold``). ``detection`` may be a ``DetectionConfig``,
-    ``merge`` a ``MergeConfig`` and ``redetect`` a ``RedetectConfig`` (onnx; a run's
-    ``Config.detection``, ``Config.merge`` and ``Config.redetect``: the track search is built
-    from the run's saved settings).
+    (``TrackingConfig.pose_score_threshold``). ``detection`` may be a ``DetectionConfig`` and
+    ``redetect`` a ``RedetectConfig`` (onnx; a run's ``Config.detection`` and ``Config.redetect``:
+    the track search is built from the run's saved settings).
     """
     scores = {} if score_threshold is None else {"score_threshold": score_threshold}
     if backend == "onnx":
         return {"model_path": model, "input_size": input_size, "detection": detection, "device": device, **scores,
-                **({} if merge is None else {"merge": merge}), **({} if redetect is None else {"redetect": redetect})}
+                **({} if redetect is None else {"redetect": redetect})}
     if device not in ("auto", "cpu"):
         raise InputError(f"device {device!r} applies to the onnx pose backend; {backend} runs on the CPU")
     if backend == "ultralytics":

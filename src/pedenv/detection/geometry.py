@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from pedenv.detection.config import BAND_MARGIN_PX, MAX_PITCH_DOWN_DEG, MAX_PITCH_UP_DEG, TOP_M
+
 if TYPE_CHECKING:
     from pedenv.detection.config import DetectionConfig
     from pedenv.records import Camera, Frame
@@ -66,17 +68,17 @@ class Band:
     reason: str = ""
 
 
-def usable_calibration(geometry: CameraGeometry | None, config: DetectionConfig) -> bool:
+def usable_calibration(geometry: CameraGeometry | None) -> bool:
     """Whether the calibration can place the far band: given, the camera above the ground,
     tilted down by at most ``max_pitch_down_deg`` and up by at most ``max_pitch_up_deg``."""
     if geometry is None or geometry.height_m <= 0:
         return False
     pitch_down = math.degrees(math.asin(float(np.clip(-geometry.cam_to_level[2, 2], -1.0, 1.0))))
-    return pitch_down <= config.max_pitch_down_deg and -pitch_down <= config.max_pitch_up_deg
+    return pitch_down <= MAX_PITCH_DOWN_DEG and -pitch_down <= MAX_PITCH_UP_DEG
 
 
 def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float, far_m: float,
-                config: DetectionConfig, max_height_px: float = math.inf) -> Band | None:
+                max_height_px: float = math.inf) -> Band | None:
     """Rows where a person ``near_m``..``far_m`` away stands (the ground there up to ``top_m``,
     or up to the height a person ``max_height_px`` tall in the image has there, if lower;
     +-72 deg around the optical axis, plus ``band_margin_px``); None when they miss the image."""
@@ -87,7 +89,7 @@ def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float
     left = np.cross([0.0, 0.0, 1.0], horizontal)
     d = np.geomspace(near_m, far_m, 24)[:, None, None]
     lateral = np.linspace(-3.0, 3.0, 61)[None, :, None] * d  # +-72 deg around the axis
-    head_m = np.minimum(config.top_m, max_height_px * d / float(K[1, 1]))  # (24, 1, 1) metres
+    head_m = np.minimum(TOP_M, max_height_px * d / float(K[1, 1]))  # (24, 1, 1) metres
     z = np.concatenate(np.broadcast_arrays(np.full_like(head_m, -geometry.height_m), head_m - geometry.height_m),
                        axis=2)
     points = d[..., None] * horizontal + lateral[..., None] * left + z[..., None] * np.array([0, 0, 1.0])
@@ -98,8 +100,8 @@ def ground_rows(geometry: CameraGeometry, width: int, height: int, near_m: float
     inside = (uv[:, 0] >= 0) & (uv[:, 0] <= width)
     if not inside.any():
         return None
-    top = int(math.floor(uv[inside, 1].min())) - config.band_margin_px
-    bottom = int(math.ceil(uv[inside, 1].max())) + config.band_margin_px
+    top = int(math.floor(uv[inside, 1].min())) - BAND_MARGIN_PX
+    bottom = int(math.ceil(uv[inside, 1].max())) + BAND_MARGIN_PX
     top, bottom = max(top, 0), min(bottom, height)
     if bottom - top < 8:
         return None  # the band lies above or below the image
@@ -113,9 +115,9 @@ def far_band(geometry: CameraGeometry | None, width: int, height: int, config: D
     ``max_pitch_down_deg`` or up by more than ``max_pitch_up_deg``, a camera below the
     ground, or a band that lies wholly above or below the image.
     """
-    if not usable_calibration(geometry, config):
+    if not usable_calibration(geometry):
         return None
     assert geometry is not None
-    return ground_rows(geometry, width, height, config.near_m, config.far_m, config)
+    return ground_rows(geometry, width, height, config.near_m, config.far_m)
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.boxes import box_areas, intersection_matrix, iou_matrix
-from pedenv.detection.config import MergeConfig
+from pedenv.detection.config import MERGE_CONTAINMENT, MERGE_IOU, MERGE_KEYPOINT_MIN_CONF, MERGE_OKS
 from pedenv.records import Detections
 
 #: COCO keypoint sigmas (nose, eyes, ears, shoulders, elbows, wrists, hips, knees, ankles).
@@ -47,12 +47,7 @@ def keypoint_similarity(kp: np.ndarray, conf: np.ndarray, kps: np.ndarray, confs
     return np.where(n >= 3, sim, 0.0)
 
 
-#: The default merge settings (frozen, shared).
-DEFAULT_MERGE = MergeConfig()
-
-
-def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeConfig = DEFAULT_MERGE,
-                     max_detections: int = 300) -> Detections:
+def merge_detections(parts: list[tuple[Detections, np.ndarray]], max_detections: int = 300) -> Detections:
     """One :class:`Detections` from several passes' detections, duplicates removed.
 
     parts: ``(detections in image px, cut (N,) bool)`` per pass; ``cut`` marks persons touching
@@ -74,9 +69,9 @@ def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeCo
             k = np.asarray(keep)
             iou, contained = _iou_and_containment(boxes[i], boxes[k])
             oks = keypoint_similarity(kps[i], confs[i], kps[k], confs[k], boxes[i], boxes[k],
-                                      config.keypoint_min_confidence)
+                                      MERGE_KEYPOINT_MIN_CONF)
             # a cut person nested in a kept one is a fragment of them, whatever its keypoints say
-            duplicate = (iou > config.iou) | ((contained > config.containment) & ((oks > config.oks) | cut[i]))
+            duplicate = (iou > MERGE_IOU) | ((contained > MERGE_CONTAINMENT) & ((oks > MERGE_OKS) | cut[i]))
             if duplicate.any():
                 continue
         keep.append(int(i))

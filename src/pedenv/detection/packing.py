@@ -71,18 +71,15 @@ def cut_by_inner_edge(boxes: np.ndarray, region: tuple[int, int, int, int], imag
 
 
 def crop_around(box: np.ndarray, image_size: tuple[int, int], person_px: float, margin: float, max_zoom: float,
-                packed_size: tuple[int, int], also: np.ndarray | None = None, min_width: float = 0.0) -> Crop:
+                packed_size: tuple[int, int], also: np.ndarray | None = None) -> Crop:
     """The crop for a person's ``box`` (4,) px in an image of ``image_size`` (height, width):
     ``margin`` times the box height on every side, clipped to the image; scaled so the box is
     ``person_px`` tall (at most ``max_zoom``, and so the crop fits in ``packed_size``).
     ``also`` (4,) px: a second place the person may be (the crop covers both, with the same
-    margin; the scale stays ``box``'s). ``min_width``: the box counts as at least this share of
-    its height wide, about its centre (a walker's box widens within a stride)."""
+    margin; the scale stays ``box``'s)."""
     h, w = image_size
     box = np.asarray(box, float)
     height = max(float(box[3] - box[1]), 1.0)
-    grow = max(0.0, 0.5 * (min_width * height - (box[2] - box[0])))
-    box = box + np.array([-grow, 0.0, grow, 0.0])
     span = box if also is None else np.concatenate([np.minimum(box[:2], also[:2]), np.maximum(box[2:], also[2:])])
     x0, y0 = max(0, int(math.floor(span[0] - margin * height))), max(0, int(math.floor(span[1] - margin * height)))
     x1, y1 = min(w, int(math.ceil(span[2] + margin * height))), min(h, int(math.ceil(span[3] + margin * height)))

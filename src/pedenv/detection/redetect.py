@@ -17,7 +17,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.detection.config import STRIDE, RedetectConfig
+from pedenv.detection.config import (
+    REDETECT_CROP_MARGIN,
+    REDETECT_CROP_SCALE,
+    REDETECT_MAX_CROP_PX,
+    REDETECT_MAX_INPUT_PX,
+    REDETECT_MIN_CROP_PX,
+    REDETECT_MIN_HITS,
+    REDETECT_MISSED_IOU,
+    STRIDE,
+    RedetectConfig,
+)
 from pedenv.detection.merge import merge_detections
 from pedenv.detection.packing import cut_by_inner_edge
 from pedenv.detection.passes import run_passes
@@ -41,31 +51,32 @@ def missed_tracks(predicted: np.ndarray, hits: np.ndarray, detections: np.ndarra
     predicted = np.asarray(predicted, float).reshape(-1, 4)
     if not len(predicted) or config.max_crops == 0:
         return np.zeros(0, np.int64)
-    usable = searchable(predicted, hits, detections, image_size, min_hits=config.min_hits,
-                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=config.missed_iou)
+    usable = searchable(predicted, hits, detections, image_size, min_hits=REDETECT_MIN_HITS,
+                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=REDETECT_MISSED_IOU)
     rows = np.flatnonzero(usable)
     rows = rows[np.argsort(-np.asarray(hits)[rows], kind="stable")]
     return rows[: config.max_crops]
 
 
-def crop_pass(box: np.ndarray, image_size: tuple[int, int], config: RedetectConfig) -> Pass:
+def crop_pass(box: np.ndarray, image_size: tuple[int, int]) -> Pass:
     """The network pass around one predicted ``box`` (4,) px in an image of ``image_size``
-    (height, width): the box with ``crop_margin`` times its height on every side, each side
-    clamped to ``[min_crop_px, max_crop_px]`` and to the image, moved inside the image;
-    scaled by ``crop_scale`` (lowered to fit ``max_input_px``) into a multiple-of-32 input."""
+    (height, width): the box with :data:`~pedenv.detection.config.REDETECT_CROP_MARGIN` times its
+    height on every side, each side clamped to ``[REDETECT_MIN_CROP_PX, REDETECT_MAX_CROP_PX]`` and
+    to the image, moved inside the image; scaled by ``REDETECT_CROP_SCALE`` (lowered to fit
+    ``REDETECT_MAX_INPUT_PX``) into a multiple-of-32 input."""
     h, w = image_size
     box = np.asarray(box, float)
     height = box[3] - box[1]
     sides = []
     for centre, extent, limit in ((0.5 * (box[0] + box[2]), box[2] - box[0], w),
                                   (0.5 * (box[1] + box[3]), height, h)):
-        side = min(max(extent + 2.0 * config.crop_margin * height, config.min_crop_px), config.max_crop_px, limit)
+        side = min(max(extent + 2.0 * REDETECT_CROP_MARGIN * height, REDETECT_MIN_CROP_PX), REDETECT_MAX_CROP_PX, limit)
         start = int(round(min(max(centre - 0.5 * side, 0.0), limit - side)))
         sides.append((start, start + int(round(side))))
     (x0, x1), (y0, y1) = sides
-    scale = min(config.crop_scale, config.max_input_px / max(x1 - x0, y1 - y0))
+    scale = min(REDETECT_CROP_SCALE, REDETECT_MAX_INPUT_PX / max(x1 - x0, y1 - y0))
     size = tuple(max(STRIDE, int(math.ceil(n * scale / STRIDE - 1e-9)) * STRIDE) for n in (y1 - y0, x1 - x0))
-    return Pass((x0, y0, x1, y1), (min(size[0], config.max_input_px), min(size[1], config.max_input_px)), "crop")
+    return Pass((x0, y0, x1, y1), (min(size[0], REDETECT_MAX_INPUT_PX), min(size[1], REDETECT_MAX_INPUT_PX)), "crop")
 
 
 @dataclass
@@ -104,7 +115,7 @@ class Redetection:
         """Per box of ``boxes`` (K, 4) px, the one whole person in the crop around it nearest to it,
         or none; the crops are independent passes (one network call: side by side on the CPU)."""
         image_size = (image.shape[0], image.shape[1])
-        steps = [crop_pass(box, image_size, self.config) for box in boxes]
+        steps = [crop_pass(box, image_size) for box in boxes]
         sizes = [step.input_size if network.dynamic else network.input_size for step in steps]
         found = run_passes(network.infer_many, image, steps, sizes, decoding.score_threshold, decoding.iou_threshold,
                            decoding.max_detections)

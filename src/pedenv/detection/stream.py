@@ -24,7 +24,18 @@ from pedenv.boxes import iou_matrix
 from pedenv.detection.accounts import StreamAccounts
 from pedenv.detection.budget import CreditBank, FramePlan, band_tiles, plan_frame, tracks_at_risk
 from pedenv.detection.cascade import candidate_placements, candidates, confirmed
-from pedenv.detection.config import DetectionConfig, MergeConfig, RedetectConfig
+from pedenv.detection.config import (
+    CASCADE_MAX_ZOOM,
+    CROWD_CROP,
+    FIT_MIN_PEOPLE,
+    FIT_MIN_SCORE,
+    MERGE_SCALE_RATIO,
+    STREAM_MISSED_IOU,
+    TRACK_CROP,
+    TRACK_MAX_SHIFT,
+    DetectionConfig,
+    RedetectConfig,
+)
 from pedenv.detection.geometry import CameraGeometry
 from pedenv.detection.levels import HeightLine
 from pedenv.detection.merge import merge_detections
@@ -47,24 +58,27 @@ class StreamState:
     """What ``stream`` remembers between frames, and the frame's passes (module doc).
 
     network: the pose network that runs the passes; config: a :class:`DetectionConfig` in mode
-    ``stream``; decoding: the passes' score threshold, NMS and cut margin; merge: the merge of the
-    passes; match: the track search's matching (the run's ``redetect`` section).
+    ``stream``; decoding: the passes' score threshold, NMS and cut margin; match: the track
+    search's matching (the run's ``redetect`` section).
     """
 
-    def __init__(self, network: OnnxPose, config: DetectionConfig, decoding: DecodeSettings, merge: MergeConfig,
+    def __init__(self, network: OnnxPose, config: DetectionConfig, decoding: DecodeSettings,
                  match: RedetectConfig) -> None:
-        self.network, self.config, self.decoding, self.merge, self.match = network, config, decoding, merge, match
+        self.network, self.config, self.decoding, self.match = network, config, decoding, match
         self.accounts = StreamAccounts()
+        #: Cut packed inputs to the room their crops use where that pays (:attr:`_trim`).
+        self.trim = True
         self.last_passes: list[Pass] = []
         self.last_note = ""
         self._reset(None)
 
     @property
     def _trim(self) -> bool:
-        """Whether packed inputs are cut to the room their crops use (``stream.trim_packed``, a
-        dynamic model, the CPU: on a GPU a pass costs about the same whatever its size, and every
-        new input shape costs a session and cuDNN's set-up, :meth:`OnnxPose._session_for`)."""
-        return self.config.stream.trim_packed and self.network.dynamic and self.network.provider == CPU
+        """Whether packed inputs are cut to the room their crops use (a dynamic model, the CPU: on a
+        GPU a pass costs about the same whatever its size, and every new input shape costs a session
+        and cuDNN's set-up, :meth:`OnnxPose._session_for`). Measured on KITTI 0016: the tracks found
+        for 1.77 units of packed inputs instead of 2.0 (``tests/detection/test_stream.py``)."""
+        return self.trim and self.network.dynamic and self.network.provider == CPU
 
     def restart(self) -> None:
         """Forget the stream: the next frame is a first frame (a cold start)."""
@@ -106,19 +120,19 @@ class StreamState:
         low: list[Detections] = []
         settings = self.decoding
         fixed = None if b.dynamic else b.input_size
-        run = partial(run_level, b.infer_many, image, fixed_input=fixed, settings=settings, config=cfg,
+        run = partial(run_level, b.infer_many, image, fixed_input=fixed, settings=settings,
                       low=low if cfg.cascade.enabled else None)
         parts = run([first])
-        line = HeightLine.fit(self._fit_boxes, cfg.fit_min_people, height)
+        line = HeightLine.fit(self._fit_boxes, FIT_MIN_PEOPLE, height)
         tiles, note = band_tiles(width, height, cfg, geometry, line)
         tracks = tracks if tracks is not None else PredictedTracks.none()
         ids, predicted, hits = self._with_untracked(tracks.ids, tracks.boxes, tracks.hits)
         unseen = self.finder.unseen_s(ids, timestamp)
-        known, last = self.finder.search_boxes(ids, predicted, cfg.stream.track_max_shift)
-        rows = tracks_at_risk(known, hits, unseen, parts[0][0].boxes, (height, width), cfg.stream)
-        early = (candidates(Detections.concat(low), parts[0][0], cfg.cascade) if cfg.cascade.enabled
+        known, last = self.finder.search_boxes(ids, predicted, TRACK_MAX_SHIFT)
+        rows = tracks_at_risk(known, hits, unseen, parts[0][0].boxes, (height, width))
+        early = (candidates(Detections.concat(low), parts[0][0]) if cfg.cascade.enabled
                  else Detections.empty())
-        early_crops = candidate_placements(early, (height, width), cfg.cascade, cfg.stream.packed_size)
+        early_crops = candidate_placements(early, (height, width), cfg.stream.packed_size)
         ages = np.array([timestamp - self._tile_seen.get(t.key, -math.inf) for t in tiles])
         track_crops, plan = self._plan_tracks((known[rows], last[rows]), early_crops, (height, width),
                                               (units(first.input_size), np.array([t.units for t in tiles]), ages))
@@ -128,19 +142,19 @@ class StreamState:
         parts += run(steps)
         for i in chosen:
             self._tile_seen[tiles[i].key] = timestamp
-        dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, self.merge, b.max_detections)
+        dets = parts[0][0] if len(parts) == 1 else merge_detections(parts, b.max_detections)
         extra, passes, found_tracks, verified = self._packed(image, dets, low, (known, last), held, track_crops,
                                                              plan.packed + (cfg.cascade.max_units if cold else 0),
                                                              settings)
         if len(extra):
             dets = merge_detections([(dets, np.zeros(len(dets), bool)), (extra, np.zeros(len(extra), bool))],
-                                    self.merge, b.max_detections)
-        self.finder.update(ids, known, dets.boxes, timestamp, cfg.stream.missed_iou)
+                                    b.max_detections)
+        self.finder.update(ids, known, dets.boxes, timestamp, STREAM_MISSED_IOU)
         tracked = known[ids >= 0]
-        free = iou_matrix(dets.boxes, tracked).max(axis=1) <= cfg.stream.missed_iou if len(tracked) and len(dets) \
+        free = iou_matrix(dets.boxes, tracked).max(axis=1) <= STREAM_MISSED_IOU if len(tracked) and len(dets) \
             else np.ones(len(dets), bool)
-        self._untracked = dets.boxes[free] if cfg.stream.search_untracked else np.zeros((0, 4))
-        self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= cfg.fit_min_score]])[-FIT_MEMORY:]
+        self._untracked = dets.boxes[free]
+        self._fit_boxes = np.concatenate([self._fit_boxes, dets.boxes[dets.scores >= FIT_MIN_SCORE]])[-FIT_MEMORY:]
         self.last_passes = [first, *steps, *passes]
         self.last_note = ("cold start, whole band; " if cold else "") + note
         if not cold:
@@ -161,11 +175,11 @@ class StreamState:
         cfg = self.config
         packed = cfg.stream.packed_size
         searched, last = (np.asarray(b, float).reshape(-1, 4) for b in boxes)
-        for person_px, margin, edge_px in cfg.stream.crop_styles:
-            apart = [replace(crop_around(box, image_size, person_px, margin, cfg.cascade.max_zoom, packed, also,
-                                         cfg.stream.crop_min_width), edge_px=edge_px)
+        for person_px, margin, edge_px in (TRACK_CROP, CROWD_CROP):
+            apart = [replace(crop_around(box, image_size, person_px, margin, CASCADE_MAX_ZOOM, packed, also),
+                             edge_px=edge_px)
                      for box, also in zip(searched, last)]
-            for crops, groups in self._arrangements(apart, crowd=person_px == cfg.stream.crowd_person_px):
+            for crops, groups in self._arrangements(apart, crowd=person_px == CROWD_CROP[0]):
                 needed = len({p.packed for p in pack_tallest_first(crops, packed)})
                 with_cascade = pack_tallest_first(crops + early_crops, packed,
                                                   max_inputs=needed + cfg.cascade.max_units)
@@ -181,10 +195,10 @@ class StreamState:
         """The tracks' ``crops`` apart, or, the crowd's (``stream.merge_crops``), with neighbours
         joined unless that needs more packed inputs; per crop the indices of ``crops`` it holds."""
         apart = (crops, [[i] for i in range(len(crops))])
-        if not crowd or not self.config.stream.merge_crops:
+        if not crowd:
             return [apart]
         packed = self.config.stream.packed_size
-        joined = merge_crops(crops, self.config.stream.merge_scale_ratio, packed)
+        joined = merge_crops(crops, MERGE_SCALE_RATIO, packed)
         needed = [len({p.packed for p in pack_tallest_first(c, packed)}) for c in (joined[0], crops)]
         return [joined if needed[0] <= needed[1] else apart]
 
@@ -193,7 +207,7 @@ class StreamState:
         """The tracks and, after them, the persons found last frame that no track held (ids < 0)."""
         boxes = self._untracked
         if len(boxes) and len(predicted):
-            boxes = boxes[iou_matrix(boxes, predicted).max(axis=1) <= self.config.stream.missed_iou]
+            boxes = boxes[iou_matrix(boxes, predicted).max(axis=1) <= STREAM_MISSED_IOU]
         if not len(boxes):
             return ids, predicted, hits
         return (np.concatenate([ids, -1 - np.arange(len(boxes))]), np.concatenate([predicted, boxes]),
@@ -208,8 +222,8 @@ class StreamState:
         ((T, 4) px each); rows: per crop of ``track_crops``, the rows of the tracks it holds."""
         cfg = self.config
         packed = cfg.stream.packed_size
-        cands = candidates(Detections.concat(low), dets, cfg.cascade) if cfg.cascade.enabled else Detections.empty()
-        cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), cfg.cascade, packed)
+        cands = candidates(Detections.concat(low), dets) if cfg.cascade.enabled else Detections.empty()
+        cand_crops = candidate_placements(cands, (image.shape[0], image.shape[1]), packed)
         tracks = sorted(pack_tallest_first(track_crops[0], packed, max_inputs=limit), key=lambda p: p.item)
         placements = pack_tallest_first([p.crop for p in tracks] + cand_crops, packed, max_inputs=limit)
         if not placements:
@@ -221,5 +235,5 @@ class StreamState:
         found = self.finder.pick(*boxes, [row for row, _ in track_parts], [r for _, r in track_parts])
         cand_parts = [(p, r) for p, r in zip(placements, results) if p.item >= n]
         verified = confirmed(cands, [p.item - n for p, _ in cand_parts], [p for p, _ in cand_parts],
-                             [r for _, r in cand_parts], cfg.cascade)
+                             [r for _, r in cand_parts])
         return Detections.concat([found, verified]), passes, len(found), len(verified)

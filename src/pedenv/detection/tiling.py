@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from pedenv.detection.config import STRIDE, DetectionConfig
+from pedenv.detection.config import MAX_TILES, STRIDE, TILE_OVERLAP, DetectionConfig
 from pedenv.errors import InputError
 
 #: Input px of one network unit, the cost measure of detection (a 384x640 input).
@@ -60,27 +60,27 @@ def _starts(length: int, window: int, overlap: float) -> list[int]:
     return [int(round(i * (length - window) / (n - 1))) for i in range(n)]
 
 
-def _tiles(region: tuple[int, int, int, int], scale: float, config: DetectionConfig, kind: str) -> list[Pass]:
+def _tiles(region: tuple[int, int, int, int], scale: float, tile_width: int, kind: str) -> list[Pass]:
     x0, y0, x1, y1 = region
-    window = max(1, int(round(config.tile_width / scale)))  # square tiles at most; bands are shorter
+    window = max(1, int(round(tile_width / scale)))  # square tiles at most; bands are shorter
     tiles = []
-    for ty in _starts(y1 - y0, window, config.tile_overlap):
+    for ty in _starts(y1 - y0, window, TILE_OVERLAP):
         th = min(window, y1 - y0)
-        for tx in _starts(x1 - x0, window, config.tile_overlap):
+        for tx in _starts(x1 - x0, window, TILE_OVERLAP):
             tw = min(window, x1 - x0)
             box = (x0 + tx, y0 + ty, x0 + tx + tw, y0 + ty + th)
             tiles.append(Pass(box, (round32(th * scale), round32(tw * scale)), kind))
     return tiles
 
 
-def tile_region(region: tuple[int, int, int, int], scale: float, config: DetectionConfig,
-                kind: str) -> tuple[list[Pass], float]:
-    """Tiles of ``region`` (px) at ``scale``, at most ``max_tiles`` (the scale lowered to fit);
-    returns the tiles and the scale they run at."""
-    tiles = _tiles(region, scale, config, kind)
-    while len(tiles) > config.max_tiles and scale > 0.05:
+def tile_region(region: tuple[int, int, int, int], scale: float, tile_width: int, kind: str,
+                max_tiles: int = MAX_TILES) -> tuple[list[Pass], float]:
+    """Tiles of ``region`` (px) at ``scale``, each input at most ``tile_width`` px wide, at most
+    ``max_tiles`` (the scale lowered to fit); returns the tiles and the scale they run at."""
+    tiles = _tiles(region, scale, tile_width, kind)
+    while len(tiles) > max_tiles and scale > 0.05:
         scale *= 0.85  # bigger windows: fewer tiles, at a lower scale
-        tiles = _tiles(region, scale, config, kind)
+        tiles = _tiles(region, scale, tile_width, kind)
     return tiles, scale
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.detection.config import RedetectConfig
+from pedenv.detection.config import MATCH_HEIGHT_RATIO, RedetectConfig
 from pedenv.records import Detections
 
 #: A predicted box shorter than this (pixels, after clipping to the image) is not searched: a person
@@ -19,7 +19,7 @@ MIN_BOX_HEIGHT_PX = 8.0
 MIN_VISIBLE_SHARE = 0.5
 #: A person found in a track's crop scoring below this needs a plausible skeleton (mean keypoint
 #: confidence at least PLAUSIBLE_KEYPOINT_CONF): a person, not a pole. The values of the far levels'
-#: own check (``sure_score``, ``plausible_keypoint_conf`` of DetectionConfig, 0.5 each).
+#: own check (:data:`pedenv.detection.config.SURE_SCORE`, ``PLAUSIBLE_KEYPOINT_CONF``, 0.5 each).
 SURE_SCORE = 0.5
 PLAUSIBLE_KEYPOINT_CONF = 0.5
 #: A remembered box overlapping another track's predicted box by this IoU (and not its own) is that track's.
@@ -55,7 +55,7 @@ def nearest_person(box: np.ndarray, boxes: np.ndarray, whole: np.ndarray, config
     heights = np.maximum(boxes[:, 3] - boxes[:, 1], 1e-9)
     distance = np.linalg.norm(0.5 * (boxes[:, :2] + boxes[:, 2:] - box[:2] - box[2:]), axis=1) / height
     ratio = np.maximum(heights / height, height / heights)
-    ok = whole & (distance <= config.match_distance) & (ratio <= config.match_height_ratio)
+    ok = whole & (distance <= config.match_distance) & (ratio <= MATCH_HEIGHT_RATIO)
     return np.flatnonzero(ok)[np.argsort(distance[ok])[:1]]
 
 

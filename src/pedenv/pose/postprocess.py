@@ -136,7 +136,7 @@ class DecodeSettings:
         suppressed (0..1; 0.7). Lowering it merges nearby persons more readily.
     max_detections: at most this many persons per input (1..10000; 300).
     edge_margin_px: a person within this many input px of an inner tile edge counts as cut (0..64;
-        the detection config's ``edge_margin_px``).
+        :data:`pedenv.detection.config.EDGE_MARGIN_PX` in the detection modes).
     """
 
     score_threshold: float = 0.25
