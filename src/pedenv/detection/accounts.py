@@ -10,7 +10,7 @@ from pedenv.detection.tiling import units
 
 @dataclass
 class StreamAccounts:
-    """Counts over the frames a :class:`~pedenv.detection.stream.StreamPose` saw; units are 384x640 inputs."""
+    """Counts over the frames a :class:`~pedenv.detection.stream.StreamState` saw; units are 384x640 inputs."""
 
     frames: int = 0
     restarts: int = 0

@@ -38,16 +38,14 @@ def create_pose_backend(name: str, **options: Any) -> PoseBackend:  # options: t
     """Create the backend registered as ``name`` with its keyword ``options``.
 
     ``detector-model:<profile>`` (e.g. ``detector-model:yolo11n-pose-single``) is the
-    detector model with that named profile; ``onnx`` with ``detection="stream"`` (or a
-    config in mode ``stream``) is the stateful :class:`~pedenv.detection.stream.StreamPose`.
-    Raises ValueError naming the valid backends for an unknown name.
+    detector model with that named profile. ``onnx`` is the network alone, one pass per
+    frame; the detection modes that spend it (``fast``, ``far``, ``stream``) are
+    :func:`pedenv.detection.create_detector`'s. Raises InputError naming the valid backends
+    for an unknown name.
     """
     if name.startswith("detector-model:"):
         name, options = "detector-model", {"profile": name.split(":", 1)[1], **options}
     if name not in POSE_BACKENDS:
         raise InputError(f"unknown pose backend {name!r}; valid: {', '.join(POSE_BACKENDS)}")
     module, cls = POSE_BACKENDS[name].split(":")
-    detection = options.get("detection")
-    if name == "onnx" and getattr(detection, "mode", detection) == "stream":
-        module, cls = "pedenv.detection.stream", "StreamPose"
     return getattr(importlib.import_module(module), cls)(**options)

@@ -2,8 +2,9 @@
 
 No torch needed at run time. The model comes from ``pedenv models prepare`` (one export
 with a dynamic input shape) or from any compatible file (input (1, 3, H, W), output (1, 56, N)).
-Detection modes (:mod:`pedenv.detection.tiling`): ``fast`` is one pass with the input fitted to
-the frame's aspect; ``far`` adds tiles over the band where far people stand.
+This is the network only: one pass over a whole image, and the raw runs (:meth:`OnnxPose.infer_many`)
+that the detection modes spend (``fast``, ``far``, ``stream``: :mod:`pedenv.detection`, whose
+:class:`~pedenv.detection.detector.Detector` wraps this backend).
 """
 
 from __future__ import annotations
@@ -102,8 +103,8 @@ class OnnxPose:
 
     def infer(self, tensor: np.ndarray) -> np.ndarray:
         """The network on ``tensor`` (B, 3, h, w) float32, RGB in [0, 1] (letterboxed,
-        :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N) (FORMATS.md,
-        "Pose network"; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
+        :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N)
+        (:mod:`pedenv.pose.postprocess`; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
         start = time.perf_counter()
         out = self._session_for(tensor.shape).run(None, {self._input_name: tensor})[0]
         self.network_s += time.perf_counter() - start

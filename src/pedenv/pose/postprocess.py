@@ -2,7 +2,8 @@
 
 Pre-processing fits an image into the network input by a letterbox (scale, keeping the
 aspect ratio, then pad with grey 114). Post-processing decodes the raw output
-``(1, 56, N)`` (see FORMATS.md, "Pose network"), keeps the persons above a score
+``(1, 56, N)`` (per anchor: box centre, width, height, person score, then 17 keypoints as
+u, v, confidence; px of the input), keeps the persons above a score
 threshold, suppresses overlapping boxes (NMS) and maps everything back to image pixels.
 """
 
