@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.detection.config import MATCH_HEIGHT_RATIO, RedetectConfig
+from pedenv.detection.config import MATCH_HEIGHT_RATIO, PLAUSIBLE_KEYPOINT_CONF, SURE_SCORE, RedetectConfig
 from pedenv.records import Detections
 
 #: A predicted box shorter than this (pixels, after clipping to the image) is not searched: a person
@@ -17,11 +17,6 @@ from pedenv.records import Detections
 MIN_BOX_HEIGHT_PX = 8.0
 #: A predicted box with less than this share of its area inside the image is not searched (leaving it).
 MIN_VISIBLE_SHARE = 0.5
-#: A person found in a track's crop scoring below this needs a plausible skeleton (mean keypoint
-#: confidence at least PLAUSIBLE_KEYPOINT_CONF): a person, not a pole. The values of the far levels'
-#: own check (:data:`pedenv.detection.config.SURE_SCORE`, ``PLAUSIBLE_KEYPOINT_CONF``, 0.5 each).
-SURE_SCORE = 0.5
-PLAUSIBLE_KEYPOINT_CONF = 0.5
 #: A remembered box overlapping another track's predicted box by this IoU (and not its own) is that track's.
 SAME_BOX_IOU = 0.95
 
@@ -130,6 +125,7 @@ class TrackFinder:
         for row, (found, cut) in zip(rows, results):
             if not len(found):
                 continue
+            # sure, or a plausible skeleton: a person, not a pole (the far levels' own check)
             sure = (found.scores >= SURE_SCORE) | (found.confidences.mean(axis=1) >= PLAUSIBLE_KEYPOINT_CONF)
             pick = found.take(nearest_person(searched[row], found.boxes, ~cut & sure, self.match))
             if not len(pick):
