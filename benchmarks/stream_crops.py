@@ -37,8 +37,8 @@ def main(argv=None) -> int:
     from pedenv.boxes import iou_matrix
     from pedenv.datasets import mot17
     from pedenv.detection import create_detector
-    from pedenv.detection.packing import crop_around, pack_tallest_first, run_packed
     from pedenv.detection.config import PLAUSIBLE_KEYPOINT_CONF, SURE_SCORE
+    from pedenv.detection.packing import crop_around, pack_tallest_first, run_packed
     from pedenv.images import read_image_rgb
 
     backend = create_detector("onnx", detection="fast")
