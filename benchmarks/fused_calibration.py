@@ -102,14 +102,14 @@ def nees_breakdown(profile: str, config: Config, duration_s: float) -> dict:
     and the NEES of the non-ghost matches against their own person."""
     from dataclasses import replace
 
-    from pedenv import create_pose_backend
     from pedenv.datasets.memory import MemoryDataset
+    from pedenv.detection import create_detector
     from pedenv.evaluation.matching import match_to_ground_truth
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.synthetic import generate_scenes
 
     data = MemoryDataset(generate_scenes(0, terrain=True, duration_s=duration_s), name="terrain-seed0")
-    backend = create_pose_backend(f"detector-model:{profile}")
+    backend = create_detector(f"detector-model:{profile}")
     model = PedestrianEnvironmentModel(configure(config, "fused"))
     rows = []  # (group, relative error %, NEES, NEES against the own person)
     for scene in data.scene_names():

@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import cv2
 
-    from pedenv import create_pose_backend
+    from pedenv.detection import create_detector
     from pedenv.pose.models import choose_input_size
 
     backends: dict = {}
@@ -65,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
         rgb = np.ascontiguousarray(bgr[..., ::-1])
         if args.mode in ("fast", "far"):
             if "mode" not in backends:
-                backends["mode"] = create_pose_backend("onnx", model_path=args.model, detection=args.mode,
+                backends["mode"] = create_detector("onnx", model_path=args.model, detection=args.mode,
                                                        score_threshold=args.min_score, threads=args.threads)
             det = backends["mode"].detect(rgb, geometry)
             size = args.mode
@@ -77,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
             size = "{}x{}".format(*choose_input_size(rgb.shape[1], rgb.shape[0]))
         if args.mode not in ("fast", "far"):
             if size not in backends:
-                backends[size] = create_pose_backend("onnx", model_path=args.model, input_size=size,
+                backends[size] = create_detector("onnx", model_path=args.model, input_size=size,
                                                      score_threshold=args.min_score, threads=args.threads)
             det = backends[size].detect(rgb)
         for name in ("keypoints", "confidences", "boxes", "scores"):

@@ -103,22 +103,20 @@ class NetworkClock:
 
 def network_alone(rec: dict, backend, clock: NetworkClock) -> dict:
     """Every frame of ``rec`` read, detected and given to the model (the fused preset's
-    re-detection crops included, as :func:`~pedenv.apps.run.run_recording` wraps the backend),
+    tracks predicted and passed to the detector, as :class:`pedenv.Pipeline` does),
     nothing written: ms per frame, the network's ms per frame, CPU ms per frame (all threads)."""
     from dataclasses import replace
 
     from pedenv.config import Config
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose.redetect import with_redetection
     from pedenv.recordings.footage import load_recording
 
     cfg = Config()
     clock.reset()
     frames, model = 0, PedestrianEnvironmentModel(cfg)
-    middle = with_redetection(backend, model, cfg.redetect)
     start, cpu = time.perf_counter(), time.process_time()
     for frame in load_recording(**rec).frames():
-        model.update(replace(frame, detections=middle(frame)))
+        model.update(replace(frame, detections=backend(frame, model.predict_tracks(frame))))
         frames += 1
     return {"frames": frames, "ms_per_frame": 1e3 * (time.perf_counter() - start) / frames,
             "network_ms_per_frame": 1e3 * clock.seconds / frames,
@@ -162,12 +160,12 @@ def measure(rec: dict, variants: list[dict], work: Path, rounds: int = 1, thread
     """``rounds`` times, for each ``side_by_side`` value (``SessionConfig.side_by_side``, one pose
     backend each with ``threads`` intra-op threads, made before any clock starts): the network
     alone, then a run of each of ``variants`` (module doc), one after the other."""
-    from pedenv import create_pose_backend
     from pedenv.config import Config
+    from pedenv.detection import create_detector
 
     detection = variants[0]["detection"]
     score = Config().tracking.pose_score_threshold
-    backends = {side: create_pose_backend("onnx", detection=detection, score_threshold=score, threads=threads,
+    backends = {side: create_detector("onnx", detection=detection, score_threshold=score, threads=threads,
                                           **({} if side is None else {"side_by_side": side}))
                 for side in side_by_side}
     alone, runs = [], []

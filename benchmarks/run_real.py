@@ -69,16 +69,15 @@ def budgeted_backend(args, config):
         return None
     from dataclasses import replace
 
-    from pedenv import create_pose_backend
-    from pedenv.pose.models import backend_options
-    from pedenv.pose.tiling import DetectionConfig
+    from pedenv.detection import backend_options, create_detector
+    from pedenv.detection.config import DetectionConfig
 
     detection = DetectionConfig.named("stream")
     fields = dict(parse_setting(s) for s in args.stream_set)
     if args.stream_budget is not None:
         fields["budget_units"] = args.stream_budget
     detection = replace(detection, stream=replace(detection.stream, **fields))
-    return create_pose_backend("onnx", **backend_options("onnx", None, None, detection,
+    return create_detector("onnx", **backend_options("onnx", None, None, detection,
                                                          config.tracking.pose_score_threshold))
 
 

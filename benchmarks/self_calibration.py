@@ -85,10 +85,9 @@ def observe_frames(images, backend):
 
 
 def onnx_far():
-    from pedenv.pose import create_pose_backend
-    from pedenv.pose.models import backend_options
+    from pedenv.detection import backend_options, create_detector
 
-    return create_pose_backend("onnx", **backend_options("onnx", detection="far"))
+    return create_detector("onnx", **backend_options("onnx", detection="far"))
 
 
 def coverage(frames, camera, spec, fused: dict, estimate=None) -> dict:
@@ -98,12 +97,12 @@ def coverage(frames, camera, spec, fused: dict, estimate=None) -> dict:
     the calibration's (:func:`pedenv.calibration.spread.widen_state`)."""
     from pedenv.calibration.spread import widen_state
     from pedenv.config import Config
+    from pedenv.detection import create_detector
     from pedenv.evaluation.matching import match_to_ground_truth
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.pose import create_pose_backend
 
     model = PedestrianEnvironmentModel(Config().replace(fused=fused))
-    backend = create_pose_backend(spec) if isinstance(spec, str) else spec()
+    backend = create_detector(spec) if isinstance(spec, str) else spec()
     rel, d2 = [], []
     for frame in frames:
         frame = dataclasses.replace(frame, camera=camera)
@@ -126,7 +125,7 @@ def synthetic() -> None:
     from pedenv.calibration.geometry import parameters_of
     from pedenv.calibration.linking import BoxLinker
     from pedenv.calibration.observations import Observations, observations_of
-    from pedenv.pose import create_pose_backend
+    from pedenv.detection import create_detector
     from pedenv.records import Detections
     from pedenv.synthetic import generate_scenes
 
@@ -136,7 +135,7 @@ def synthetic() -> None:
     print("synthetic static-plaza (seed 0, 150 frames, exact truth)")
     for label, spec in (("detector model (yolo11n-pose-far)", "detector-model:yolo11n-pose-far"),
                         ("exact skeletons", "ground-truth")):
-        backend, linker, parts = create_pose_backend(spec), BoxLinker(), []
+        backend, linker, parts = create_detector(spec), BoxLinker(), []
         for frame in scene.frames:
             det: Detections = backend(frame)
             parts.append(observations_of(det, frame.index, linker(det.boxes)))

@@ -45,8 +45,8 @@ def sample_images(samples: Path) -> list[tuple[str, np.ndarray, Any]]:
 
     from pedenv.datasets import kitti_files as kitti
     from pedenv.datasets import mot17
+    from pedenv.detection.geometry import CameraGeometry
     from pedenv.evaluation.detections import KITTI_CAMERA_HEIGHT_M
-    from pedenv.pose.tiling import CameraGeometry
 
     out = []
     training = samples / "kitti" / "tracking_mini" / "training"
@@ -67,12 +67,12 @@ def sample_images(samples: Path) -> list[tuple[str, np.ndarray, Any]]:
 
 
 def detector(mode: str, config: Any) -> Any:
-    """The ONNX pose backend in ``mode`` with the config's ``detection`` and ``merge`` sections
-    (the one place this benchmark reaches the pose package)."""
-    from pedenv.pose import create_pose_backend
+    """The ONNX detector in ``mode`` with the config's ``detection`` and ``redetect`` sections
+    (the one place this benchmark reaches the detection stage)."""
+    from pedenv.detection import create_detector
 
-    return create_pose_backend("onnx", detection=dataclasses.replace(config.detection, mode=mode),
-                               merge=config.merge)
+    return create_detector("onnx", detection=dataclasses.replace(config.detection, mode=mode),
+                           redetect=config.redetect)
 
 
 def _hang(_signum: int, _frame: Any) -> None:

@@ -97,11 +97,10 @@ def evaluate(scene, method: str, backend, fused: dict | None = None, box_truth: 
 
 def cases(samples: Path, only: str | None):
     """(scene label, scene, backend label, backend factory)."""
-    from pedenv import create_pose_backend
-    from pedenv.pose.models import backend_options
+    from pedenv.detection import backend_options, create_detector
 
     def onnx_far():
-        return create_pose_backend("onnx", **backend_options("onnx", detection="far", score_threshold=0.1))
+        return create_detector("onnx", **backend_options("onnx", detection="far", score_threshold=0.1))
 
     if only in (None, "mot17"):
         from pedenv.datasets.ucmctrack import mot17_static_scene
@@ -115,8 +114,8 @@ def cases(samples: Path, only: str | None):
 
         scene = generate_scenes(0, ["static-plaza"])[0]
         yield "static-plaza", scene, "detector model (yolo11n-pose-far)", (
-            lambda: create_pose_backend("detector-model:yolo11n-pose-far"))
-        yield "static-plaza", scene, "exact skeletons", lambda: create_pose_backend("ground-truth")
+            lambda: create_detector("detector-model:yolo11n-pose-far"))
+        yield "static-plaza", scene, "exact skeletons", lambda: create_detector("ground-truth")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -75,17 +75,16 @@ def stream_backend(settings: list[str]):
         return None
     from dataclasses import replace
 
-    from pedenv import create_pose_backend
     from pedenv.config import Config
+    from pedenv.detection import backend_options, create_detector
+    from pedenv.detection.config import DetectionConfig
     from pedenv.localization import configure
-    from pedenv.pose.models import backend_options
-    from pedenv.pose.tiling import DetectionConfig
 
     fields = {name.strip(): json.loads(value) for name, _, value in (s.partition("=") for s in settings)}
     detection = DetectionConfig.named("stream")
     detection = replace(detection, stream=replace(detection.stream, **fields))
     threshold = configure(Config(), "fused").tracking.pose_score_threshold
-    return create_pose_backend("onnx", **backend_options("onnx", None, None, detection, threshold))
+    return create_detector("onnx", **backend_options("onnx", None, None, detection, threshold))
 
 
 def main(argv=None) -> int:

@@ -6,18 +6,16 @@ import pytest
 from pedenv.apps.run import detection_mode
 from pedenv.config import (
     DEFAULT_METHOD,
+    METHOD_PRESETS,
     SECTIONS,
     Config,
-    DetectionConfig,
     KalmanConfig,
-    MergeConfig,
     PaperConfig,
     TrackingConfig,
 )
+from pedenv.detection import DetectionConfig, backend_options
 from pedenv.errors import InputError
-from pedenv.localization import configure
-from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.models import backend_options
+from pedenv.localization import LOCATORS, configure
 
 from cli_in_process import pedenv
 
@@ -69,8 +67,9 @@ def test_method_presets_fill_only_defaults():
     assert configure(mine, "paper").kalman.restart_gate == 9.0
     with pytest.raises(ValueError, match="unknown position method 'magic'; valid: paper, fused"):
         configure(Config(), "magic")
-    with pytest.raises(ValueError, match="unknown position method 'magic'"):
-        PedestrianEnvironmentModel(Config(method="magic"))
+    with pytest.raises(ValueError, match="unknown position method 'magic'; valid: paper, fused"):
+        Config(method="magic")  # refused where it is made, not later by the model
+    assert set(METHOD_PRESETS) == set(LOCATORS)  # the methods Config accepts are those that exist
 
 
 def test_the_default_is_the_fused_method_as_the_commands_run_it():
@@ -125,8 +124,9 @@ def test_a_partial_section_starts_from_its_methods_defaults():
     ({"detection": {"mode": "slow"}}, "detection.mode must be one of fast, far, stream, got 'slow'"),
     ({"detection": {"level_scales": [1.0, 2.0] * 10}},
      "detection.level_scales must be a non-empty tuple of at most 8 numbers, got (1.0, 2.0, 1.0, 2.0, ...)"),
-    ({"detection": {"max_tiles": 1e9}}, "detection.max_tiles must be an integer in [1, 64], got 1000000000.0"),
-    ({"merge": {"oks": float("nan")}}, "merge.oks must be a finite number, got nan"),
+    ({"detection": {"tile_width": 1e9}}, "detection.tile_width must be an integer in [160, 4096], got 1000000000.0"),
+    ({"merge": {"oks": float("nan")}}, "merge.oks is no longer a setting (fixed at 0.3); remove it from the config, "
+                                      "got nan"),
     ({"redetect": {"max_crops": 10 ** 9}}, "redetect.max_crops must be an integer in [0, 64], got 1000000000"),
     ({"method": ["fused"] * 10 ** 6}, "method must be the name of a position method, got ['fused', 'fused', 'fused', "
                                       "'fused', ...]"),
@@ -163,37 +163,73 @@ def test_every_setting_of_a_run_round_trips_through_config_json(tmp_path):
     changed = {"tracking": {"max_misses": 7, "yaw_compensation": False}, "paper": {"refine": False},
                "kalman": {"restart_gate": 9.0}, "fused": {"cues": ["ground", "height"], "history_length": 10},
                "redetect": {"max_crops": 2}, "detection": {"mode": "fast", "level_scales": [1.0, 1.5, 3.0],
-                                                           "max_tiles": 6, "near_m": 3.0},
-               "merge": {"iou": 0.4, "oks": 0.35}}
+                                                           "tile_width": 1280, "near_m": 3.0}}
     cfg = Config().replace(**changed)
     cfg.save(tmp_path / "config.json")
     saved = json.loads((tmp_path / "config.json").read_text())
-    assert set(saved) == {"method", *SECTIONS} >= {"detection", "merge"}
-    assert saved["detection"]["level_scales"] == [1.0, 1.5, 3.0] and saved["merge"]["iou"] == 0.4
+    assert set(saved) == {"method", *SECTIONS} >= {"detection", "redetect"}
+    assert saved["detection"]["level_scales"] == [1.0, 1.5, 3.0] and saved["redetect"]["max_crops"] == 2
     loaded = Config.load(tmp_path / "config.json")
     assert loaded == cfg
-    assert loaded.detection == DetectionConfig(mode="fast", level_scales=(1.0, 1.5, 3.0), max_tiles=6, near_m=3.0)
-    assert loaded.merge == MergeConfig(iou=0.4, oks=0.35) and loaded.fused.cues == ("ground", "height")
+    assert loaded.detection == DetectionConfig(mode="fast", level_scales=(1.0, 1.5, 3.0), tile_width=1280, near_m=3.0)
+    assert loaded.fused.cues == ("ground", "height")
     for section, values in changed.items():  # every field changed above comes back as set
         for name, value in values.items():
             assert getattr(getattr(loaded, section), name) == (tuple(value) if isinstance(value, list) else value)
 
 
-def test_a_config_saved_before_detection_and_merge_loads_their_defaults(tmp_path):
+def test_a_config_saved_before_detection_loads_its_defaults(tmp_path):
     data = Config().to_dict()
-    del data["detection"], data["merge"]
+    del data["detection"]
     (tmp_path / "old.json").write_text(json.dumps(data))
     old = Config.load(tmp_path / "old.json")
-    assert old == Config() and old.detection == DetectionConfig() and old.merge == MergeConfig()
+    assert old == Config() and old.detection == DetectionConfig()
+
+
+def test_a_config_with_settings_that_became_constants_loads_when_they_hold_their_fixed_values(tmp_path):
+    """config.json files saved before the detection settings were cut to what a user turns: the
+    fields that became constants load when they hold today's values (so nothing changes), another
+    value is refused naming the field; the old names of the packed input's size still load."""
+    data = Config().to_dict()
+    data["merge"] = {"iou": 0.5, "containment": 0.7, "oks": 0.3, "keypoint_min_confidence": 0.3}
+    data["detection"].update(tile_overlap=0.25, max_tiles=12, fit_min_score=0.35)
+    data["detection"]["stream"].update(crop_min_width=0.0, trim_mosaics=True, mosaic_width=512)
+    data["redetect"].update(crop_scale=2.0, min_hits=2)
+    (tmp_path / "old.json").write_text(json.dumps(data))
+    old = Config.load(tmp_path / "old.json")
+    assert old.detection.stream.packed_width == 512
+    assert old == Config().replace(detection={"stream": {"packed_width": 512}})
+    for section, field, value in (("detection", "max_tiles", 6), ("redetect", "min_hits", 3), ("merge", "iou", 0.4)):
+        changed = Config().to_dict() | {"merge": {}}
+        changed[section][field] = value
+        with pytest.raises(InputError, match=rf"{section}\.{field} is no longer a setting \(fixed at"):
+            Config.from_dict(changed)
+    with pytest.raises(InputError, match=r"detection.stream.crop_min_width is no longer a setting"):
+        Config.from_dict({"detection": {"stream": {"crop_min_width": 0.6}}})
+
+
+@pytest.mark.parametrize("width", [128, 160, 1280])
+def test_an_accepted_packed_input_width_plans_the_band_without_an_error(width):
+    """Issue 32: ``detection.stream.packed_width`` 128 was accepted, then every ``stream`` frame
+    stopped on ``detection.tile_width`` (a field the user never set): the band's tiles now take the
+    packed input's width as it is."""
+    from pedenv.detection.budget import band_tiles
+    from pedenv.detection.geometry import CameraGeometry
+    from pedenv.records import Camera
+
+    cfg = Config.from_dict({"detection": {"mode": "stream", "stream": {"packed_width": width}}})
+    tiles, note = band_tiles(1600, 900, cfg.detection, CameraGeometry.level(Camera.from_fov().intrinsics, 1.5), None)
+    assert tiles and "calibration" in note
+    assert max(t.step.input_size[1] for t in tiles) <= width + 32  # a tile's px rounded up to the stride
 
 
 def test_the_commands_detection_mode_is_recorded_in_the_config():
-    cfg = Config().replace(detection={"max_tiles": 6})
-    assert detection_mode(cfg, "onnx", "fast").detection == DetectionConfig(mode="fast", max_tiles=6)
+    cfg = Config().replace(detection={"tile_width": 1280})
+    assert detection_mode(cfg, "onnx", "fast").detection == DetectionConfig(mode="fast", tile_width=1280)
     assert detection_mode(cfg, "onnx", None) == cfg
     assert detection_mode(cfg, "ground-truth", "fast") == cfg
-    options = backend_options("onnx", None, None, cfg.detection, None, cfg.merge)
-    assert options["detection"] is cfg.detection and options["merge"] is cfg.merge
+    options = backend_options("onnx", None, None, cfg.detection, None, redetect=cfg.redetect)
+    assert options["detection"] is cfg.detection and options["redetect"] is cfg.redetect
 
 
 @pytest.mark.parametrize("text, fragment", [

@@ -80,7 +80,7 @@ def test_module_map_matches_the_tree():
 
 
 def package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
-    """Sub-package (or top-level module) -> those it imports: ``pedenv.pose.redetect`` counts as
+    """Sub-package (or top-level module) -> those it imports: ``pedenv.detection.redetect`` counts as
     ``pose``, ``pedenv.config`` as ``config``; the package root ``pedenv`` itself is left out."""
     def part(module: str) -> str | None:
         names = module.split(".")
@@ -96,7 +96,18 @@ def package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
 
 def test_no_sub_package_imports_one_that_imports_it_back():
     """Not only modules: the sub-packages (and top-level modules) form no cycle either, so every
-    arrow between them runs one way (``config`` takes its sections from ``pose``, never back)."""
+    arrow between them runs one way (``detection`` takes the network from ``pose``, never back)."""
     packages = package_graph(import_graph())
-    assert "pose" in packages["config"]
+    assert "pose" in packages["detection"] and "detection" not in packages["pose"]
     assert cycles(packages) == []
+
+
+#: The core: the model and what it is made of. It takes detections whatever made them.
+CORE = ("model", "config", "config_position", "config_tracking", "tracking", "localization")
+
+
+def test_the_core_imports_nothing_of_the_network_or_the_detection_stage():
+    """``model.py``, ``config*.py``, ``tracking/`` and ``localization/`` import nothing from ``pose/``
+    or ``detection/`` (the detection settings are registered into the run's config from above)."""
+    packages = package_graph(import_graph())
+    assert {part: sorted(packages[part] & {"pose", "detection"}) for part in CORE} == {part: [] for part in CORE}

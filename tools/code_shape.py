@@ -7,7 +7,10 @@ Prints, against the layout goals of the project:
 - functions with more than ``--max-params`` (8) parameters (``self``/``cls`` not counted; a CLI
   command's own options excepted);
 - each folder's share of the package's lines (goal: none above one sixth);
-- arrows between sub-packages that run both ways (a package cycle).
+- cycles among the sub-packages (and top-level modules): an arrow back up;
+- arrows from the core (``model.py``, ``config*.py``, ``tracking/``, ``localization/``) to the
+  pose network (``pose/``) or the detection stage (``detection/``): the core takes detections
+  whatever made them.
 
 Usage: ``python tools/code_shape.py [--check]``; ``--check`` exits 1 when a goal is missed.
 """
@@ -85,6 +88,28 @@ def package_arrows(root: Path = PACKAGE) -> set[tuple[str, str]]:
     return arrows
 
 
+#: The core and what it must not import.
+CORE = ("model", "config", "config_position", "config_tracking", "tracking", "localization")
+ABOVE_CORE = ("pose", "detection")
+
+
+def package_cycles(arrows: set[tuple[str, str]]) -> list[list[str]]:
+    """Groups of more than one sub-package that reach each other through ``arrows``, each sorted."""
+    graph: dict[str, set[str]] = defaultdict(set)
+    for a, b in arrows:
+        graph[a].add(b)
+    reach: dict[str, set[str]] = {}
+    for start in {n for arrow in arrows for n in arrow}:
+        seen, todo = set(), [start]
+        while todo:
+            for nxt in graph[todo.pop()] - seen:
+                seen.add(nxt)
+                todo.append(nxt)
+        reach[start] = seen
+    groups = {tuple(sorted({n} | {m for m in reach[n] if n in reach[m]})) for n in reach}
+    return sorted(list(g) for g in groups if len(g) > 1)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--max-lines", type=int, default=60)
@@ -115,11 +140,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {name:<14}{n:>6}  {100 * n / total:5.1f} %{flag}")
 
     arrows = package_arrows()
-    both_ways = sorted({tuple(sorted(a)) for a in arrows if (a[1], a[0]) in arrows})
-    print(f"sub-packages importing each other: {len(both_ways)}")
-    for a, b in both_ways:
-        print(f"  {a} <-> {b}")
-    missed += len(both_ways)
+    cycles = package_cycles(arrows)
+    print(f"cycles among sub-packages: {len(cycles)}")
+    for group in cycles:
+        print(f"  {' <-> '.join(group)}")
+    missed += len(cycles)
+    up = sorted(a for a in arrows if a[0] in CORE and a[1] in ABOVE_CORE)
+    print(f"core modules importing {' or '.join(ABOVE_CORE)}: {len(up)}")
+    for a, b in up:
+        print(f"  {a} -> {b}")
+    missed += len(up)
     return 1 if (args.check and missed) else 0
 
 

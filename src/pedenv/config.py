@@ -2,8 +2,10 @@
 
 Defaults are the paper's (Holzbock et al., Sections III-B and III-C) where it gives one.
 ``Config.to_dict()`` is saved next to every result (``config.json``) so a run can be
-repeated: the tracker, the position methods, the re-detection, and the pose network's
-detection passes and their merge. Every section checks its fields with
+repeated: the tracker, the position methods, the behaviour cues, and the sections of the
+stages above the core that register theirs (:func:`register_section`: the detection stage's
+``redetect`` and ``detection``, from :mod:`pedenv.detection.config`, which
+``import pedenv`` loads). The core imports nothing of those stages. Every section checks its fields with
 :mod:`pedenv.validation` (type, finiteness, a range with a documented upper bound) and
 raises :class:`~pedenv.errors.InputError` naming ``section.field``; ``Config.load`` reads
 the file through :mod:`pedenv.structured_text` (size and nesting limits) and names it.
@@ -13,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,15 +24,11 @@ from pedenv.behaviour.config import BehaviourConfig
 from pedenv.config_position import FUSED_CUES, INITIAL_ESTIMATES, FusedConfig, PaperConfig
 from pedenv.config_tracking import KalmanConfig, TrackingConfig
 from pedenv.errors import InputError
-from pedenv.pose.merge import MergeConfig
-from pedenv.pose.redetect_config import RedetectConfig
-from pedenv.pose.tiling import DetectionConfig
 from pedenv.structured_text import load_json
 from pedenv.validation import shown
 
 __all__ = ["DEFAULT_METHOD", "FUSED_CUES", "INITIAL_ESTIMATES", "METHOD_PRESETS", "SECTIONS", "Config",
-           "BehaviourConfig", "DetectionConfig", "FusedConfig", "KalmanConfig", "MergeConfig", "PaperConfig",
-           "RedetectConfig", "TrackingConfig"]
+           "BehaviourConfig", "FusedConfig", "KalmanConfig", "PaperConfig", "TrackingConfig", "register_section"]
 
 #: The position method of ``Config()`` and of every command without ``--method``: the
 #: most accurate one (``paper`` reproduces the paper's figures).
@@ -40,7 +38,7 @@ DEFAULT_METHOD = "fused"
 #: (which are the paper's values). ``fused`` turns on the tracker's height-ratio rule,
 #: low-score second pass, motion prediction, ground gate and track memory, and the
 #: filter's restart gate, the re-detection of missed tracks in crops (onnx backend,
-#: :mod:`pedenv.pose.redetect`) and the behaviour cues (:mod:`pedenv.behaviour`) (on the golden
+#: :mod:`pedenv.detection.redetect`) and the behaviour cues (:mod:`pedenv.behaviour`) (on the golden
 #: ``terrain2/fused/detector-model`` case 75 identity
 #: switches with them, 200 without).
 METHOD_PRESETS: dict[str, dict[str, dict]] = {
@@ -56,8 +54,8 @@ class Config:
     """Everything the environment model needs besides the data.
 
     method: the position method, a name of :data:`pedenv.localization.LOCATORS`:
-        ``fused`` (the default, the best one) or ``paper`` (reproduces the paper).
-        Each method's constants are in its own section.
+        ``fused`` (the default, the best one) or ``paper`` (reproduces the paper); another
+        name is refused here, naming the valid ones. Each method's constants are in its own section.
 
     A section not given starts from the method's defaults (:data:`METHOD_PRESETS` over the
     section class's defaults), so ``Config()`` is the fused method as every command runs it
@@ -66,11 +64,12 @@ class Config:
     field existed) loads as ``fused``; the fields it names keep their values.
 
     behaviour: the behaviour cues (:class:`pedenv.behaviour.config.BehaviourConfig`; on in ``fused``).
-    detection, merge: the pose network's passes and their merge (``onnx`` backend,
-    :class:`pedenv.pose.tiling.DetectionConfig`, :class:`pedenv.pose.merge.MergeConfig`),
-    saved with the run so its detection is recorded; ``pedenv run --detection`` sets
-    ``detection.mode``. A saved config without them (written before they were) loads
-    their defaults.
+    redetect, detection: the detection stage's sections (``onnx`` backend,
+    :mod:`pedenv.detection.config`, registered by it), saved with the run so its detection is
+    recorded; ``pedenv run --detection`` sets ``detection.mode``. A saved config without them
+    (written before they were) loads their defaults; one with settings that are no longer
+    settings loads when they hold today's fixed values (:func:`drop_retired`; the ``merge``
+    section is such a one).
     """
 
     method: str = DEFAULT_METHOD
@@ -79,14 +78,18 @@ class Config:
     paper: PaperConfig = None  # type: ignore[assignment]
     kalman: KalmanConfig = None  # type: ignore[assignment]
     fused: FusedConfig = None  # type: ignore[assignment]
-    redetect: RedetectConfig = None  # type: ignore[assignment]
-    detection: DetectionConfig = None  # type: ignore[assignment]
-    merge: MergeConfig = None  # type: ignore[assignment]
+    redetect: Any = None  # the detection stage's sections (register_section): pedenv.detection.config
+    detection: Any = None
     behaviour: BehaviourConfig = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str) or not self.method or len(self.method) > 64:
             raise InputError(f"method must be the name of a position method, got {shown(self.method)}")
+        if self.method not in METHOD_PRESETS:
+            raise InputError(f"unknown position method {shown(self.method)}; valid: {', '.join(METHOD_PRESETS)}")
+        missing = [name for name in STAGE_SECTIONS if name not in SECTIONS]
+        if missing:
+            raise InputError(f"config section(s) {', '.join(missing)} not registered: import pedenv first")
         preset = METHOD_PRESETS.get(self.method, {})
         for name, kind in SECTIONS.items():
             if getattr(self, name) is None:
@@ -101,6 +104,15 @@ class Config:
         lists stand for the tuple fields (``fused.cues``, ``detection.level_scales``)."""
         if not isinstance(data, dict):
             raise InputError(f"a config must be an object of sections, got {type(data).__name__}")
+        for name in sorted(set(data) & set(RETIRED_SECTIONS)):  # a section that is no longer saved
+            values = data[name]
+            if not isinstance(values, dict):
+                raise InputError(f"config.{name} must be an object of fields, got {type(values).__name__}")
+            extra = set(values) - set(RETIRED_SECTIONS[name])
+            if extra:
+                raise InputError(f"unknown field(s) in config.{name}: {_names(extra)}")
+            drop_retired(name, values, RETIRED_SECTIONS[name])
+        data = {k: v for k, v in data.items() if k not in RETIRED_SECTIONS}
         unknown = set(data) - set(SECTIONS) - {"method"}
         if unknown:
             raise InputError(f"unknown config section(s): {_names(unknown)}; valid: method, {', '.join(SECTIONS)}")
@@ -111,6 +123,7 @@ class Config:
             values = data.get(name, {})
             if not isinstance(values, dict):
                 raise InputError(f"config.{name} must be an object of fields, got {type(values).__name__}")
+            values = drop_retired(name, values, RETIRED_FIELDS.get(name, {}))
             names = {f.name for f in dataclasses.fields(kind)}
             extra = set(values) - names
             if extra:
@@ -155,7 +168,50 @@ def _names(names: Iterable[object]) -> str:
     return ", ".join(listed[:5]) + (f" and {len(listed) - 5} more" if len(listed) > 5 else "")
 
 
-#: Section name -> its class.
+#: Section name -> its class, in the order ``config.json`` lists them: the core's, then those the
+#: stages above it register (:func:`register_section`).
 SECTIONS: dict[str, type] = {"tracking": TrackingConfig, "paper": PaperConfig, "kalman": KalmanConfig,
-                             "fused": FusedConfig, "redetect": RedetectConfig, "detection": DetectionConfig,
-                             "merge": MergeConfig, "behaviour": BehaviourConfig}
+                             "fused": FusedConfig, "behaviour": BehaviourConfig}
+#: The sections a :class:`Config` has that a stage above the core registers.
+STAGE_SECTIONS = ("redetect", "detection")
+
+
+#: Per section, fields that are no longer settings and their fixed values (:func:`drop_retired`).
+RETIRED_FIELDS: dict[str, Mapping[str, object]] = {
+    name: getattr(kind, "RETIRED", {}) for name, kind in SECTIONS.items() if getattr(kind, "RETIRED", None)}
+#: Whole sections that are no longer settings, with their fields' fixed values.
+RETIRED_SECTIONS: dict[str, Mapping[str, object]] = {}
+
+
+def register_section(name: str, kind: type, retired: Mapping[str, object] | None = None) -> None:
+    """Make ``kind`` (a frozen dataclass of validated fields) the class of section ``name``
+    (one of :data:`STAGE_SECTIONS`), saved in ``config.json`` and loaded from it; ``retired``: its
+    fields that are no longer settings and their fixed values. Called by
+    :mod:`pedenv.detection.config` when it is imported (``import pedenv`` does)."""
+    if name not in STAGE_SECTIONS:
+        raise ValueError(f"unknown stage section {name!r}; valid: {', '.join(STAGE_SECTIONS)}")
+    SECTIONS[name] = kind
+    RETIRED_FIELDS[name] = dict(retired or {})
+
+
+def retire_section(name: str, retired: Mapping[str, object]) -> None:
+    """Section ``name`` is no longer saved; a ``config.json`` holding it at the fixed values ``retired`` still loads."""
+    RETIRED_SECTIONS[name] = dict(retired)
+
+
+def drop_retired(where: str, values: dict, retired: Mapping[str, object]) -> dict:
+    """``values`` (a section of a saved config, named ``where``) without the fields that are no
+    longer settings; such a field holding another value than its fixed one is refused, named."""
+    for field, fixed in retired.items():
+        if field in values:
+            given = values[field]
+            if isinstance(given, bool) or isinstance(fixed, bool):
+                same = given is fixed
+            elif isinstance(fixed, tuple):
+                same = isinstance(given, list | tuple) and tuple(given) == fixed
+            else:
+                same = isinstance(given, int | float) and given == fixed
+            if not same:
+                raise InputError(f"{where}.{field} is no longer a setting (fixed at {fixed!r}); remove it from "
+                                 f"the config, got {shown(given)}")
+    return {k: v for k, v in values.items() if k not in retired}

@@ -1,7 +1,7 @@
 """PedestrianEnvironmentModel: detections + ego pose in, environment state out, per frame.
 
     model = PedestrianEnvironmentModel(Config())
-    for frame in frames:           # frames carry detections (see pedenv.pose)
+    for frame in frames:           # frames carry detections (see pedenv.detection)
         state = model.update(frame)
 
 One frame, as the paper's Fig. 2: the tracker compensates the ego's yaw and associates
@@ -26,10 +26,11 @@ from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.localization import FrameGeometry, Locator, create_locator
 from pedenv.localization.bounds import bound_measurement, clamp_reported
-from pedenv.records import Detections, Frame
+from pedenv.records import Detections, Frame, PredictedTracks
 from pedenv.stage_timer import StageTimer
 from pedenv.state import EnvironmentState, Pedestrians
-from pedenv.tracking.egomotion import shift_u, yaw_change, yaw_shift_pixels
+from pedenv.tracking.egomotion import yaw_change, yaw_shift_pixels
+from pedenv.tracking.prediction import predict_boxes
 from pedenv.tracking.projection import CameraView
 from pedenv.tracking.table import TrackTable
 from pedenv.tracking.tracker import Tracker
@@ -94,24 +95,17 @@ class PedestrianEnvironmentModel:
         self._last = frame
         return EnvironmentState(frame.index, frame.timestamp, frame.ego, peds, frame.scene)
 
-    def predicted_boxes(self, frame: Frame) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Where the live tracks are expected in ``frame``, before it is added (read-only).
-
-        Returns ``ids (T,) int64``, ``boxes (T, 4) float`` pixels of ``frame`` (the tracks'
-        last boxes moved as the tracker will move them: the ego-yaw shift, then the image
-        velocity when ``tracking.predict_motion``) and ``hits (T,) int64``. Tracks only
-        remembered after an occlusion (``tracking.memory_s``) are left out. Used by the
-        re-detection of missed tracks (:mod:`pedenv.pose.redetect`).
-        """
+    def predict_tracks(self, frame: Frame) -> PredictedTracks:
+        """Where the live tracks are expected in ``frame``, before it is added (read-only): the
+        tracks' last boxes moved as the tracker will move them (:func:`pedenv.tracking.prediction.predict_boxes`:
+        the ego-yaw shift, then the image velocity when ``tracking.predict_motion``). Tracks only
+        remembered after an occlusion (``tracking.memory_s``) are left out. What the detector is
+        given to search for the people it would otherwise miss (:class:`pedenv.Pipeline`)."""
         tr = self.tracks.tracks
         live = ~tr.lost
-        boxes = tr.boxes[live]
-        if len(boxes):
-            shift = self._yaw_shift(frame)
-            boxes = shift_u(boxes, shift) if shift else boxes.copy()
-            if self.config.tracking.predict_motion:
-                boxes = boxes + tr.velocities[live]
-        return tr.ids[live].copy(), boxes, tr.hits[live].copy()
+        boxes = predict_boxes(tr.boxes[live], tr.velocities[live], self._yaw_shift(frame) if live.any() else 0.0,
+                              self.config.tracking.predict_motion)
+        return PredictedTracks(tr.ids[live].copy(), boxes, tr.hits[live].copy())
 
     def _view(self, frame: Frame) -> CameraView | None:
         """The camera view the tracker's ground gate and memory need; None while both are off."""

@@ -9,6 +9,7 @@ Conventions everywhere in the core (adapters convert at the boundary):
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -100,6 +101,45 @@ class Detections:
     def take(self, index: np.ndarray) -> Detections:
         """The detections at ``index`` (an int array or boolean mask)."""
         return Detections(self.keypoints[index], self.confidences[index], self.boxes[index], self.scores[index])
+
+    @classmethod
+    def concat(cls, parts: Sequence[Detections]) -> Detections:
+        """One :class:`Detections` of several of the same image, in order (none: empty)."""
+        parts = [d for d in parts if len(d)]
+        if not parts:
+            return cls.empty()
+        return cls(*(np.concatenate([getattr(d, k) for d in parts])
+                     for k in ("keypoints", "confidences", "boxes", "scores")))
+
+
+@dataclass(frozen=True)
+class PredictedTracks:
+    """The live tracks where the model expects them in the next frame, before it is added: what
+    detection is given to search for people it would otherwise miss
+    (:meth:`pedenv.model.PedestrianEnvironmentModel.predict_tracks`).
+
+    ids: (T,) int64 track ids (a negative id: a person no track holds, searched again).
+    boxes: (T, 4) float, pixels of the next frame ``[u_min, v_min, u_max, v_max]``.
+    hits: (T,) int64, detections of each track so far.
+    """
+
+    ids: np.ndarray
+    boxes: np.ndarray
+    hits: np.ndarray
+
+    def __post_init__(self) -> None:
+        boxes = check_array("predicted boxes", self.boxes, (None, 4), finite=False)
+        n = len(boxes)
+        _frozen_set(self, "boxes", boxes)
+        _frozen_set(self, "ids", check_array("track ids", self.ids, (n,), dtype=np.int64))
+        _frozen_set(self, "hits", check_array("track hits", self.hits, (n,), dtype=np.int64))
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+    @classmethod
+    def none(cls) -> PredictedTracks:
+        return cls(np.zeros(0, np.int64), np.zeros((0, 4)), np.zeros(0, np.int64))
 
 
 def boxes_from_keypoints(keypoints: np.ndarray, visible: np.ndarray) -> np.ndarray:

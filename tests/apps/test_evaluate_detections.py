@@ -59,12 +59,12 @@ def test_benchmark_recall_on_the_real_samples(mode, model_cache, tmp_path, monke
 @pytest.mark.parametrize("shape", [(100, 100), (6000, 8000), (40, 3000)])
 def test_far_on_tiny_and_huge_images_does_not_crash(shape, model_cache, monkeypatch):
     monkeypatch.setenv("PEDENV_CACHE", str(model_cache))
-    from pedenv.pose.onnx_backend import OnnxPose
-    from pedenv.pose.tiling import CameraGeometry
+    from pedenv.detection import create_detector
+    from pedenv.detection.geometry import CameraGeometry
 
     image = np.full((*shape, 3), 120, np.uint8)
     cv2.circle(image, (shape[1] // 2, shape[0] // 2), min(shape) // 4, (30, 60, 200), -1)
-    pose = OnnxPose(detection="far")
+    pose = create_detector("onnx", detection="far")
     dets = pose.detect(image)
     assert len(dets) == 0 or (dets.boxes[:, 2] <= shape[1] + 1e-6).all()
     sky = CameraGeometry.level(np.array([[800, 0, shape[1] / 2], [0, 800, shape[0] / 2], [0, 0, 1]]), 1.5,
@@ -75,9 +75,9 @@ def test_far_on_tiny_and_huge_images_does_not_crash(shape, model_cache, monkeypa
 
 def test_detection_mode_is_checked(model_cache, monkeypatch):
     monkeypatch.setenv("PEDENV_CACHE", str(model_cache))
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
     with pytest.raises(ValueError, match="detection mode must be one of fast, far"):
-        create_pose_backend("onnx", detection="medium")
-    fast = create_pose_backend("onnx", detection="fast")
-    assert fast.describe()["detection"]["mode"] == "fast" and fast.dynamic
+        create_detector("onnx", detection="medium")
+    fast = create_detector("onnx", detection="fast")
+    assert fast.describe()["detection"]["mode"] == "fast" and fast.network.dynamic

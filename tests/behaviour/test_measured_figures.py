@@ -34,12 +34,12 @@ def test_synthetic_orientation_path_conflict_and_motion_state():
 @pytest.mark.onnx_model
 def test_real_orientation(tmp_path):
     from pedenv.config import Config
+    from pedenv.detection import create_detector
     from pedenv.evaluation.behaviour_real import real_orientation
     from pedenv.evaluation.real_samples import detect_samples
-    from pedenv.pose import create_pose_backend
 
     cache = tmp_path / "det-far.npz"
-    backend = create_pose_backend("onnx", detection="far", score_threshold=0.25, threads=1)
+    backend = create_detector("onnx", detection="far", score_threshold=0.25, threads=1)
     np.savez_compressed(cache, **detect_samples(REAL_SAMPLES, backend, ("kitti", "nuscenes")))
     rows = real_orientation(REAL_SAMPLES, cache, Config())
     errors = np.array([r["pedenv"] for r in rows])

@@ -11,9 +11,9 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from sink_runs import short_scenes
 
 from pedenv.config import Config
+from pedenv.detection import create_detector
 from pedenv.errors import InputError
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.base import create_pose_backend
 
 websockets = pytest.importorskip("websockets", reason="the test extra")
 FRAMES = 8
@@ -22,7 +22,7 @@ FRAMES = 8
 def _states():
     """(state, frame) of the first frames of a built-in scene, with the ground-truth skeletons."""
     scene = short_scenes()[0]
-    model, pose = PedestrianEnvironmentModel(Config()), create_pose_backend("ground-truth")
+    model, pose = PedestrianEnvironmentModel(Config()), create_detector("ground-truth")
     out = []
     for frame in scene.frames[:FRAMES]:
         frame = replace(frame, detections=pose(frame))

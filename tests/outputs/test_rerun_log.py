@@ -88,12 +88,12 @@ def test_a_single_scene_keeps_the_file_name_given(tmp_path):
 
     from sink_runs import short_scenes
 
+    from pedenv.detection import create_detector
     from pedenv.model import PedestrianEnvironmentModel
     from pedenv.outputs.rerun_log import RerunWriter
-    from pedenv.pose import create_pose_backend
 
     scene = short_scenes()[0]
-    model, backend = PedestrianEnvironmentModel(), create_pose_backend("detector-model")
+    model, backend = PedestrianEnvironmentModel(), create_detector("detector-model")
     writer = RerunWriter(tmp_path / "one.rrd")
     for frame in scene.frames[:12]:
         frame = replace(frame, detections=backend(frame))

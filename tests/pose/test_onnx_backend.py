@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pedenv.detection import create_detector
 from pedenv.errors import InputError
-from pedenv.pose import models
-from pedenv.pose.base import create_pose_backend
+from pedenv.pose import create_pose_backend, models
 from pedenv.records import Camera, EgoPose, Frame
 
 
@@ -47,7 +47,7 @@ def _one_person_output(anchors: int = 4) -> np.ndarray:
 @pytest.mark.ultralytics
 def test_onnx_backend_on_a_constant_model(tmp_path):
     path = _constant_model(tmp_path / "fake.onnx", _one_person_output())
-    backend = create_pose_backend("onnx", model_path=path)
+    backend = create_pose_backend("onnx", model_path=path)  # the network alone: one pass
     assert backend.name == "onnx" and backend.input_size == (64, 64)
     # a 128x256 image is scaled by 0.25 into 32x64 with 16 rows of padding above
     det = backend.detect(np.zeros((128, 256, 3), np.uint8))
@@ -67,7 +67,7 @@ def test_onnx_backend_on_a_constant_model(tmp_path):
 def test_wrong_output_shape_names_file_and_shape(tmp_path, shape):
     path = _constant_model(tmp_path / "wrong.onnx", np.zeros(shape, np.float32))
     with pytest.raises(InputError, match=r"wrong\.onnx.*\(1, 56, N\).*" + re_shape(shape)):
-        create_pose_backend("onnx", model_path=path)
+        create_detector("onnx", model_path=path)
 
 
 def re_shape(shape) -> str:
@@ -78,16 +78,16 @@ def re_shape(shape) -> str:
 def test_input_size_must_match_a_fixed_model(tmp_path):
     path = _constant_model(tmp_path / "fake.onnx", _one_person_output())
     with pytest.raises(InputError, match=r"fake\.onnx.*64x64.*384x640"):
-        create_pose_backend("onnx", model_path=path, input_size="384x640")
+        create_detector("onnx", model_path=path, input_size="384x640")
 
 
 def test_not_an_onnx_file(tmp_path):
     path = tmp_path / "junk.onnx"
     path.write_bytes(b"not a model")
     with pytest.raises(InputError, match="junk.onnx.*not a readable ONNX model"):
-        create_pose_backend("onnx", model_path=path)
+        create_detector("onnx", model_path=path)
     with pytest.raises(InputError, match="absent.onnx.*not found"):
-        create_pose_backend("onnx", model_path=tmp_path / "absent.onnx")
+        create_detector("onnx", model_path=tmp_path / "absent.onnx")
 
 
 @pytest.mark.parametrize("option, value", [
@@ -96,13 +96,13 @@ def test_not_an_onnx_file(tmp_path):
 ])
 def test_options_are_range_checked(tmp_path, option, value):
     with pytest.raises(ValueError, match=option.split("_")[0]):
-        create_pose_backend("onnx", model_path=tmp_path / "never-read.onnx", **{option: value})
+        create_detector("onnx", model_path=tmp_path / "never-read.onnx", **{option: value})
 
 
 def test_missing_cached_model_names_prepare(tmp_path, monkeypatch):
     monkeypatch.setenv("PEDENV_CACHE", str(tmp_path / "empty"))
     with pytest.raises(InputError, match="384x640.*pedenv models prepare"):
-        create_pose_backend("onnx", input_size="384x640")
+        create_detector("onnx", input_size="384x640")
 
 
 @pytest.mark.parametrize("env, expected", [

@@ -48,15 +48,15 @@ def test_session_options_are_checked(options, message):
 def test_auto_runs_on_the_cpu_here_and_cuda_is_one_clear_error(use_pose_cache):
     import onnxruntime as ort
 
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
     if CUDA in ort.get_available_providers():
         pytest.skip("this onnxruntime has the CUDA provider: the CPU-only fallback is not what runs here")
-    pose = create_pose_backend("onnx", detection="fast", device="auto")
-    assert pose.provider == CPU and pose.describe()["provider"] == CPU and not pose.batches
-    assert create_pose_backend("onnx", detection="fast", device="cpu").provider == CPU
+    pose = create_detector("onnx", detection="fast", device="auto")
+    assert pose.provider == CPU and pose.describe()["provider"] == CPU and not pose.network.batches
+    assert create_detector("onnx", detection="fast", device="cpu").provider == CPU
     with pytest.raises(InputError, match="--device cuda: this onnxruntime has no CUDA provider"):
-        create_pose_backend("onnx", detection="fast", device="cuda")
+        create_detector("onnx", detection="fast", device="cuda")
 
 
 @pytest.mark.onnx_model
@@ -71,11 +71,11 @@ def test_a_batch_of_passes_gives_what_the_passes_give_one_by_one(use_pose_cache,
     sizes = [(640, 480), (416, 256), (416, 256), (320, 320)]
     inputs = [letterbox(image[y0:y1, x0:x1], size) for (x0, y0, x1, y1), size in zip(crops, sizes)]
     tensors = [to_input_tensor(padded) for padded, _ in inputs]
-    batched = OnnxPose(detection="fast", batch=True)
+    batched = OnnxPose(batch=True)
     assert batched.batches
     together = batched.infer_batch(tensors)
     assert batched.network_runs == 3  # the two 416x256 passes ran as one batch
-    single = OnnxPose(detection="fast", batch=False)
+    single = OnnxPose(batch=False)
     apart = single.infer_batch(tensors)
     assert single.network_runs == 4
     for a, b, (_, box) in zip(together, apart, inputs):
@@ -99,33 +99,33 @@ def test_passes_side_by_side_give_what_they_give_one_after_another(use_pose_cach
     sizes = [(640, 480), (416, 256), (416, 256), (320, 320), (256, 192)]
     tensors = [to_input_tensor(letterbox(image[y0:y1, x0:x1], size)[0])
                for (x0, y0, x1, y1), size in zip(crops, sizes)]
-    pose = OnnxPose(detection="fast", threads=2)
+    pose = OnnxPose(threads=2)
     assert pose.side_by_side  # the CPU, two threads, no batching
     together = pose.infer_many(tensors)
     assert pose.network_runs == 5
-    alone = OnnxPose(detection="fast", threads=2, side_by_side=False)
+    alone = OnnxPose(threads=2, side_by_side=False)
     assert not alone.side_by_side
     apart = [alone.infer(t) for t in tensors]
     for a, b in zip(together, apart, strict=True):  # in order; one thread sums some convolutions in another order
         assert a.shape == b.shape
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-3)
-    assert not OnnxPose(detection="fast", threads=1).side_by_side  # one thread: nothing to split
-    assert not OnnxPose(detection="fast", batch=True).side_by_side  # a batch instead
+    assert not OnnxPose(threads=1).side_by_side  # one thread: nothing to split
+    assert not OnnxPose(batch=True).side_by_side  # a batch instead
 
 
 @pytest.mark.onnx_model
 @pytest.mark.ultralytics
 @pytest.mark.slow
 def test_stream_finds_the_same_persons_with_its_passes_side_by_side(use_pose_cache):
+    from pedenv.detection import create_detector
     from pedenv.images import read_image_rgb
-    from pedenv.pose.base import create_pose_backend
 
     from shared_paths import REAL_SAMPLES
 
     frames = sorted((REAL_SAMPLES / "mot17" / "MOT17-04-FRCNN" / "img1").glob("*.jpg"))[:3]  # a crowd
-    side = create_pose_backend("onnx", detection="stream")
-    alone = create_pose_backend("onnx", detection="stream", side_by_side=False)
-    assert side.backend.side_by_side and not alone.backend.side_by_side
+    side = create_detector("onnx", detection="stream")
+    alone = create_detector("onnx", detection="stream", side_by_side=False)
+    assert side.network.side_by_side and not alone.network.side_by_side
     for i, path in enumerate(frames):  # the cold start's band tiles, then two packed inputs a frame
         image = read_image_rgb(path)
         got, want = side.detect_frame(image, None, 0.1 * i), alone.detect_frame(image, None, 0.1 * i)
@@ -133,26 +133,26 @@ def test_stream_finds_the_same_persons_with_its_passes_side_by_side(use_pose_cac
         assert len(got) == len(want) >= 25
         for field in ("keypoints", "confidences", "boxes", "scores"):
             np.testing.assert_allclose(getattr(got, field), getattr(want, field), rtol=0, atol=1e-3)
-    assert side.backend.network_runs == alone.backend.network_runs
+    assert side.network.network_runs == alone.network.network_runs
 
 
 @pytest.mark.onnx_model
 @pytest.mark.ultralytics
 @pytest.mark.slow
 def test_far_with_a_calibration_runs_its_levels_in_one_call_and_finds_the_same_persons(use_pose_cache):
+    from pedenv.detection import create_detector
+    from pedenv.detection.geometry import CameraGeometry
     from pedenv.images import read_image_rgb
-    from pedenv.pose.onnx_backend import OnnxPose
-    from pedenv.pose.tiling import CameraGeometry
     from pedenv.records import Camera
 
     from shared_paths import REAL_SAMPLES
 
     image = read_image_rgb(next((REAL_SAMPLES / "nuscenes-0061").glob("*CAM_BACK__*.jpg")))  # 1600x900
     geometry = CameraGeometry.level(Camera.from_fov().intrinsics, 1.5)  # the bands from the calibration
-    side, alone = OnnxPose(detection="far"), OnnxPose(detection="far", side_by_side=False)
+    side, alone = create_detector("onnx", detection="far"), create_detector("onnx", detection="far", side_by_side=False)
     calls = []
-    many = side.infer_many
-    side.infer_many = lambda tensors: calls.append(len(tensors)) or many(tensors)  # type: ignore[method-assign]
+    many = side.network.infer_many
+    side.network.infer_many = lambda tensors: calls.append(len(tensors)) or many(tensors)  # type: ignore[method-assign]
     got, want = side.detect(image, geometry), alone.detect(image, geometry)
     assert [p.kind for p in side.last_passes][:3] == ["full", "band", "band"]
     assert side.last_passes == alone.last_passes

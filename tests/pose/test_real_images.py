@@ -61,10 +61,10 @@ def test_onnx_agrees_with_ultralytics(pose_cache, photo, name, size):
 
 
 def test_rect_model_is_found_by_input_size(use_pose_cache, photo):
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
-    backend = create_pose_backend("onnx", input_size="384x640")
-    assert backend.input_size == (384, 640)
+    backend = create_detector("onnx", input_size="384x640")
+    assert backend.network.input_size == (384, 640) and backend.config is None  # one pass
     assert len(backend.detect(read_image_rgb(photo("zidane.jpg")))) == 2
 
 

@@ -57,7 +57,8 @@ def test_a_mot17_recording_has_a_labelled_guessed_camera_and_a_standing_ego(tmp_
 
 
 def test_a_guessed_downward_pitch_makes_far_tile_the_whole_image(tmp_path):
-    from pedenv.pose.tiling import CameraGeometry, DetectionConfig, far_band
+    from pedenv.detection.config import DetectionConfig
+    from pedenv.detection.geometry import CameraGeometry, far_band
 
     far = DetectionConfig.named("far")
     level = next(_load(write_mot17_recording(MOT17 / "MOT17-04-FRCNN", tmp_path / "level")).frames())

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pedenv.detection import create_detector
 from pedenv.errors import InputError
-from pedenv.pose import create_pose_backend
 from pedenv.records import Camera, EgoPose, Frame, GroundTruth
 from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.synthetic.detector import DetectorModel
@@ -28,7 +28,7 @@ def person_frame(index: int, height_px: float, centre_u: float = 800.0, scene: s
 
 
 def test_registered_as_pose_backend():
-    backend = create_pose_backend("detector-model", seed=3)
+    backend = create_detector("detector-model", seed=3)
     assert isinstance(backend, DetectorModel) and backend.name == "detector-model" and backend.seed == 3
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pedenv.pose import create_pose_backend
+from pedenv.detection import create_detector
 from pedenv.synthetic.detector import PROFILES, DetectorModel
 from pedenv.synthetic.detector_fit import (
     BINS,
@@ -77,7 +77,7 @@ def test_curve_fit_recovers_a_known_logistic():
 
 
 def test_profile_by_backend_name_and_unknown_profile():
-    model = create_pose_backend("detector-model:yolo11n-pose-single", seed=1)
+    model = create_detector("detector-model:yolo11n-pose-single", seed=1)
     assert isinstance(model, DetectorModel) and model.half_detection_height_px == PROFILES["yolo11n-pose-single"][
         "half_detection_height_px"]
     assert DetectorModel(profile="yolo11n-pose-single", half_detection_height_px=30.0).half_detection_height_px == 30.0

@@ -12,10 +12,10 @@ import sys
 from dataclasses import replace
 
 from pedenv.config import Config
+from pedenv.detection import create_detector
 from pedenv.evaluation.tracking_metrics import TrackingAccumulator
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose import create_pose_backend
 from pedenv.synthetic import SCENARIOS, generate_scenes
 
 #: The tracking fields the identity changes add; "before" sets them back to the paper's.
@@ -32,7 +32,7 @@ def fused_configs() -> dict[str, Config]:
 
 def identity_metrics(scenes, config: Config, backend="detector-model") -> dict:
     """MOTA, IDF1, id switches and matched detections over ``scenes`` (per-scene summed)."""
-    backend = create_pose_backend(backend) if isinstance(backend, str) else backend
+    backend = create_detector(backend) if isinstance(backend, str) else backend
     model = PedestrianEnvironmentModel(config)
     acc = TrackingAccumulator()
     for scene in scenes:

@@ -101,10 +101,10 @@ def _summary(acc: TrackingAccumulator) -> dict:
 def main() -> None:
     from identity_scenes import fused_configs
 
-    from pedenv.pose import create_pose_backend
+    from pedenv.detection import create_detector
 
     configs = {"paper": Config(method="paper"), **fused_configs()}
-    backends = {threshold: create_pose_backend("onnx", score_threshold=threshold) for threshold in (0.25, 0.1)}
+    backends = {threshold: create_detector("onnx", score_threshold=threshold) for threshold in (0.25, 0.1)}
     frames = kitti_frames()
     print("KITTI tracking 0016, frames", [f.index for f in frames], "onnx backend (far)")
     for name, config in configs.items():

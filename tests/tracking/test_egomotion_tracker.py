@@ -135,5 +135,5 @@ def test_a_static_camera_gets_no_yaw_shift():
     for make, moved in ((lambda f: f, True), (static, False)):
         model = PedestrianEnvironmentModel(Config(method="paper"))
         model.update(make(a))
-        _, boxes, _ = model.predicted_boxes(make(b))
+        boxes = model.predict_tracks(make(b)).boxes
         assert bool(abs(boxes[0, 0] - a.detections.boxes[0, 0]) > 50.0) is moved

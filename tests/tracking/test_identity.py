@@ -173,7 +173,7 @@ def test_identity_fields_are_checked(field, value):
 
 
 def test_the_low_band_reaches_the_tracker_only_when_it_is_on():
-    from pedenv.pose.models import backend_options
+    from pedenv.detection import backend_options
 
     assert TrackingConfig().pose_score_threshold is None
     assert TrackingConfig(low_score_threshold=0.1).pose_score_threshold == 0.1

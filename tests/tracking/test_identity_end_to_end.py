@@ -6,7 +6,7 @@ import pytest
 from identity_scenes import fused_configs, identity_metrics
 
 from pedenv.config import Config
-from pedenv.pose import create_pose_backend
+from pedenv.detection import create_detector
 from pedenv.synthetic import SCENARIOS, generate_scenes
 
 
@@ -32,7 +32,7 @@ def test_side_by_side_walkers_of_kitti_0016_keep_their_ids():
 
     frames = kitti_frames("0016")
     config = fused_configs()["after"]
-    backend = create_pose_backend("onnx", score_threshold=config.tracking.pose_score_threshold)
+    backend = create_detector("onnx", score_threshold=config.tracking.pose_score_threshold)
     found, summary = track_kitti(frames, config, backend)
     # walkers 5 and 6 go side by side; in frame 7 the network sees 6 only at score 0.17
     assert [(ids.get(5), ids.get(6)) for ids in found] == [(found[0][5], found[0][6])] * 3
@@ -42,5 +42,5 @@ def test_side_by_side_walkers_of_kitti_0016_keep_their_ids():
     # matches, IDF1 0.792; the paper's tracker: walkers 5 and 6 swap in frame 12
     assert summary["id_switches"] <= 1
     assert summary["matches"] >= 19
-    paper, _ = track_kitti(frames, Config(method="paper"), create_pose_backend("onnx"))
+    paper, _ = track_kitti(frames, Config(method="paper"), create_detector("onnx"))
     assert paper[2].get(5) != paper[0].get(5) or paper[2].get(6) != paper[0].get(6)  # the swap this fixes

@@ -115,14 +115,13 @@ def _recording_task(row: ManifestRow, context: TaskContext) -> dict:
 
 
 def _make_backend(pose: PoseOptions, config: Config) -> PoseBackend:
-    from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.models import backend_options
+    from pedenv.detection import backend_options, create_detector
 
     name = pose.backend or "onnx"
     cfg = detection_mode(config, name, pose.detection)
-    return create_pose_backend(name, **backend_options(
+    return create_detector(name, **backend_options(
         name, pose.model, pose.input_size, cfg.detection if pose.detection else None,
-        cfg.tracking.pose_score_threshold, cfg.merge))
+        cfg.tracking.pose_score_threshold, redetect=cfg.redetect))
 
 
 def _complete(folder: Path, partial: bool = False) -> dict:

@@ -165,15 +165,15 @@ def bench_detection_modes(samples_root: str | Path | None = None, repeats: int =
     import os
 
     from pedenv.apps.evaluate_detections import evaluate_detections, network_units
-    from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.tiling import CameraGeometry
+    from pedenv.detection import create_detector
+    from pedenv.detection.geometry import CameraGeometry
     from pedenv.pose.timing import benchmark_image
 
     image = benchmark_image()
     geometry = CameraGeometry.level(Camera.from_fov().intrinsics, 1.5)
     rows = []
     for mode in ("fast", "far", "stream"):
-        pose: Any = create_pose_backend("onnx", detection=mode, threads=threads, device=device)
+        pose: Any = create_detector("onnx", detection=mode, threads=threads, device=device)
         def run(i: int, pose: Any = pose, mode: str = mode) -> None:
             if mode == "stream":
                 pose.detect_frame(image, geometry, 0.1 * i)

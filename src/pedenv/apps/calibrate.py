@@ -227,10 +227,9 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
 
     k = load_intrinsics(calibration)[2] if calibration is not None else None
     if backend is None:
-        from pedenv.pose.base import create_pose_backend
-        from pedenv.pose.models import backend_options
+        from pedenv.detection import backend_options, create_detector
 
-        backend = create_pose_backend(backend_name, **backend_options(backend_name, None, None, "far", device=device))
+        backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
     warmup = observe(warmup_frames(images, video), backend)
     estimate = estimate_from(warmup, backend_name, k)
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()

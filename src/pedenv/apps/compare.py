@@ -24,13 +24,14 @@ from pedenv.apps.evaluate import run_evaluation
 from pedenv.apps.evaluation_outputs import write_outputs
 from pedenv.config import Config
 from pedenv.datasets import Dataset
+from pedenv.detection import create_detector
 from pedenv.errors import InputError
 from pedenv.evaluation.metrics import ErrorSummary, strict_json
 from pedenv.evaluation.report import fmt
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.localization import METHODS, configure
 from pedenv.outputs.sinks import ExtraOutputs
-from pedenv.pose import PoseBackend, create_pose_backend
+from pedenv.pose.base import PoseBackend
 from pedenv.visualize.plots import plot_error_by_distance
 
 
@@ -58,7 +59,7 @@ def compare_methods(
         raise InputError(f"methods must be distinct names from {', '.join(METHODS)}, got {methods}")
     config = config or Config()
     spec = pose_backend or dataset.default_pose_backend
-    backend = create_pose_backend(spec) if isinstance(spec, str) else spec
+    backend = create_detector(spec) if isinstance(spec, str) else spec
     out = Path(output_dir) if output_dir else None
     extras = dict(extra_outputs or {})
     for extra in extras.values():

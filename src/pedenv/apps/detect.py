@@ -6,12 +6,12 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from pedenv.detection.geometry import CameraGeometry
 from pedenv.errors import InputError
 from pedenv.images import image_size, read_image_rgb, write_image
 from pedenv.outputs.detections import detections_to_dict, unique_names, write_detections
 from pedenv.outputs.output_dir import prepare_output_dir
 from pedenv.pose.base import PoseBackend
-from pedenv.pose.tiling import CameraGeometry
 from pedenv.records import Camera
 from pedenv.visualize.overlay import draw_detections
 
@@ -68,7 +68,7 @@ def _annotate(path: Path, drawn_path: Path, backend: PoseBackend, camera: Camera
     """One image's record: read, detected (the far band placed by ``camera`` when given), drawn
     to ``drawn_path``."""
     # detect(image[, geometry]) is not in the PoseBackend protocol (only __call__ on a frame): the
-    # image backends (OnnxPose, StreamPose, UltralyticsPose) have it, with the signatures of their own
+    # image backends (Detector, OnnxPose, UltralyticsPose) have it, with the signatures of their own
     detector: Any = backend
     image = read_image_rgb(path)
     if camera is None:

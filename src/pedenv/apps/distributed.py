@@ -33,10 +33,11 @@ from pedenv.apps.scene_checkpoint import load_checkpoint, run_identity, save_che
 from pedenv.apps.scene_result import SceneHooks, SceneResult, evaluate_scene, merge_scene_results
 from pedenv.config import Config
 from pedenv.datasets import Dataset
+from pedenv.detection import create_detector
 from pedenv.errors import InputError
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.outputs.jsonl import EnvironmentWriter
-from pedenv.pose import PoseBackend, create_pose_backend
+from pedenv.pose.base import PoseBackend
 
 #: Folder of the per-scene outputs and checkpoints inside the output folder.
 SCENES_FOLDER = "scenes"
@@ -45,14 +46,15 @@ CHECKPOINT = "result.npz"
 PICKLE_CHECKPOINT = "result.pkl"
 
 #: A pose backend as workers get it: a registered name, a picklable backend, or a
-#: picklable factory (``functools.partial(create_pose_backend, "onnx", detection="far")``).
+#: picklable factory (``functools.partial(create_detector, "onnx", detection="far")``).
 BackendSpec = str | PoseBackend | Callable[[], PoseBackend]
 
 
-def make_backend(spec: BackendSpec) -> PoseBackend:
-    """The backend of ``spec``: created by name, called as a factory, or ``spec`` itself."""
+def make_backend(spec: BackendSpec, config: Config) -> PoseBackend:
+    """The backend of ``spec``: created by name (onnx: with ``config``'s merge and re-detection
+    settings), called as a factory, or ``spec`` itself."""
     if isinstance(spec, str):
-        return create_pose_backend(spec)
+        return create_detector(spec, redetect=config.redetect)
     if isinstance(spec, PoseBackend):
         return spec
     return spec()
@@ -70,7 +72,7 @@ def evaluate_on(dataset: Dataset, *, executor: SerialExecutor | RayExecutor, sce
     """
     config = config or Config()
     spec = pose_backend or dataset.default_pose_backend
-    backend = make_backend(spec)
+    backend = make_backend(spec, config)
     names = resolve_scenes(dataset, scenes)
     run = run_identity(dataset.name, backend.name, config.to_dict())
     store = SceneStore(Path(output_dir), run) if output_dir else None
@@ -103,7 +105,7 @@ def evaluate_on(dataset: Dataset, *, executor: SerialExecutor | RayExecutor, sce
 def _scene_task(name: str, context: TaskContext) -> SceneResult:
     """One scene on a worker: the dataset's frames through a fresh model, lines collected."""
     dataset, config, spec = (context.shared[k] for k in ("dataset", "config", "backend"))
-    backend = context.cached(("backend", id(spec)), lambda: make_backend(spec))
+    backend = context.cached(("backend", id(spec)), lambda: make_backend(spec, config))
     frames = list(dataset.frames(name))
     context.report(0, len(frames))
     hooks = SceneHooks(collect_lines=True, progress=lambda done: context.report(done, len(frames)))

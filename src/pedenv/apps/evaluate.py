@@ -14,13 +14,14 @@ from pedenv.apps.scene_result import SceneHooks, evaluate_scene, merge_scene_res
 from pedenv.behaviour.conflict import CONFLICT_PROBABILITY
 from pedenv.config import Config
 from pedenv.datasets import Dataset
+from pedenv.detection import create_detector
 from pedenv.errors import InputError
 from pedenv.evaluation.metrics import Metrics
 from pedenv.evaluation.result import EvaluationResult
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
-from pedenv.pose import PoseBackend, create_pose_backend
+from pedenv.pose.base import PoseBackend
 from pedenv.records import Frame
 from pedenv.state import EnvironmentState
 
@@ -56,7 +57,7 @@ def run_evaluation(dataset: Dataset, *, scenes: Sequence[str] | None = None, con
     executor merges them (:mod:`pedenv.apps.distributed`).
     """
     config = config or Config()
-    backend = _backend(pose_backend or dataset.default_pose_backend)
+    backend = _backend(pose_backend or dataset.default_pose_backend, config)
     names = resolve_scenes(dataset, scenes)
     writer = EnvironmentWriter(Path(output_dir) / "environment.jsonl") if output_dir else None
     extra_outputs = extra_outputs or ExtraOutputs()
@@ -120,5 +121,6 @@ def _matches_writer(path: Path | None, sinks: Sinks) -> MatchesTableWriter | Non
         raise
 
 
-def _backend(spec: str | PoseBackend) -> PoseBackend:
-    return create_pose_backend(spec) if isinstance(spec, str) else spec
+def _backend(spec: str | PoseBackend, config: Config) -> PoseBackend:
+    """The backend ``spec`` names (onnx: with the run's merge and re-detection settings), or ``spec``."""
+    return create_detector(spec, redetect=config.redetect) if isinstance(spec, str) else spec

@@ -96,15 +96,15 @@ def onnx_backend(data: Dataset, cfg: Config, pose: PoseOptions) -> tuple[Config,
     ``--pose-backend onnx`` is given; else ``cfg`` and None. ``--detection`` and ``--device`` need onnx."""
     if pose.detection is None and pose.backend != "onnx" and pose.device == "auto":
         return cfg, None
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
     if (pose.backend or data.default_pose_backend) != "onnx":
         raise InputError("--detection and --device apply to the onnx pose backend; add --pose-backend onnx")
     threshold = {} if cfg.tracking.pose_score_threshold is None else {
         "score_threshold": cfg.tracking.pose_score_threshold}
     cfg = cfg.replace(detection={"mode": pose.detection or "far"})
-    return cfg, partial(create_pose_backend, "onnx", detection=cfg.detection, merge=cfg.merge, device=pose.device,
-                        **threshold)
+    return cfg, partial(create_detector, "onnx", detection=cfg.detection, redetect=cfg.redetect,
+                        device=pose.device, **threshold)
 
 
 def refuse_with_tasks(method: MethodOptions, flags: OutputFlags, *, ablation: bool) -> None:

@@ -15,41 +15,40 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pedenv.detection.config import STREAM_MIN_HITS
 from pedenv.evaluation.detections import DetectionSample, load_samples, match_detections, summarize
 from pedenv.evaluation.metrics import strict_json
 from pedenv.images import read_image_rgb
-from pedenv.records import Detections
+from pedenv.records import Detections, PredictedTracks
 
 if TYPE_CHECKING:
     from rich.table import Table
 
-    from pedenv.pose.onnx_backend import OnnxPose
-    from pedenv.pose.stream import StreamPose
-    from pedenv.pose.tiling import DetectionConfig
+    from pedenv.detection import DetectionConfig, Detector
 
 
 def evaluate_detections(data_root: str | Path, detection: str | DetectionConfig = "far",
-                        output: str | Path | None = None, backend: OnnxPose | StreamPose | None = None,
+                        output: str | Path | None = None, backend: Detector | None = None,
                         model_path: str | Path | None = None, threads: int = 2,
                         progress: Callable[[int, int], None] | None = None,
                         samples: list[DetectionSample] | None = None) -> dict:
     """Recall/precision report (a JSON-ready dict) of ``detection`` mode (``fast``, ``far`` or a
     DetectionConfig) on the samples under ``data_root``; written to ``output/detections_eval.json``
-    when ``output`` is given. ``backend``: an OnnxPose to use instead of creating one.
+    when ``output`` is given. ``backend``: a :class:`~pedenv.detection.Detector` to use instead of creating one.
     ``samples``: a list of DetectionSample to use instead of all under ``data_root``.
     ``stream`` runs each sequence's samples as consecutive frames (:func:`stream_frame`).
     """
-    from pedenv.pose.base import create_pose_backend
+    from pedenv.detection import create_detector
 
     samples = load_samples(data_root) if samples is None else samples
-    pose: Any = backend or create_pose_backend("onnx", model_path=model_path, detection=detection, threads=threads)
+    pose: Any = backend or create_detector("onnx", model_path=model_path, detection=detection, threads=threads)
     images = [read_image_rgb(s.image_path) for s in samples]
     pose.detect(images[0], samples[0].geometry)  # warm-up: onnxruntime's first run allocates
     matches, ms, cpu_ms, units = [], [], [], []
     previous: tuple[DetectionSample, Detections] | None = None
     for i, (sample, image) in enumerate(zip(samples, images)):
         start, cpu = time.perf_counter(), time.process_time()
-        if hasattr(pose, "detect_frame"):  # stream: a sequence's samples in order, consecutive frames
+        if pose.stream is not None:  # stream: a sequence's samples in order, consecutive frames
             dets = stream_frame(pose, image, sample, previous)
             previous = (sample, dets)
         else:
@@ -79,21 +78,22 @@ def evaluate_detections(data_root: str | Path, detection: str | DetectionConfig 
     return report
 
 
-def stream_frame(pose: StreamPose, image: np.ndarray, sample: DetectionSample,
+def stream_frame(pose: Detector, image: np.ndarray, sample: DetectionSample,
                  previous: tuple[DetectionSample, Detections] | None) -> Detections:
     """``pose.detect_frame`` on one sample as the next frame of its sequence; the tracks stand-in
     is the previous sample's persons where it is the frame before in the same sequence (not moved,
-    ``track_min_hits`` hits each); a sample of another sequence, or of none, restarts the stream.
+    ``STREAM_MIN_HITS`` hits each); a sample of another sequence, or of none, restarts the stream.
     ``image``: (H, W, 3) uint8 RGB."""
     if previous is None or not sample.sequence or previous[0].sequence != sample.sequence:
         pose.restart()
         return pose.detect_frame(image, sample.geometry, sample.timestamp)
     boxes = previous[1].boxes
-    hits = np.full(len(boxes), pose.config.stream.track_min_hits)
-    return pose.detect_frame(image, sample.geometry, sample.timestamp, (np.arange(len(boxes)), boxes, hits))
+    hits = np.full(len(boxes), STREAM_MIN_HITS)
+    tracks = PredictedTracks(np.arange(len(boxes)), boxes, hits)
+    return pose.detect_frame(image, sample.geometry, sample.timestamp, tracks)
 
 
-def network_units(pose: OnnxPose | StreamPose) -> float:
+def network_units(pose: Detector) -> float:
     """Network input pixels of the passes ``pose`` ran on its last image, in units of one
     384x640 pass (a load-independent cost; `pedenv bench` times one such pass on this machine)."""
     return sum(p.input_size[0] * p.input_size[1] for p in pose.last_passes) / (384 * 640)

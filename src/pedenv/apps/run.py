@@ -3,10 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
-import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -27,14 +25,14 @@ from pedenv.apps.run_outputs import (
     outside,
 )
 from pedenv.config import Config
+from pedenv.detection import Detector, backend_options, create_detector
 from pedenv.errors import InputError
-from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import holds_files
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
-from pedenv.pose.base import PoseBackend, create_pose_backend
-from pedenv.pose.models import backend_options, choose_input_size
-from pedenv.pose.redetect import with_redetection
+from pedenv.pipeline import Pipeline
+from pedenv.pose.base import PoseBackend
+from pedenv.pose.models import choose_input_size
 from pedenv.recordings.footage import Recording
 from pedenv.records import Frame
 from pedenv.video_files import video_capture
@@ -63,9 +61,12 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     an input, a full disk one error with every output valid (:mod:`pedenv.apps.output_safety`).
     A video that ends before the frame count its header gives is warned about and
     ``run.json`` says so in ``ended_early``.
-    ``pose.detection`` (``onnx``): ``far`` (whole frame + tiles over the far band, the default) or
-    ``fast`` (one pass fitted to the camera's aspect); None with ``pose.input_size`` None
-    picks 384x640 for wide cameras, else 640 (one pass). ``pose.device`` (``onnx``): ``auto``,
+    ``pose.detection`` (``onnx``): ``stream`` (the default: the whole-frame pass, the tracks it
+    missed in packed inputs and the far band's tiles in rotation, about one pass's cost), ``far``
+    (whole frame + tiles over the far band) or ``fast`` (one pass fitted to the camera's aspect);
+    None with ``pose.input_size`` None picks 384x640 for wide cameras, else 640 (one pass).
+    Each frame runs :class:`pedenv.Pipeline`: predict the tracks, detect with them, update the model.
+    ``pose.device`` (``onnx``): ``auto``,
     ``cpu`` or ``cuda`` (:mod:`pedenv.pose.providers`).
     ``pipeline.realtime``: frames at the recording's rate, those arriving while the model is
     busy dropped and counted (``frames_dropped``); an image folder needs its timestamps.csv or ``fps``.
@@ -83,14 +84,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
-    model = PedestrianEnvironmentModel(cfg)
-    backend = with_redetection(backend, model, cfg.redetect)  # missed tracks searched in crops (fused preset)
+    frames = Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update the model
     summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
                                "frames_total": len(rec), "frames_done": 0,
                                "environment": str(folder.final / "environment.jsonl")}
     if estimated is not None:
         summary["calibration"] = estimated.write(out)  # calibration.yaml (estimated: true), .json and .png
-    stats, timer = PipelineStats(), _StepTimes()
+    stats = PipelineStats()
     extra = in_work_folder(output.extra or ExtraOutputs(), folder)
     writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
@@ -100,14 +100,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
             write = estimated.widened(outputs.write) if estimated is not None else outputs.write
-            run_frames(rec.frames(), partial(_step, backend, model, timer), write, config=pipe,
-                       done=outputs.done, stats=stats)
+            run_frames(rec.frames(), frames.process, write, config=pipe, done=outputs.done, stats=stats)
         _check_ended_early(rec, stats, summary)
         finished = True
     finally:
         outputs.close()
         summary["frames_done"] = writer.lines  # the frames whose every output was written
-        _finish_summary(summary, out, backend, stats, timer, pipe, outputs, sinks)
+        _finish_summary(summary, out, frames, stats, pipe, outputs, sinks)
         finish_run(folder, summary, sinks, finished=finished)
     return summary
 
@@ -153,9 +152,9 @@ def _make_backend(pose: PoseOptions, cfg: Config, rec: Recording | BagRecording)
     input_size: str | tuple[int, int] | None = pose.input_size
     if name == "onnx" and input_size is None and pose.model is None and pose.detection is None:
         input_size = choose_input_size(rec.camera.width, rec.camera.height)
-    return create_pose_backend(name, **backend_options(
+    return create_detector(name, **backend_options(
         name, pose.model, input_size, cfg.detection if pose.detection else None,
-        cfg.tracking.pose_score_threshold, cfg.merge, device=pose.device))
+        cfg.tracking.pose_score_threshold, device=pose.device, redetect=cfg.redetect))
 
 
 def _check_ended_early(rec: Recording | BagRecording, stats: PipelineStats, summary: dict) -> None:
@@ -170,12 +169,13 @@ def _check_ended_early(rec: Recording | BagRecording, stats: PipelineStats, summ
         warnings.warn(summary["ended_early"], stacklevel=3)
 
 
-def _finish_summary(summary: dict, out: Path, backend: PoseBackend, stats: PipelineStats, timer: _StepTimes,
-                    pipe: PipelineConfig, outputs: _Outputs, sinks: Sinks) -> None:
+def _finish_summary(summary: dict, out: Path, pipeline: Pipeline, stats: PipelineStats, pipe: PipelineConfig,
+                    outputs: _Outputs, sinks: Sinks) -> None:
     """The end of ``run.json``: backend, dropped frames, speed, the bird's-eye plot and the files written."""
+    backend = pipeline.detector
     summary["pose_backend"] = backend.describe() if hasattr(backend, "describe") else {"backend": backend.name}
     summary["frames_dropped"] = stats.dropped
-    summary["speed"] = {**stats.to_dict(), **timer.per_frame(backend), "pipeline": dataclasses.asdict(pipe)}
+    summary["speed"] = {**stats.to_dict(), **_step_times(pipeline), "pipeline": dataclasses.asdict(pipe)}
     if outputs.last is not None:
         state, frame = outputs.last
         try:
@@ -191,37 +191,16 @@ def detection_mode(cfg: Config, pose_backend: str, detection: str | None) -> Con
     return cfg.replace(detection={"mode": detection}) if pose_backend == "onnx" and detection else cfg
 
 
-@dataclass
-class _StepTimes:
-    """Seconds spent in the middle stage: detection (the backend's call: network, pre- and
-    post-processing, re-detection crops) and the model's update, over ``frames`` frames."""
-
-    detection_s: float = 0.0
-    model_s: float = 0.0
-    frames: int = 0
-
-    def per_frame(self, backend: PoseBackend) -> dict:
-        """ms per frame of detection, model and the network alone (an onnx backend's
-        ``network_s``: its session runs, counted by the backend), and network passes per frame."""
-        n = max(self.frames, 1)
-        onnx: Any = getattr(backend, "backend", backend)  # under the re-detection wrapper; counters read by name
-        times = {"detection_ms_per_frame": 1e3 * self.detection_s / n, "model_ms_per_frame": 1e3 * self.model_s / n}
-        if hasattr(onnx, "network_s"):
-            times.update(network_ms_per_frame=1e3 * onnx.network_s / n, network_passes_per_frame=onnx.network_runs / n)
-        return times
-
-
-def _step(backend: PoseBackend, model: PedestrianEnvironmentModel, timer: _StepTimes,
-          frame: Frame) -> tuple[EnvironmentState, Frame]:
-    """The network and the model on one frame (the pipeline's middle stage): (state, frame)."""
-    start = time.perf_counter()
-    frame = dataclasses.replace(frame, detections=backend(frame))
-    middle = time.perf_counter()
-    state = model.update(frame)
-    timer.detection_s += middle - start
-    timer.model_s += time.perf_counter() - middle
-    timer.frames += 1
-    return state, frame
+def _step_times(pipeline: Pipeline) -> dict:
+    """ms per frame of detection (the network, pre- and post-processing, the track search), the
+    model's update and the network alone (an onnx detector's session runs), and network passes per frame."""
+    n = max(pipeline.frames, 1)
+    times = {"detection_ms_per_frame": 1e3 * pipeline.detection_s / n, "model_ms_per_frame": 1e3 * pipeline.model_s / n}
+    if isinstance(pipeline.detector, Detector):
+        network = pipeline.detector.network
+        times.update(network_ms_per_frame=1e3 * network.network_s / n,
+                     network_passes_per_frame=network.network_runs / n)
+    return times
 
 
 class _Outputs:

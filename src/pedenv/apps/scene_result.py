@@ -28,7 +28,6 @@ from pedenv.geometry import inverse_2x2
 from pedenv.model import PedestrianEnvironmentModel
 from pedenv.outputs.jsonl import environment_line
 from pedenv.pose import PoseBackend
-from pedenv.pose.redetect import with_redetection
 from pedenv.records import Frame
 from pedenv.stage_timer import StageTimer
 from pedenv.state import EnvironmentState
@@ -88,12 +87,12 @@ def evaluate_scene(name: str, frames: Iterable[Frame], *, config: Config, backen
     """
     hooks = hooks or SceneHooks()
     model = model_factory(config)
-    backend = with_redetection(backend, model, config.redetect)  # missed tracks searched in crops (fused)
     tracking = TrackingAccumulator()
     behaviour = BehaviourRecorder(config.behaviour)
     result = SceneResult(name, timer=model.timer, lines=[] if hooks.collect_lines else None)
     for frame in frames:
-        frame = replace(frame, detections=backend(frame))
+        tracks = model.predict_tracks(frame)  # as pedenv.Pipeline: predict, detect with the tracks, update
+        frame = replace(frame, detections=backend(frame, tracks))
         state = model.update(frame)
         if hooks.on_frame is not None:
             hooks.on_frame(state, frame)

@@ -35,10 +35,9 @@ def calibrate(
 ) -> None:
     """Estimate a camera (focal length, height, tilt, roll) from the people in its first frames."""
     from pedenv.apps.calibrate import calibrate as run_calibration
-    from pedenv.pose.base import create_pose_backend
-    from pedenv.pose.models import backend_options
+    from pedenv.detection import backend_options, create_detector
 
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, None, detection,
+    backend = create_detector(pose_backend, **backend_options(pose_backend, pose_model, None, detection,
                                                                   device=device))
     if odometry:
         _odometry(output, calibration, images, video, fps, backend, overwrite)

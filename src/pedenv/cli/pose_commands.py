@@ -64,22 +64,22 @@ def detect(
     pose_model: PoseModel = None,
     pose_input_size: PoseInputSize = None,
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace the outputs of an earlier run in --output."),
-    detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
+    detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles over the far band, the "
+                                  "default), fast (one pass) or stream (on single images: as far)."),
     device: Device = "auto",
     calibration: Path | None = typer.Option(
         None, "--calibration", help="Calibration YAML (as for run): places the far band; default: fitted."),
 ) -> None:
     """2D skeletons on images: writes DIR/detections.json and each image with skeletons drawn."""
     from pedenv.apps.detect import annotate_images
+    from pedenv.detection import backend_options, create_detector
     from pedenv.paths import refuse_special_file
-    from pedenv.pose.base import create_pose_backend
 
     for image in images:
         refuse_special_file(image, "image")
-    from pedenv.pose.models import backend_options
 
-    backend = create_pose_backend(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection,
-                                                                  device=device))
+    backend = create_detector(pose_backend, **backend_options(pose_backend, pose_model, pose_input_size, detection,
+                                                              device=device))
     camera = None
     if calibration is not None:
         from pedenv.recordings.footage import load_calibration

@@ -24,8 +24,8 @@ import numpy as np
 from pedenv.boxes import containment_matrix, greedy_match, iou_matrix
 from pedenv.datasets import kitti_files as kitti
 from pedenv.datasets import mot17, nuscenes_cameras
+from pedenv.detection.geometry import CameraGeometry
 from pedenv.errors import InputError
-from pedenv.pose.tiling import CameraGeometry
 
 #: Person height bins, pixels: (label, low, high).
 HEIGHT_BINS = (("<50", 0.0, 50.0), ("50-100", 50.0, 100.0), ("100-200", 100.0, 200.0), (">=200", 200.0, np.inf))

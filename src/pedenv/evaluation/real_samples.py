@@ -86,7 +86,7 @@ def sample_images(samples: Path) -> list[tuple[str, Path, Any]]:
     ``nuscenes/<CAM>``. The geometry is the one ``pedenv evaluate-detections`` uses (KITTI:
     level camera 1.65 m up; nuScenes: the camera's pose; MOT17: none, the whole image is tiled)."""
     from pedenv.datasets import mot17
-    from pedenv.pose.tiling import CameraGeometry
+    from pedenv.detection.geometry import CameraGeometry
 
     out: list[tuple[str, Path, CameraGeometry | None]] = []
     for folder in mot17.sequence_folders(samples / "mot17"):

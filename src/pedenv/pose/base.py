@@ -1,4 +1,4 @@
-"""The pose backend Protocol and the registry that creates backends by name."""
+"""The pose backend Protocol and the registry that creates the networks by name."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import importlib
 from typing import Any, Protocol, runtime_checkable
 
 from pedenv.errors import InputError
-from pedenv.records import Detections, Frame
+from pedenv.records import Detections, Frame, PredictedTracks
 
 
 @runtime_checkable
@@ -15,12 +15,14 @@ class PoseBackend(Protocol):
 
     ``name`` is saved with the results. ``__call__`` reads what it needs from the frame
     (its image, or its ground truth for the ``ground-truth`` backend) and returns
-    :class:`~pedenv.records.Detections` in the frame's pixel coordinates.
+    :class:`~pedenv.records.Detections` in the frame's pixel coordinates. ``tracks``: where
+    the model expects its live tracks in this frame (:class:`~pedenv.records.PredictedTracks`),
+    handed in by the pipeline; a backend that cannot use them ignores them.
     """
 
     name: str
 
-    def __call__(self, frame: Frame) -> Detections: ...
+    def __call__(self, frame: Frame, tracks: PredictedTracks | None = None) -> Detections: ...
 
 
 #: Backend name -> "module:class"; modules are imported only when the backend is created.
@@ -36,16 +38,14 @@ def create_pose_backend(name: str, **options: Any) -> PoseBackend:  # options: t
     """Create the backend registered as ``name`` with its keyword ``options``.
 
     ``detector-model:<profile>`` (e.g. ``detector-model:yolo11n-pose-single``) is the
-    detector model with that named profile; ``onnx`` with ``detection="stream"`` (or a
-    config in mode ``stream``) is the stateful :class:`~pedenv.pose.stream.StreamPose`.
-    Raises ValueError naming the valid backends for an unknown name.
+    detector model with that named profile. ``onnx`` is the network alone, one pass per
+    frame; the detection modes that spend it (``fast``, ``far``, ``stream``) are
+    :func:`pedenv.detection.create_detector`'s. Raises InputError naming the valid backends
+    for an unknown name.
     """
     if name.startswith("detector-model:"):
         name, options = "detector-model", {"profile": name.split(":", 1)[1], **options}
     if name not in POSE_BACKENDS:
         raise InputError(f"unknown pose backend {name!r}; valid: {', '.join(POSE_BACKENDS)}")
     module, cls = POSE_BACKENDS[name].split(":")
-    detection = options.get("detection")
-    if name == "onnx" and getattr(detection, "mode", detection) == "stream":
-        module, cls = "pedenv.pose.stream", "StreamPose"
     return getattr(importlib.import_module(module), cls)(**options)

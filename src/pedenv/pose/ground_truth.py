@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.records import Detections, Frame
+from pedenv.records import Detections, Frame, PredictedTracks
 
 
 class GroundTruthPose:
@@ -20,7 +20,7 @@ class GroundTruthPose:
 
     name = "ground-truth"
 
-    def __call__(self, frame: Frame) -> Detections:
+    def __call__(self, frame: Frame, tracks: PredictedTracks | None = None) -> Detections:  # noqa: ARG002 - sees no tracks
         gt = frame.ground_truth
         if gt is None or gt.keypoints is None:
             if frame.detections is not None:

@@ -28,9 +28,6 @@ from pedenv.pose.postprocess import OUTPUT_ROWS, parse_input_size
 if TYPE_CHECKING:
     import onnxruntime as ort
 
-    from pedenv.pose.merge import MergeConfig
-    from pedenv.pose.tiling import DetectionConfig
-
 DEFAULT_WEIGHTS_NAME = "yolo11n-pose.pt"
 #: ``input_sizes`` entry that stands for the export with a dynamic input shape.
 DYNAMIC = "dynamic"
@@ -236,28 +233,3 @@ def choose_input_size(width: int, height: int) -> tuple[int, int]:
     """The prepared input (height, width) that suits a camera: 384x640 for wide images
     (aspect >= 16:10, e.g. nuScenes' 1600x900), else the square 640."""
     return (384, 640) if width / height >= 1.6 else (640, 640)
-
-
-def backend_options(backend: str, model: str | Path | None = None, input_size: int | str | Sequence[int] | None = None,
-                    detection: str | DetectionConfig | None = None, score_threshold: float | None = None,
-                    merge: MergeConfig | None = None, device: str = "auto") -> dict:
-    """Keyword options for ``create_pose_backend(backend, ...)`` from a model file, input size,
-    detection mode (``fast`` or ``far``, onnx only) and device (``auto``, ``cpu`` or ``cuda``:
-    :mod:`pedenv.pose.providers`; ultralytics runs on the CPU, ``cuda`` is refused for it).
-
-    ``onnx``: ``model`` is an ONNX file (None: the cached one for ``input_size``, else the
-    dynamic one); ``ultralytics``: ``model`` is the .pt weights. Other backends take no options.
-    score_threshold: the network's person score threshold (onnx, ultralytics); None keeps
-    the backend's own (0.25). The tracker's low-score band needs it lowered
-    (``TrackingConfig.pose_score_threshold``). ``detection`` may be a ``DetectionConfig`` and
-    ``merge`` a ``MergeConfig`` (onnx; a run's ``Config.detection`` and ``Config.merge``).
-    """
-    scores = {} if score_threshold is None else {"score_threshold": score_threshold}
-    if backend == "onnx":
-        return {"model_path": model, "input_size": input_size, "detection": detection, "device": device, **scores,
-                **({} if merge is None else {"merge": merge})}
-    if device not in ("auto", "cpu"):
-        raise InputError(f"device {device!r} applies to the onnx pose backend; {backend} runs on the CPU")
-    if backend == "ultralytics":
-        return {"weights": model, "input_size": input_size or 640, **scores}
-    return {}

@@ -2,8 +2,9 @@
 
 No torch needed at run time. The model comes from ``pedenv models prepare`` (one export
 with a dynamic input shape) or from any compatible file (input (1, 3, H, W), output (1, 56, N)).
-Detection modes (:mod:`pedenv.pose.tiling`): ``fast`` is one pass with the input fitted to
-the frame's aspect; ``far`` adds tiles over the band where far people stand.
+This is the network only: one pass over a whole image, and the raw runs (:meth:`OnnxPose.infer_many`)
+that the detection modes spend (``fast``, ``far``, ``stream``: :mod:`pedenv.detection`, whose
+:class:`~pedenv.detection.detector.Detector` wraps this backend).
 """
 
 from __future__ import annotations
@@ -20,13 +21,9 @@ import numpy as np
 
 from pedenv.errors import InputError, require_extra
 from pedenv.pose import models
-from pedenv.pose.levels import plan_passes
-from pedenv.pose.merge import MergeConfig
-from pedenv.pose.multipass import detect_levels
 from pedenv.pose.postprocess import DecodeSettings, decode, frame_image, letterbox, parse_input_size, to_input_tensor
 from pedenv.pose.providers import CPU, SessionConfig, create_session
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
-from pedenv.records import Detections, Frame
+from pedenv.records import Detections, Frame, PredictedTracks
 
 #: At most this many sessions per backend on a GPU, one per input shape (:meth:`OnnxPose._session_for`);
 #: each holds the model's weights (11 MB) and its own workspace.
@@ -38,11 +35,9 @@ class OnnxPose:
     model_path: an ONNX file; None takes the cached model (a fixed export for ``input_size``
         if one is cached, else the dynamic one).
     input_size: network input, ``640`` or ``"384x640"`` / ``(384, 640)`` (height x width);
-        must match a model with a fixed input. Given without ``detection``: one pass at this
-        size (the behaviour before detection modes). With ``detection``: the whole-frame pass's input.
-    detection: ``"fast"``, ``"far"`` or a :class:`DetectionConfig`; None means ``"far"``
-        unless ``input_size`` is given. A model with a fixed input runs every pass at that size.
-    merge: how the passes' detections are merged (:class:`MergeConfig`; None: its defaults).
+        must match a model with a fixed input; :meth:`detect` runs one pass at this size (None:
+        640x640 on a dynamic model), a detection mode its whole-frame pass (:attr:`requested_input`).
+        A model with a fixed input runs every pass at that size.
     decoding: ``score_threshold`` (0.25), ``iou_threshold`` (0.7) and ``max_detections`` (300)
         (:class:`~pedenv.pose.postprocess.DecodeSettings`); its fields may also be given as
         keywords (``OnnxPose(score_threshold=0.1)``).
@@ -55,7 +50,6 @@ class OnnxPose:
     name = "onnx"
 
     def __init__(self, model_path: str | Path | None = None, input_size: int | str | Sequence[int] | None = None, *,
-                 detection: str | DetectionConfig | None = None, merge: MergeConfig | None = None,
                  decoding: DecodeSettings | None = None, session: SessionConfig | None = None,
                  **options: Any) -> None:  # options: SessionConfig's and DecodeSettings' fields
         require_extra("onnxruntime", "pose", "the onnx pose backend")
@@ -63,18 +57,8 @@ class OnnxPose:
         self.session_config = SessionConfig.of(session, {k: v for k, v in options.items() if k not in decode_names})
         self.threads = self.session_config.threads
         wanted = None if input_size is None else parse_input_size(input_size)
-        if detection is None and wanted is None:
-            detection = "far"
-        if isinstance(detection, str):
-            detection = DetectionConfig.named(detection)
-        elif detection is not None and not isinstance(detection, DetectionConfig):
-            raise InputError(f"detection must be 'fast', 'far' or a DetectionConfig, got {detection!r}")
-        self.detection: DetectionConfig | None = detection
-        margin = {} if detection is None else {"edge_margin_px": detection.edge_margin_px}
-        #: The passes' decoding; its cut margin is the detection config's.
-        self.decoding = replace(decoding or DecodeSettings(),
-                                **{k: v for k, v in options.items() if k in decode_names}, **margin)
-        self.merge = MergeConfig() if merge is None else merge
+        #: The passes' decoding (score threshold, NMS, max persons, the cut margin at inner edges).
+        self.decoding = replace(decoding or DecodeSettings(), **{k: v for k, v in options.items() if k in decode_names})
         if model_path is None:
             model_path = models.find_onnx_model(wanted)
         self.model_path = Path(model_path).expanduser()
@@ -83,7 +67,8 @@ class OnnxPose:
         self._session, self.provider = create_session(self.model_path, self.session_config)
         fixed = models.check_session(self._session, self.model_path)
         self.dynamic = None in fixed
-        self._base_input = wanted
+        #: The input size asked for (None: none), the whole-frame pass's input in a detection mode.
+        self.requested_input = wanted
         if self.dynamic:
             self.input_size = wanted or (640, 640)
         else:
@@ -100,9 +85,6 @@ class OnnxPose:
         self._batch_axis_dynamic = not isinstance(self._session.get_inputs()[0].shape[0], int)
         #: Seconds in the network's session runs and how many runs, since this backend was made.
         self.network_s, self.network_runs = 0.0, 0
-        #: The passes the last :meth:`detect` ran, and how their rows were chosen.
-        self.last_passes: list[Pass] = []
-        self.last_note = ""
 
     @property
     def score_threshold(self) -> float:
@@ -116,13 +98,13 @@ class OnnxPose:
     def max_detections(self) -> int:
         return self.decoding.max_detections
 
-    def __call__(self, frame: Frame) -> Detections:
-        return self.detect(frame_image(frame), CameraGeometry.from_frame(frame))
+    def __call__(self, frame: Frame, tracks: PredictedTracks | None = None) -> Detections:  # noqa: ARG002 - one pass sees no tracks
+        return self.detect(frame_image(frame))
 
     def infer(self, tensor: np.ndarray) -> np.ndarray:
         """The network on ``tensor`` (B, 3, h, w) float32, RGB in [0, 1] (letterboxed,
-        :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N) (FORMATS.md,
-        "Pose network"; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
+        :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N)
+        (:mod:`pedenv.pose.postprocess`; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
         start = time.perf_counter()
         out = self._session_for(tensor.shape).run(None, {self._input_name: tensor})[0]
         self.network_s += time.perf_counter() - start
@@ -214,37 +196,14 @@ class OnnxPose:
                     outputs[i] = self.infer(tensors[i])
         return [o for o in outputs if o is not None]
 
-    def plan(self, width: int, height: int, geometry: CameraGeometry | None = None) -> tuple[list[Pass], str]:
-        """The passes this backend runs on a ``width`` x ``height`` image before any detection,
-        and how they were chosen (levels whose rows wait for a fit to the people found are
-        only named in the note; :attr:`last_passes` holds what :meth:`detect` ran)."""
-        if self.detection is None:
-            raise InputError(f"{self.model_path}: no detection mode set (one pass at {self.input_size}): "
-                             "nothing to plan")
-        passes, note = plan_passes(width, height, self.detection, geometry)
-        if self._base_input is not None:
-            passes[0] = Pass(passes[0].region, self._base_input, "full")
-        return passes, note
-
-    def detect(self, image_rgb: np.ndarray, geometry: CameraGeometry | None = None) -> Detections:
-        """2D skeletons in ``image_rgb`` (H, W, 3) uint8 RGB; pixels of that image.
-
-        geometry: the camera's intrinsics, tilt and height for the ``far`` band; None (no
-        calibration) tiles the whole image.
-        """
-        if self.detection is None:
-            padded, box = letterbox(image_rgb, self.input_size)
-            self.last_passes = [Pass((0, 0, image_rgb.shape[1], image_rgb.shape[0]), self.input_size, "full")]
-            return decode(self.infer(to_input_tensor(padded)), box, self.score_threshold, self.iou_threshold,
-                          self.max_detections)
-        dets, self.last_passes, self.last_note = detect_levels(
-            self.infer_many, image_rgb, self.detection, geometry, fixed_input=None if self.dynamic else self.input_size,
-            decoding=self.decoding, base_input=self._base_input, merge=self.merge)
-        return dets
+    def detect(self, image_rgb: np.ndarray) -> Detections:
+        """2D skeletons in ``image_rgb`` (H, W, 3) uint8 RGB, one pass at :attr:`input_size`; pixels of that image."""
+        padded, box = letterbox(image_rgb, self.input_size)
+        return decode(self.infer(to_input_tensor(padded)), box, self.score_threshold, self.iou_threshold,
+                      self.max_detections)
 
     def describe(self) -> dict:
-        """What to save next to results: backend, model file, input size, detection mode, thresholds."""
+        """What to save next to results: backend, model file, input size, device, thresholds."""
         return {"backend": self.name, "model": str(self.model_path), "input_size": list(self.input_size),
                 "device": self.session_config.device, "provider": self.provider, "side_by_side": self.side_by_side,
-                "detection": None if self.detection is None else self.detection.to_dict(),
                 "score_threshold": self.score_threshold, "iou_threshold": self.iou_threshold}

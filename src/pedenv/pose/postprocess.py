@@ -2,7 +2,8 @@
 
 Pre-processing fits an image into the network input by a letterbox (scale, keeping the
 aspect ratio, then pad with grey 114). Post-processing decodes the raw output
-``(1, 56, N)`` (see FORMATS.md, "Pose network"), keeps the persons above a score
+``(1, 56, N)`` (per anchor: box centre, width, height, person score, then 17 keypoints as
+u, v, confidence; px of the input), keeps the persons above a score
 threshold, suppresses overlapping boxes (NMS) and maps everything back to image pixels.
 """
 
@@ -136,7 +137,7 @@ class DecodeSettings:
         suppressed (0..1; 0.7). Lowering it merges nearby persons more readily.
     max_detections: at most this many persons per input (1..10000; 300).
     edge_margin_px: a person within this many input px of an inner tile edge counts as cut (0..64;
-        the detection config's ``edge_margin_px``).
+        :data:`pedenv.detection.config.EDGE_MARGIN_PX` in the detection modes).
     """
 
     score_threshold: float = 0.25

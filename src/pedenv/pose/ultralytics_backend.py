@@ -15,7 +15,7 @@ import numpy as np
 from pedenv.errors import InputError
 from pedenv.pose import models
 from pedenv.pose.postprocess import DecodeSettings, frame_image, parse_input_size
-from pedenv.records import Detections, Frame
+from pedenv.records import Detections, Frame, PredictedTracks
 
 
 class UltralyticsPose:
@@ -46,7 +46,7 @@ class UltralyticsPose:
         except Exception as exc:
             raise InputError(f"{self.weights}: cannot load the weights with ultralytics: {exc}") from None
 
-    def __call__(self, frame: Frame) -> Detections:
+    def __call__(self, frame: Frame, tracks: PredictedTracks | None = None) -> Detections:  # noqa: ARG002 - sees no tracks
         return self.detect(frame_image(frame))
 
     def detect(self, image_rgb: np.ndarray) -> Detections:

@@ -32,7 +32,7 @@ import zlib
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.records import Detections, Frame, boxes_from_keypoints
+from pedenv.records import Detections, Frame, PredictedTracks, boxes_from_keypoints
 from pedenv.skeleton import CocoKeypoint as KP
 from pedenv.synthetic.detector_profiles import DEFAULT_PROFILE, PROFILES, DetectorParameters
 from pedenv.synthetic.walker import body_keypoints
@@ -84,7 +84,7 @@ class DetectorModel:
             1.0 + np.exp(-(np.asarray(height_px, float) - p.half_detection_height_px) / p.detection_slope_px)
         )
 
-    def __call__(self, frame: Frame) -> Detections:
+    def __call__(self, frame: Frame, tracks: PredictedTracks | None = None) -> Detections:  # noqa: ARG002 - sees no tracks
         p = self.parameters
         gt = frame.ground_truth
         if gt is None or (gt.keypoints is None and len(gt) > 0):

@@ -19,7 +19,7 @@ lower bound of the error against the truth. False positives: MOT17 and KITTI fra
 fitted to the frame's aspect), measured the same way: as blind as the single pass
 (recall 0 / 0 / 6 / 72 % in the bins <50, 50-100, 100-200, >=200 px).
 
-``yolo11n-pose-far``: the ``far`` mode (:mod:`pedenv.pose.levels`: a pyramid of the whole
+``yolo11n-pose-far``: the ``far`` mode (:mod:`pedenv.detection.levels`: a pyramid of the whole
 frame and x1, x2 levels over the rows where people of each level's heights stand):
 recall 5 / 70 / 87 / 99 % in the bins <50, 50-100, 100-200, >=200 px, 0.31 false positives
 per frame. Its recall rises steeply at the finest level's smallest person and then flattens,

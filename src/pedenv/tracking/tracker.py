@@ -20,7 +20,7 @@ import numpy as np
 
 from pedenv.config import TrackingConfig
 from pedenv.tracking.association import associate
-from pedenv.tracking.egomotion import shift_u
+from pedenv.tracking.prediction import predict_boxes
 from pedenv.tracking.projection import CameraView
 from pedenv.tracking.recall import camera_disagrees, ground_terms, recall_remembered, split_by_score
 from pedenv.tracking.table import TrackTable
@@ -113,10 +113,8 @@ class Tracker:
         """
         cfg, tr = self.config, self.table.tracks
         boxes = np.asarray(boxes, np.float64).reshape(-1, 4)
-        if u_shift and len(tr.ids):
-            tr.boxes = shift_u(tr.boxes, u_shift)
-        if cfg.predict_motion and len(tr.ids):
-            tr.boxes = tr.boxes + tr.velocities  # constant velocity in the image (kept tracks too)
+        if len(tr.ids):  # where the tracks are expected now (kept tracks too): the detector's prediction
+            tr.boxes = predict_boxes(tr.boxes, tr.velocities, u_shift, cfg.predict_motion)
         memory = view is not None and cfg.memory_s > 0
         if cfg.low_score_threshold <= 0 and (view is None or cfg.ground_gate <= 0) and not memory:
             # the paper's association, without the steps beyond it (the hot path of `paper`)

@@ -1,4 +1,4 @@
-"""Packed crops: packing, rendering, and persons found in a mosaic landing at the right image pixels."""
+"""Packed crops: packing, rendering, and persons found in a packed landing at the right image pixels."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -7,15 +7,14 @@ import numpy as np
 import pytest
 
 from pedenv.datasets.mot17 import read_sequence
-from pedenv.pose.mosaic import (
+from pedenv.detection.packing import (
     GAP_PX,
     Crop,
     crop_around,
-    cut_by_inner_edge,
     merge_crops,
-    mosaic_units,
     pack,
     pack_tallest_first,
+    packed_units,
     render,
     unpack,
     used_size,
@@ -25,8 +24,8 @@ from pedenv.records import Detections
 MOSAIC = (384, 640)
 
 
-def person_in_mosaic(box_image: np.ndarray, placement) -> np.ndarray:
-    """Where the image box (4,) px lies in the mosaic, input px."""
+def person_in_packed(box_image: np.ndarray, placement) -> np.ndarray:
+    """Where the image box (4,) px lies in the packed, input px."""
     x0, y0 = placement.crop.region[:2]
     ox, oy = placement.offset
     s = placement.crop.scale
@@ -38,7 +37,7 @@ def test_ten_far_people_fit_one_input_without_overlapping():
     boxes = [np.array([100.0 + 140 * i, 400, 118 + 140 * i, 445]) for i in range(10)]  # 45 px tall people
     crops = [crop_around(b, (900, 1600), 96.0, 0.35, 3.5, MOSAIC) for b in boxes]
     placed = pack(crops, MOSAIC)
-    assert len(placed) == 10 and {p.mosaic for p in placed} == {0}
+    assert len(placed) == 10 and {p.packed for p in placed} == {0}
     rects = [(p.offset[0], p.offset[1], p.offset[0] + p.crop.size[1], p.offset[1] + p.crop.size[0]) for p in placed]
     for i, a in enumerate(rects):
         assert a[0] >= GAP_PX and a[1] >= GAP_PX and a[2] <= MOSAIC[1] and a[3] <= MOSAIC[0]
@@ -47,10 +46,10 @@ def test_ten_far_people_fit_one_input_without_overlapping():
     assert all(p.crop.scale == pytest.approx(96.0 / 45.0) for p in placed)  # the person is 96 px tall there
 
 
-def test_pack_keeps_order_and_limits_the_mosaics():
-    crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(12)]  # 300x200 input px each: 3 per mosaic
-    placed = pack(crops, MOSAIC, max_mosaics=2)
-    assert [p.item for p in placed] == list(range(6)) and [p.mosaic for p in placed] == [0, 0, 0, 1, 1, 1]
+def test_pack_keeps_order_and_limits_the_packed_inputs():
+    crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(12)]  # 300x200 input px each: 3 per packed input
+    placed = pack(crops, MOSAIC, max_inputs=2)
+    assert [p.item for p in placed] == list(range(6)) and [p.packed for p in placed] == [0, 0, 0, 1, 1, 1]
     assert pack([Crop((0, 0, 700, 100), 1.0)], MOSAIC) == []  # larger than the input: left out
 
 
@@ -58,9 +57,9 @@ def test_a_person_found_in_a_packed_crop_lands_at_the_right_image_pixels():
     image_boxes = np.array([[100.0, 400, 118, 445], [900, 380, 930, 450], [1400, 500, 1412, 530]])
     crops = [crop_around(b, (900, 1600), 112.0, 0.4, 3.5, MOSAIC) for b in image_boxes]
     placed = pack(crops, MOSAIC)
-    in_mosaic = np.array([person_in_mosaic(image_boxes[p.item], p) for p in placed])
-    kps = np.repeat(0.5 * (in_mosaic[:, None, :2] + in_mosaic[:, None, 2:]), 17, axis=1)
-    found = Detections(kps, np.full((3, 17), 0.9), in_mosaic, np.array([0.9, 0.8, 0.7]))
+    in_packed = np.array([person_in_packed(image_boxes[p.item], p) for p in placed])
+    kps = np.repeat(0.5 * (in_packed[:, None, :2] + in_packed[:, None, 2:]), 17, axis=1)
+    found = Detections(kps, np.full((3, 17), 0.9), in_packed, np.array([0.9, 0.8, 0.7]))
     parts = unpack(found, placed, (900, 1600), 16.0)
     for p, (dets, cut) in zip(placed, parts):
         assert len(dets) == 1 and not cut[0]
@@ -74,10 +73,10 @@ def test_a_packed_input_is_trimmed_to_the_room_its_crops_use():
     assert [p.offset for p in placed] == [(GAP_PX, GAP_PX), (GAP_PX + 75 + GAP_PX, GAP_PX)]
     # extent: 4 + 120 = 124 rows, 4 + 75 + 4 + 60 = 143 columns, the gap after them, up to 32 px
     assert used_size(placed, MOSAIC) == (128, 160)
-    assert mosaic_units(placed, MOSAIC, trim=True) == pytest.approx(128 * 160 / (384 * 640))
-    assert mosaic_units(placed, MOSAIC, trim=False) == 1.0
-    full = pack([Crop((0, 0, 200, 100), 3.0)] * 4, MOSAIC)  # four 300x600: two mosaics, each whole
-    assert {used_size([p for p in full if p.mosaic == m], MOSAIC) for m in (0, 1)} == {(320, 608)}  # 308 x 608
+    assert packed_units(placed, MOSAIC, trim=True) == pytest.approx(128 * 160 / (384 * 640))
+    assert packed_units(placed, MOSAIC, trim=False) == 1.0
+    full = pack([Crop((0, 0, 200, 100), 3.0)] * 4, MOSAIC)  # four 300x600: two packed inputs, each whole
+    assert {used_size([p for p in full if p.packed == m], MOSAIC) for m in (0, 1)} == {(320, 608)}  # 308 x 608
     image = np.random.default_rng(0).integers(0, 255, (200, 300, 3), dtype=np.uint8)
     trimmed = render(image, placed, used_size(placed, MOSAIC))
     np.testing.assert_array_equal(trimmed, render(image, placed, MOSAIC)[:128, :160])  # the same crops
@@ -126,9 +125,9 @@ def mot17_boxes(sequence: str, frame: int) -> tuple[np.ndarray, tuple[int, int]]
 def test_tallest_first_packs_a_real_crowd_into_fewer_inputs(sequence, frame, first_fit, tallest_first):
     boxes, size = mot17_boxes(sequence, frame)
     crops = [crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
-    assert len({p.mosaic for p in pack(crops, MOSAIC)}) == first_fit
+    assert len({p.packed for p in pack(crops, MOSAIC)}) == first_fit
     placed = pack_tallest_first(crops, MOSAIC)
-    assert len(placed) == len(boxes) and len({p.mosaic for p in placed}) == tallest_first
+    assert len(placed) == len(boxes) and len({p.packed for p in placed}) == tallest_first
     assert sorted(p.item for p in placed) == list(range(len(boxes)))
 
 
@@ -136,13 +135,13 @@ def test_denser_track_crops_hold_a_real_crowd_in_two_inputs():
     boxes, size = mot17_boxes("MOT17-04-FRCNN", 2)  # the crowd the whole-frame pass misses at night
     old = [crop_around(b, size, 96.0, 0.35, 3.5, MOSAIC) for b in boxes]
     new = [crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC) for b in boxes]
-    assert len(pack_tallest_first(old, MOSAIC, max_mosaics=2)) == 26  # of 42: 4 inputs for all
-    assert len(pack_tallest_first(new, MOSAIC, max_mosaics=2)) == 42
+    assert len(pack_tallest_first(old, MOSAIC, max_inputs=2)) == 26  # of 42: 4 inputs for all
+    assert len(pack_tallest_first(new, MOSAIC, max_inputs=2)) == 42
 
 
 def test_with_a_limit_the_first_crops_in_priority_order_are_kept():
     crops = [Crop((0, 0, 100, 150), 2.0) for _ in range(5)] + [Crop((0, 0, 50, 50), 1.0)]
-    placed = pack_tallest_first(crops, MOSAIC, max_mosaics=1)  # 3 tall ones fill the input's width
+    placed = pack_tallest_first(crops, MOSAIC, max_inputs=1)  # 3 tall ones fill the input's width
     assert sorted(p.item for p in placed) == [0, 1, 2, 5]  # the small one still fits beside them
 
 
@@ -150,9 +149,9 @@ def test_a_person_found_in_a_tallest_first_packed_crop_lands_at_the_right_image_
     boxes, size = mot17_boxes("MOT17-13-FRCNN", 2)
     crops = [replace(crop_around(b, size, 80.0, 0.25, 3.5, MOSAIC), edge_px=8.0) for b in boxes]
     placed = pack_tallest_first(crops, MOSAIC)
-    in_mosaic = np.array([person_in_mosaic(boxes[p.item], p) for p in placed])
-    kps = np.repeat(0.5 * (in_mosaic[:, None, :2] + in_mosaic[:, None, 2:]), 17, axis=1)
-    found = Detections(kps, np.full((len(placed), 17), 0.9), in_mosaic, np.full(len(placed), 0.8))
+    in_packed = np.array([person_in_packed(boxes[p.item], p) for p in placed])
+    kps = np.repeat(0.5 * (in_packed[:, None, :2] + in_packed[:, None, 2:]), 17, axis=1)
+    found = Detections(kps, np.full((len(placed), 17), 0.9), in_packed, np.full(len(placed), 0.8))
     parts = unpack(found, placed, size, 16.0)
     for p, (dets, cut) in zip(placed, parts):
         assert len(dets) == 1 and not cut[0]  # 20 px of context around each: not cut at 8 px of edge
@@ -169,20 +168,10 @@ def test_a_crop_can_cover_a_second_place_at_the_first_boxs_scale():
     assert crop.scale == pytest.approx(96.0 / 60.0)
 
 
-def test_a_narrow_box_gets_a_crop_as_wide_as_a_walkers_stride():
+def test_a_narrow_box_gets_a_crop_around_its_own_width():
     box = np.array([254.0, 220, 284, 309])  # 89 px tall, 30 px wide: legs together (vtest.avi frame 0)
     plain = crop_around(box, (576, 768), 96.0, 0.35, 3.5, MOSAIC)
-    wide = crop_around(box, (576, 768), 96.0, 0.35, 3.5, MOSAIC, min_width=0.6)
-    assert plain.region == (222, 188, 316, 341)
-    # 0.6 x 89 = 53.4 px wide about the centre (269), then 0.35 x 89 = 31.15 px of context on each side
-    assert wide.region == (211, 188, 327, 341) and wide.scale == plain.scale
-    # the same person one frame later, legs apart (far's box): cut by the plain crop's edge, whole in the wide one
-    later = np.array([[257.3, 219.8, 308.2, 308.1]])
-    for crop, cut in ((plain, True), (wide, False)):
-        assert bool(cut_by_inner_edge(later, crop.region, (576, 768), 16.0 / crop.scale)[0]) is cut
-    wide_box = np.array([100.0, 100, 160, 190])  # already wider than 0.6 of its height: unchanged
-    assert crop_around(wide_box, (576, 768), 96.0, 0.35, 3.5, MOSAIC, min_width=0.6) == \
-        crop_around(wide_box, (576, 768), 96.0, 0.35, 3.5, MOSAIC)
+    assert plain.region == (222, 188, 316, 341)  # 0.35 x 89 = 31.15 px of context on each side
 
 
 @pytest.mark.parametrize("second, ratio, joined", [
@@ -214,9 +203,9 @@ def test_a_person_found_in_a_joined_crop_lands_at_the_right_image_pixels():
     merged, groups = merge_crops(crops, 1.25, MOSAIC)
     assert groups == [[0, 1, 2]]
     placed = pack(merged, MOSAIC)
-    in_mosaic = np.array([person_in_mosaic(b, placed[0]) for b in boxes])
-    kps = np.repeat(0.5 * (in_mosaic[:, None, :2] + in_mosaic[:, None, 2:]), 17, axis=1)
-    found = Detections(kps, np.full((3, 17), 0.9), in_mosaic, np.full(3, 0.8))
+    in_packed = np.array([person_in_packed(b, placed[0]) for b in boxes])
+    kps = np.repeat(0.5 * (in_packed[:, None, :2] + in_packed[:, None, 2:]), 17, axis=1)
+    found = Detections(kps, np.full((3, 17), 0.9), in_packed, np.full(3, 0.8))
     (people, cut), = unpack(found, placed, (900, 1600), 4.0)
     np.testing.assert_allclose(people.boxes, boxes, atol=1e-6)
     assert not cut.any()  # all three inside the joined crop, none at its inner edges

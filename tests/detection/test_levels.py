@@ -5,9 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from pedenv.pose.levels import HeightLine, Level, plan_level, pyramid
-from pedenv.pose.multipass import level_filter
-from pedenv.pose.tiling import DetectionConfig, Pass
+from pedenv.detection.config import BAND_MARGIN_PX, FIT_MARGIN, DetectionConfig
+from pedenv.detection.levels import HeightLine, Level, plan_level, pyramid
+from pedenv.detection.passes import level_filter
+from pedenv.detection.tiling import Pass
 from pedenv.records import Detections
 
 
@@ -64,7 +65,7 @@ def test_a_level_without_calibration_follows_the_fit_or_waits_for_it():
     assert tiles == [] and "skipped: no calibration, too few people" in note
     line = HeightLine(0.8, -320.0, 5)
     tiles, note = plan_level(level, 1920, 1080, config, None, line)
-    margin = config.fit_margin * 80 + config.band_margin_px
+    margin = FIT_MARGIN * 80 + BAND_MARGIN_PX
     assert len({(p.region[1], p.region[3]) for p in tiles}) == 1  # one band
     assert (tiles[0].region[1], tiles[0].region[3]) == pytest.approx((410 - margin, 500 + margin), abs=1)
     assert "fit to 5" in note and all(p.kind == "band" for p in tiles)
@@ -82,9 +83,9 @@ def detections(heights, scores, keypoint_conf):
 def test_level_filter_drops_fragments_and_unlikely_skeletons_of_finer_levels_only():
     dets = detections([100, 300, 100, 100], [0.9, 0.9, 0.3, 0.3], [0.9, 0.9, 0.7, 0.2])
     band = Pass((0, 0, 320, 100), (224, 640), "band")  # x2: 300 px is 600 px of its input
-    assert level_filter(dets, band, DetectionConfig()).tolist() == [True, False, True, False]
+    assert level_filter(dets, band).tolist() == [True, False, True, False]
     full = Pass((0, 0, 1600, 900), (384, 640), "full")
-    assert level_filter(dets, full, DetectionConfig()).all()
+    assert level_filter(dets, full).all()
 
 
 def test_a_small_uncalibrated_image_gets_the_finest_level_over_all_of_it():

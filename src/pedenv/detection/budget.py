@@ -21,17 +21,19 @@ tracks' further packed inputs, so the average over many frames stays at the budg
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.pose.levels import HeightLine, plan_level, pyramid
-from pedenv.pose.redetect import searchable
-from pedenv.pose.stream_config import StreamConfig
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, round32, units
+from pedenv.detection.config import BAND_ROW_STRETCH, STREAM_MIN_HITS, STREAM_MISSED_IOU, DetectionConfig, StreamConfig
+from pedenv.detection.geometry import CameraGeometry
+from pedenv.detection.levels import HeightLine, placing_geometry, plan_level, pyramid
+from pedenv.detection.tiling import Pass, round32, units
+from pedenv.detection.track_search import MIN_BOX_HEIGHT_PX, searchable
 
-#: A predicted box shorter than this (px, clipped to the image) is not searched (``redetect.searchable``).
-MIN_TRACK_PX = 8.0
+#: Most tiles of one level's band in ``stream``'s rotation (it visits them over several frames; a
+#: bound against an absurd band only: 64 packed-input-wide tiles cover a 4K frame at x2 twice over).
+BAND_MAX_TILES = 64
 
 
 @dataclass(frozen=True)
@@ -49,14 +51,15 @@ class Tile:
 def band_tiles(width: int, height: int, config: DetectionConfig, geometry: CameraGeometry | None,
                line: HeightLine | None) -> tuple[list[Tile], str]:
     """The finer levels' tiles of a ``width`` x ``height`` frame, each at most one packed input
-    (``stream.mosaic_width`` px wide), over the rows from the calibration, the fitted ``line``
-    or the whole image (:func:`pedenv.pose.levels.plan_level`), and a note per level."""
-    small = replace(config, tile_width=config.stream.mosaic_width, max_tiles=64)
+    (``stream.packed_width`` px wide), over the rows from the calibration, the fitted ``line``
+    or the whole image (:func:`pedenv.detection.levels.plan_level`), and a note per level."""
     tiles, notes = [], []
+    geometry = placing_geometry(geometry, width, height, config)  # the ground band, once per frame
     levels = pyramid(width, height, config)[1:]
     for li, level in enumerate(levels):
-        passes, note = plan_level(level, width, height, small, geometry, line, finest=li == len(levels) - 1)
-        passes = one_row(passes, config.stream.band_row_stretch)
+        passes, note = plan_level(level, width, height, config, geometry, line, finest=li == len(levels) - 1,
+                                  tiles=(config.stream.packed_width, BAND_MAX_TILES))
+        passes = one_row(passes, BAND_ROW_STRETCH)
         tiles += [Tile((li, ti), p) for ti, p in enumerate(passes)]
         notes.append(note)
     return tiles, "; ".join(notes)
@@ -82,32 +85,32 @@ def one_row(passes: list[Pass], stretch: float) -> list[Pass]:
 
 
 def tracks_at_risk(predicted: np.ndarray, hits: np.ndarray, unseen_s: np.ndarray, found: np.ndarray,
-                   image_size: tuple[int, int], config: StreamConfig) -> np.ndarray:
+                   image_size: tuple[int, int], min_hits: int = STREAM_MIN_HITS) -> np.ndarray:
     """Rows of the tracks to look for in crops, most at risk first.
 
     predicted: (T, 4) px, the tracks' expected boxes; hits: (T,) detections so far;
     unseen_s: (T,) seconds since each was last detected; found: (N, 4) px, the whole-frame
     pass's boxes; image_size: (height, width). A track is looked for when detected at least
-    ``track_min_hits`` times, mostly inside the image, and overlapped by no found box by
+    ``min_hits`` times, mostly inside the image, and overlapped by no found box by
     more than ``missed_iou``. Order: longest unseen first, then most hits.
     """
     predicted = np.asarray(predicted, float).reshape(-1, 4)
     if not len(predicted):
         return np.zeros(0, np.int64)
-    usable = searchable(predicted, hits, found, image_size, min_hits=config.track_min_hits, min_height_px=MIN_TRACK_PX,
-                        missed_iou=config.missed_iou)
+    usable = searchable(predicted, hits, found, image_size, min_hits=min_hits,
+                        min_height_px=MIN_BOX_HEIGHT_PX, missed_iou=STREAM_MISSED_IOU)
     rows = np.flatnonzero(usable)
     return rows[np.lexsort((-np.asarray(hits)[rows], -np.asarray(unseen_s, float)[rows]))]
 
 
 @dataclass(frozen=True)
 class FramePlan:
-    """What a frame runs beyond the whole-frame pass: ``mosaics`` packed inputs for the tracks,
+    """What a frame runs beyond the whole-frame pass: ``packed`` packed inputs for the tracks,
     the rows of the band tiles (oldest first), the units the rotation needs per frame, whether a
     tile ran past the budget (it was due), the frame's ``budget`` and the ``credit`` it could
     spend on top (units)."""
 
-    mosaics: int
+    packed: int
     tiles: list[int]
     reserve_units: float
     over_budget: bool
@@ -115,7 +118,7 @@ class FramePlan:
     credit: float = 0.0
 
 
-def plan_frame(full_units: float, mosaic_units: float, mosaics_wanted: int, tile_units: np.ndarray,
+def plan_frame(full_units: float, packed_units: float, packed_wanted: int, tile_units: np.ndarray,
                tile_age_s: np.ndarray, dt_s: float, config: StreamConfig, credit: float = 0.0) -> FramePlan:
     """The passes of one frame (module doc). tile_units, tile_age_s: (N,) per band tile (age:
     seconds since it was last looked at, inf if never); dt_s: the time to the next frame, s;
@@ -126,14 +129,14 @@ def plan_frame(full_units: float, mosaic_units: float, mosaics_wanted: int, tile
     credit = min(credit, config.credit_units)
     allowance = budget + credit
     reserve = float(tile_units.sum()) * min(dt_s / config.scan_period_s, 1.0)
-    spent, mosaics = full_units, 0
-    while mosaics < mosaics_wanted:
+    spent, packed = full_units, 0
+    while packed < packed_wanted:
         # the most at risk first, even owing (the debt is paid by the tiles), then the rotation's share
-        room = max(allowance, budget) if mosaics == 0 else allowance - reserve
-        if spent + mosaic_units > room + 1e-9:
+        room = max(allowance, budget) if packed == 0 else allowance - reserve
+        if spent + packed_units > room + 1e-9:
             break
-        spent += mosaic_units
-        mosaics += 1
+        spent += packed_units
+        packed += 1
     chosen, over = [], False
     for i in np.argsort(-tile_age_s, kind="stable"):
         if spent + tile_units[i] <= min(budget, allowance) + 1e-9:
@@ -143,10 +146,10 @@ def plan_frame(full_units: float, mosaic_units: float, mosaics_wanted: int, tile
         else:
             break
         chosen.append(int(i))
-    while mosaics < mosaics_wanted and spent + mosaic_units <= allowance + 1e-9:  # the room no tile fits in
-        spent += mosaic_units
-        mosaics += 1
-    return FramePlan(mosaics, chosen, reserve, over, budget, credit)
+    while packed < packed_wanted and spent + packed_units <= allowance + 1e-9:  # the room no tile fits in
+        spent += packed_units
+        packed += 1
+    return FramePlan(packed, chosen, reserve, over, budget, credit)
 
 
 @dataclass

@@ -6,17 +6,12 @@ import numpy as np
 import pytest
 
 from pedenv.boxes import iou_matrix
-from pedenv.config import Config, RedetectConfig
+from pedenv.config import Config
+from pedenv.detection import RedetectConfig
+from pedenv.detection.redetect import Redetection, crop_pass, missed_tracks
+from pedenv.detection.track_search import nearest_person, nearest_track
 from pedenv.localization import configure
 from pedenv.model import PedestrianEnvironmentModel
-from pedenv.pose.redetect import (
-    RedetectingPose,
-    crop_pass,
-    missed_tracks,
-    nearest_person,
-    nearest_track,
-    with_redetection,
-)
 from pedenv.records import Detections, EgoPose, Frame
 
 ON = RedetectConfig(enabled=True)
@@ -71,30 +66,24 @@ def test_nearest_track_measures_in_each_tracks_heights():
 
 def test_crop_pass_holds_the_box_with_context_inside_the_image():
     # a 60 px person: margin 0.5 -> 60 + 60 px tall, min 128 px; scale 2 -> input 256
-    step = crop_pass(np.array([500.0, 200, 524, 260]), (370, 1224), ON)
+    step = crop_pass(np.array([500.0, 200, 524, 260]), (370, 1224))
     x0, y0, x1, y1 = step.region
     assert (x1 - x0, y1 - y0) == (128, 128)
     assert x0 <= 500 and x1 >= 524 and y0 <= 200 and y1 >= 260
     assert step.input_size == (256, 256)
     # near the image corner: moved inside, never past the edges
-    x0, y0, x1, y1 = crop_pass(np.array([-10.0, 300, 20, 380]), (370, 1224), ON).region
+    x0, y0, x1, y1 = crop_pass(np.array([-10.0, 300, 20, 380]), (370, 1224)).region
     assert x0 == 0 and y1 == 370 and y1 - y0 == 160
     # a tall person: the input is capped at max_input_px, a multiple of 32
-    step = crop_pass(np.array([100.0, 0, 300, 600]), (1080, 1920), ON)
+    step = crop_pass(np.array([100.0, 0, 300, 600]), (1080, 1920))
     assert max(step.input_size) == 640 and all(s % 32 == 0 for s in step.input_size)
     assert step.region[3] - step.region[1] == 960  # 600 + 2 * 300, clamped to max_crop_px
 
 
 @pytest.mark.parametrize("field, value, message", [
-    ("crop_margin", -0.1, r"redetect.crop_margin must be in \[0.0, 2.0\]"),
-    ("crop_scale", 5.0, "redetect.crop_scale"),
+    ("match_distance", -0.1, r"redetect.match_distance must be in \[0.0, 2.0\]"),
     ("max_crops", 65, r"redetect.max_crops must be an integer in \[0, 64\]"),
-    ("min_crop_px", 2000, "redetect.min_crop_px .* must not exceed redetect.max_crop_px"),
-    ("max_input_px", 650, "redetect.max_input_px must be a multiple of 32"),
-    ("missed_iou", 1.5, "redetect.missed_iou"),
     ("match_distance", 3.0, "redetect.match_distance"),
-    ("match_height_ratio", 0.5, "redetect.match_height_ratio"),
-    ("min_hits", 0, "redetect.min_hits"),
     ("enabled", "yes", "redetect.enabled must be true or false"),
 ])
 def test_bad_settings_are_refused(field, value, message):
@@ -116,57 +105,55 @@ def _person(box) -> Detections:
     return Detections(kp[None], np.full((1, 17), 0.9), np.array([box], float), np.array([0.9]))
 
 
-def test_predicted_boxes_move_with_the_tracks_image_velocity(camera):
+def test_predicted_tracks_move_with_the_tracks_image_velocity(camera):
     model = PedestrianEnvironmentModel(configure(Config(), "fused"))  # predict_motion on
     ego = EgoPose.from_xy_yaw(0.0, 0.0, 0.0)
     frame = Frame(0, 0.0, camera, ego, _person([800, 400, 840, 500]))
-    assert model.predicted_boxes(frame)[1].shape == (0, 4)
+    assert model.predict_tracks(frame).boxes.shape == (0, 4)
     model.update(frame)
     model.update(Frame(1, 0.1, camera, ego, _person([810, 400, 850, 500])))
-    ids, boxes, hits = model.predicted_boxes(Frame(2, 0.2, camera, ego))
-    assert ids.tolist() == [1] and hits.tolist() == [2]
+    tracks = model.predict_tracks(Frame(2, 0.2, camera, ego))
+    assert tracks.ids.tolist() == [1] and tracks.hits.tolist() == [2]
     # smoothed velocity 0.5 * 10 px per frame: the tracker's own prediction
-    np.testing.assert_allclose(boxes[0], [815, 400, 855, 500])
+    np.testing.assert_allclose(tracks.boxes[0], [815, 400, 855, 500])
     np.testing.assert_allclose(model.tracks.tracks.boxes[0], [810, 400, 850, 500])  # the model is unchanged
-
-
-def test_backends_without_a_network_are_left_alone():
-    from pedenv.pose import create_pose_backend
-
-    model = PedestrianEnvironmentModel()
-    truth = create_pose_backend("ground-truth")
-    assert with_redetection(truth, model, ON) is truth
-    assert with_redetection(truth, model, RedetectConfig()) is truth
 
 
 @pytest.mark.onnx_model
 def test_a_person_the_main_pass_missed_is_found_again_in_a_crop():
     from pedenv.datasets.kitti import KittiTrackingDataset
-    from pedenv.pose import create_pose_backend
+    from pedenv.detection import create_detector
+    from pedenv.pose.postprocess import frame_image
 
     from shared_paths import REAL_SAMPLES
 
     config = configure(Config(), "fused")
-    backend = create_pose_backend("onnx", score_threshold=config.tracking.pose_score_threshold)
+    backend = create_detector("onnx", score_threshold=config.tracking.pose_score_threshold)
+    assert backend.redetection is None  # no re-detection unless the run's settings turn it on
+    on = create_detector("onnx", score_threshold=config.tracking.pose_score_threshold, redetect=config.redetect)
+    assert on.redetection is not None and on.redetection.config == config.redetect
+    assert create_detector("onnx", detection="stream", redetect=config.redetect).redetection is None  # its own search
     frame = next(KittiTrackingDataset(REAL_SAMPLES / "kitti" / "tracking_mini").frames("0016"))
     main = backend(frame)
     model = PedestrianEnvironmentModel(config)
-    redetect = with_redetection(backend, model, config.redetect)
-    assert isinstance(redetect, RedetectingPose)
+    redetect = Redetection(config.redetect)
     for k in range(2):  # two frames with everyone seen: tracks with 2 hits
         before = model.update(replace(frame, index=k, timestamp=0.1 * k, detections=main))
     # the third frame's main pass "misses" the tallest person who started a track (score >= 0.25)
     tallest = int(np.argmax(np.where(main.scores >= 0.25, main.boxes[:, 3] - main.boxes[:, 1], 0.0)))
     missing = main.take(np.delete(np.arange(len(main)), tallest))
     third = replace(frame, index=2, timestamp=0.2)
-    found = redetect.redetect(third, missing)
+    tracks, image = model.predict_tracks(third), frame_image(third)
+    size = (image.shape[0], image.shape[1])
+    found = redetect(backend.network, image, size, missing, tracks, backend.decoding)
     assert redetect.crops == 1 and redetect.redetected == 1
     assert len(found) == len(main)
     assert iou_matrix(main.boxes[[tallest]], found.boxes).max() > 0.8
     iou = iou_matrix(found.boxes, found.boxes)
     assert (np.triu(iou, 1) <= 0.5).all()  # nobody twice
     # with everyone detected, no crop runs and nothing changes
-    assert len(redetect.redetect(third, main)) == len(main) and redetect.crops == 1
+    assert len(redetect(backend.network, image, size, main, tracks, backend.decoding)) == len(main)
+    assert redetect.crops == 1
     # every track continues, the re-found person's included, and no new one starts
     state = model.update(replace(third, detections=found))
     assert len(before.pedestrians) >= 6

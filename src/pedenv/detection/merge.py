@@ -11,38 +11,15 @@ seam is kept from the tile or pass that holds them whole.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from pedenv.boxes import box_areas, intersection_matrix, iou_matrix
+from pedenv.detection.config import MERGE_CONTAINMENT, MERGE_IOU, MERGE_KEYPOINT_MIN_CONF, MERGE_OKS
 from pedenv.records import Detections
-from pedenv.validation import check_fields, number
 
 #: COCO keypoint sigmas (nose, eyes, ears, shoulders, elbows, wrists, hips, knees, ankles).
 COCO_SIGMAS = np.array([0.026, 0.025, 0.025, 0.035, 0.035, 0.079, 0.079, 0.072, 0.072, 0.062, 0.062,
                         0.107, 0.107, 0.087, 0.087, 0.089, 0.089])
-
-
-@dataclass(frozen=True)
-class MergeConfig:
-    """Thresholds of the skeleton-aware NMS, section ``merge`` of :class:`pedenv.config.Config`
-    (validated by :mod:`pedenv.validation`; a bad value raises InputError naming ``merge.field``).
-
-    iou: two boxes with IoU above this are one person (0..1; default 0.5).
-    containment: a box whose area lies this fraction inside another's (0..1; 0.7) is the
-        same person when the keypoints also agree.
-    oks: keypoint similarity above which nested boxes are one person (0..1; 0.3).
-    keypoint_min_confidence: keypoints below this confidence are not compared (0..1; 0.3).
-    """
-
-    iou: float = number(0.5, 0.0, 1.0)
-    containment: float = number(0.7, 0.0, 1.0)
-    oks: float = number(0.3, 0.0, 1.0)
-    keypoint_min_confidence: float = number(0.3, 0.0, 1.0)
-
-    def __post_init__(self) -> None:
-        check_fields("merge", self)
 
 
 def _iou_and_containment(box: np.ndarray, boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -70,8 +47,7 @@ def keypoint_similarity(kp: np.ndarray, conf: np.ndarray, kps: np.ndarray, confs
     return np.where(n >= 3, sim, 0.0)
 
 
-def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeConfig = MergeConfig(),
-                     max_detections: int = 300) -> Detections:
+def merge_detections(parts: list[tuple[Detections, np.ndarray]], max_detections: int = 300) -> Detections:
     """One :class:`Detections` from several passes' detections, duplicates removed.
 
     parts: ``(detections in image px, cut (N,) bool)`` per pass; ``cut`` marks persons touching
@@ -81,10 +57,8 @@ def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeCo
     parts = [(d, c) for d, c in parts if len(d)]
     if not parts:
         return Detections.empty()
-    kps = np.concatenate([d.keypoints for d, _ in parts])
-    confs = np.concatenate([d.confidences for d, _ in parts])
-    boxes = np.concatenate([d.boxes for d, _ in parts])
-    scores = np.concatenate([d.scores for d, _ in parts])
+    every = Detections.concat([d for d, _ in parts])
+    kps, confs, boxes, scores = every.keypoints, every.confidences, every.boxes, every.scores
     cut = np.concatenate([np.asarray(c, bool) for _, c in parts])
     order = np.lexsort((-scores, cut))  # whole before cut, then best score first
     keep: list[int] = []
@@ -95,9 +69,9 @@ def merge_detections(parts: list[tuple[Detections, np.ndarray]], config: MergeCo
             k = np.asarray(keep)
             iou, contained = _iou_and_containment(boxes[i], boxes[k])
             oks = keypoint_similarity(kps[i], confs[i], kps[k], confs[k], boxes[i], boxes[k],
-                                      config.keypoint_min_confidence)
+                                      MERGE_KEYPOINT_MIN_CONF)
             # a cut person nested in a kept one is a fragment of them, whatever its keypoints say
-            duplicate = (iou > config.iou) | ((contained > config.containment) & ((oks > config.oks) | cut[i]))
+            duplicate = (iou > MERGE_IOU) | ((contained > MERGE_CONTAINMENT) & ((oks > MERGE_OKS) | cut[i]))
             if duplicate.any():
                 continue
         keep.append(int(i))

@@ -1,24 +1,65 @@
-"""What the ``stream`` detection remembers of tracks, and how it spent its budget (for ``run.json``)."""
+"""The track search: which predicted tracks to look for in a crop, and which person found there is
+the track. One search, used by the re-detection of ``far``/``fast`` (:mod:`pedenv.detection.redetect`)
+and by ``stream`` (:class:`TrackFinder`, which also remembers where each track was last detected);
+both match with the run's ``redetect.match_distance`` and ``redetect.match_height_ratio``.
+"""
 
 from __future__ import annotations
-
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from pedenv.boxes import iou_matrix
-from pedenv.pose.cascade import concat
-from pedenv.pose.redetect import nearest_person, nearest_track
-from pedenv.pose.redetect_config import RedetectConfig
-from pedenv.pose.schedule import FramePlan, units
+from pedenv.detection.config import MATCH_HEIGHT_RATIO, PLAUSIBLE_KEYPOINT_CONF, SURE_SCORE, RedetectConfig
 from pedenv.records import Detections
 
-#: A person found in a track's crop scoring below this needs a plausible skeleton (mean keypoint
-#: confidence at least PLAUSIBLE_KEYPOINT_CONF): a person, not a pole.
-SURE_SCORE = 0.5
-PLAUSIBLE_KEYPOINT_CONF = 0.5
+#: A predicted box shorter than this (pixels, after clipping to the image) is not searched: a person
+#: that small is below what the network finds even zoomed (geometry: 8 px is a quarter of its stride).
+MIN_BOX_HEIGHT_PX = 8.0
+#: A predicted box with less than this share of its area inside the image is not searched (leaving it).
+MIN_VISIBLE_SHARE = 0.5
 #: A remembered box overlapping another track's predicted box by this IoU (and not its own) is that track's.
 SAME_BOX_IOU = 0.95
+
+
+def searchable(predicted: np.ndarray, hits: np.ndarray, found: np.ndarray, image_size: tuple[int, int], *,
+               min_hits: int, min_height_px: float, missed_iou: float) -> np.ndarray:
+    """(T,) bool: the tracks worth searching for in a crop (here and in the ``stream`` mode).
+
+    predicted: (T, 4) px, the tracks' expected boxes; hits: (T,) detections so far; found: (N, 4)
+    px, the boxes detected in the frame; image_size: (height, width) px. A track is searchable
+    when at least :data:`MIN_VISIBLE_SHARE` of its box lies inside the image and at least
+    ``min_height_px`` of its height, it has at least ``min_hits`` hits, and no found box overlaps
+    it by more than ``missed_iou``.
+    """
+    h, w = image_size
+    clipped = np.clip(predicted, 0.0, [w, h, w, h])
+    area = np.prod(np.clip(predicted[:, 2:] - predicted[:, :2], 1e-9, None), axis=1)
+    inside = np.prod(np.clip(clipped[:, 2:] - clipped[:, :2], 0.0, None), axis=1)
+    usable = (inside / area >= MIN_VISIBLE_SHARE) & (clipped[:, 3] - clipped[:, 1] >= min_height_px)
+    usable &= np.asarray(hits) >= min_hits
+    if len(found):
+        usable &= iou_matrix(predicted, np.asarray(found, float).reshape(-1, 4)).max(axis=1) <= missed_iou
+    return usable
+
+
+def nearest_person(box: np.ndarray, boxes: np.ndarray, whole: np.ndarray, config: RedetectConfig) -> np.ndarray:
+    """Index array (0 or 1 entries) of the box of ``boxes`` (M, 4) px nearest the predicted
+    ``box`` (4,) px: among the ``whole`` (M,) ones, centre within ``match_distance`` predicted
+    heights and height within ``match_height_ratio`` of the predicted one."""
+    height = max(float(box[3] - box[1]), 1.0)
+    heights = np.maximum(boxes[:, 3] - boxes[:, 1], 1e-9)
+    distance = np.linalg.norm(0.5 * (boxes[:, :2] + boxes[:, 2:] - box[:2] - box[2:]), axis=1) / height
+    ratio = np.maximum(heights / height, height / heights)
+    ok = whole & (distance <= config.match_distance) & (ratio <= MATCH_HEIGHT_RATIO)
+    return np.flatnonzero(ok)[np.argsort(distance[ok])[:1]]
+
+
+def nearest_track(box: np.ndarray, predicted: np.ndarray) -> int:
+    """Row of the predicted box (T, 4) px whose centre lies nearest the centre of ``box`` (4,) px,
+    in heights of each predicted box."""
+    heights = np.maximum(predicted[:, 3] - predicted[:, 1], 1.0)
+    distance = np.linalg.norm(0.5 * (predicted[:, :2] + predicted[:, 2:] - box[:2] - box[2:]), axis=1) / heights
+    return int(np.argmin(distance))
 
 
 class TrackFinder:
@@ -33,12 +74,12 @@ class TrackFinder:
     frames, a wrong association):
     the predicted box is searched as it is. A person found in a track's crop
     re-detects it when whole, sure or plausible, nearest the search box or the last detection
-    (within :class:`~pedenv.pose.redetect_config.RedetectConfig`'s ``match_distance`` and
+    (within :class:`~pedenv.detection.config.RedetectConfig`'s ``match_distance`` and
     ``match_height_ratio``) and nearer the search box than any other track's.
     """
 
-    def __init__(self, match: RedetectConfig | None = None) -> None:
-        self.match = match or RedetectConfig()
+    def __init__(self, match: RedetectConfig) -> None:
+        self.match = match
         self._seen: dict[int, float] = {}
         self._last: dict[int, np.ndarray] = {}
 
@@ -84,72 +125,13 @@ class TrackFinder:
         for row, (found, cut) in zip(rows, results):
             if not len(found):
                 continue
+            # sure, or a plausible skeleton: a person, not a pole (the far levels' own check)
             sure = (found.scores >= SURE_SCORE) | (found.confidences.mean(axis=1) >= PLAUSIBLE_KEYPOINT_CONF)
             pick = found.take(nearest_person(searched[row], found.boxes, ~cut & sure, self.match))
             if not len(pick):
                 pick = found.take(nearest_person(last[row], found.boxes, ~cut & sure, self.match))
             if len(pick) and nearest_track(pick.boxes[0], searched) == row:
                 kept.append(pick)
-        return concat(kept)
+        return Detections.concat(kept)
 
 
-@dataclass
-class StreamAccounts:
-    """Counts over the frames a :class:`~pedenv.pose.stream.StreamPose` saw; units are 384x640 inputs."""
-
-    frames: int = 0
-    restarts: int = 0
-    cold_starts: int = 0
-    units: dict[str, float] = field(default_factory=lambda: {"whole_frame": 0.0, "band_tiles": 0.0, "packed": 0.0})
-    warm_units: float = 0.0
-    max_units: float = 0.0
-    max_units_warm: float = 0.0
-    frames_over_budget: int = 0
-    frames_on_credit: int = 0
-    credit_units: float = 0.0
-    tracks_at_risk: int = 0
-    tracks_found: int = 0
-    cascade_confirmed: int = 0
-    tile_visits: int = 0
-    tiles_late: int = 0
-    band_reserve_units: float = 0.0
-
-    def add(self, ran: tuple, plan: FramePlan, cold: bool, counts: tuple[int, int, int], late: int) -> None:
-        """One frame: ``ran`` (its whole-frame pass, band tiles, packed inputs), its plan, whether a
-        cold start, ``counts`` (tracks searched, found in crops, cascade confirmations) and the
-        tiles it left older than the scan period."""
-        first, steps, passes = ran
-        at_risk, found, verified = counts
-        spent = [units(first.input_size), sum(units(s.input_size) for s in steps),
-                 sum(units(p.input_size) for p in passes)]
-        for key, value in zip(self.units, spent):
-            self.units[key] += value
-        total = sum(spent)
-        self.frames += 1
-        self.cold_starts += int(cold)
-        self.max_units = max(self.max_units, total)
-        if not cold:
-            self.warm_units += total
-            self.max_units_warm = max(self.max_units_warm, total)
-        self.frames_over_budget += int(plan.over_budget and not cold)
-        self.frames_on_credit += int(not cold and not plan.over_budget and total > plan.budget + 1e-9)
-        self.tracks_at_risk += at_risk
-        self.tracks_found += found
-        self.cascade_confirmed += verified
-        self.tile_visits += len(steps)
-        self.tiles_late += late
-        self.band_reserve_units = plan.reserve_units
-
-    def to_dict(self) -> dict:
-        n = max(self.frames, 1)
-        return {"frames": self.frames, "restarts": self.restarts, "cold_starts": self.cold_starts,
-                "units_per_frame": sum(self.units.values()) / n,
-                "units_per_frame_by_use": {k: v / n for k, v in self.units.items()},
-                "units_per_frame_after_cold_starts": self.warm_units / max(self.frames - self.cold_starts, 1),
-                "max_units_per_frame": self.max_units, "max_units_per_frame_after_cold_start": self.max_units_warm,
-                "frames_past_budget_for_a_due_tile": self.frames_over_budget,
-                "frames_past_budget_on_credit": self.frames_on_credit, "credit_units_left": self.credit_units,
-                "band_units_per_frame_needed": self.band_reserve_units,
-                "tracks_at_risk_searched": self.tracks_at_risk, "tracks_found_in_crops": self.tracks_found,
-                "cascade_confirmed": self.cascade_confirmed, "tile_visits": self.tile_visits,
-                "tiles_older_than_scan_period": self.tiles_late}

@@ -5,14 +5,11 @@ import math
 import numpy as np
 import pytest
 
+from pedenv.detection.config import BAND_MARGIN_PX, MAX_TILES, DetectionConfig
+from pedenv.detection.geometry import CameraGeometry, far_band
+from pedenv.detection.levels import plan_passes
+from pedenv.detection.tiling import fit_input
 from pedenv.errors import InputError
-from pedenv.pose.levels import plan_passes
-from pedenv.pose.tiling import (
-    CameraGeometry,
-    DetectionConfig,
-    far_band,
-    fit_input,
-)
 
 NUSCENES_K = np.array([[1266.4, 0, 816.3], [0, 1266.4, 491.5], [0, 0, 1]])
 KITTI_K = np.array([[707.05, 0, 604.08], [0, 707.05, 180.51], [0, 0, 1]])
@@ -30,16 +27,13 @@ def test_fit_input_follows_the_aspect(width, height, long_side, expected):
     ("mode", "slow", "mode must be one of fast, far"),
     ("base_long_side", 650, "multiple of 32"),
     ("base_long_side", 64, r"base_long_side must be an integer in \[160, 2048\]"),
-    ("tile_overlap", 0.6, r"detection.tile_overlap must be in \[0.0, 0.5\]"),
+    ("tile_width", 100, r"detection.tile_width must be an integer in \[160, 4096\]"),
     ("level_scales", (2.0, 1.0), "ascending without repeats"),
     ("level_scales", (1.0, 5.0), r"detection.level_scales must be in \[0.25, 4.0\]"),
     ("level_scales", [1.0], "non-empty tuple"),
-    ("short_person_m", 2.3, "short_person_m .* must be below detection.top_m"),
-    ("plausible_keypoint_conf", 1.5, "plausible_keypoint_conf"),
     ("near_m", 200.0, "near_m .* must be below detection.far_m"),
-    ("max_tiles", 0, "max_tiles"),
-    ("fit_min_score", 1.2, r"detection.fit_min_score must be in \[0.0, 1.0\]"),
-    ("top_m", True, "top_m"),
+    ("min_person_px", True, "min_person_px"),
+    ("far_m", 2000.0, r"detection.far_m must be in \[0.5, 1000.0\]"),
 ])
 def test_config_fields_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
@@ -48,16 +42,16 @@ def test_config_fields_are_checked(field, value, message):
 
 def test_band_of_a_level_nuscenes_camera_matches_the_ground_at_15_and_150_m():
     geometry = CameraGeometry.level(NUSCENES_K, 1.5)
-    config = DetectionConfig(band_margin_px=0, near_m=15.0)
+    config = DetectionConfig(near_m=15.0)
     band = far_band(geometry, 1600, 900, config)
     f, cy = 1266.4, 491.5
-    assert band.bottom == pytest.approx(cy + f * 1.5 / 15, abs=2)  # feet at 15 m
-    assert band.top == pytest.approx(cy - f * 0.7 / 15, abs=2)  # a 2.2 m top at 15 m
-    assert band.bottom - band.top < 200
+    assert band.bottom == pytest.approx(cy + f * 1.5 / 15 + BAND_MARGIN_PX, abs=2)  # feet at 15 m, the margin below
+    assert band.top == pytest.approx(cy - f * 0.7 / 15 - BAND_MARGIN_PX, abs=2)  # a 2.2 m top at 15 m
+    assert band.bottom - band.top < 200 + 2 * BAND_MARGIN_PX
 
 
 def test_pitch_down_moves_the_band_up_and_roll_widens_it():
-    config = DetectionConfig(band_margin_px=0)
+    config = DetectionConfig()
     level = far_band(CameraGeometry.level(NUSCENES_K, 1.5), 1600, 900, config)
     pitched = far_band(CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(3)), 1600, 900, config)
     rolled = far_band(CameraGeometry.level(NUSCENES_K, 1.5, roll_rad=math.radians(3)), 1600, 900, config)
@@ -80,11 +74,6 @@ def test_pitch_down_moves_the_band_up_and_roll_widens_it():
             CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(-29)),
             DetectionConfig(),
             "band below the image",
-        ),
-        (
-            CameraGeometry.level(NUSCENES_K, 1.5, pitch_down_rad=math.radians(40)),
-            DetectionConfig(max_pitch_down_deg=60),
-            "band above the image",
         ),
         (CameraGeometry.level(NUSCENES_K, -1.0), DetectionConfig(), "camera below the ground"),
     ],
@@ -128,7 +117,7 @@ def test_fast_is_one_pass():
 def test_tiny_and_huge_images_get_a_bounded_plan(width, height):
     config = DetectionConfig()
     passes, _ = plan_passes(width, height, config)
-    assert 1 <= len(passes) <= len(config.level_scales) * config.max_tiles + 1
+    assert 1 <= len(passes) <= len(config.level_scales) * MAX_TILES + 1
     for p in passes:
         x0, y0, x1, y1 = p.region
         assert 0 <= x0 < x1 <= width and 0 <= y0 < y1 <= height

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from pedenv.pose.merge import MergeConfig, keypoint_similarity, merge_detections
-from pedenv.pose.multipass import cut_by_inner_edge, spans_the_region
+from pedenv.detection.merge import keypoint_similarity, merge_detections
+from pedenv.detection.passes import cut_by_inner_edge, spans_the_region
 from pedenv.records import Detections
 
 # A standing person 100 px tall, COCO-17, box (0, 0)-(40, 100) before shifting.
@@ -69,12 +69,6 @@ def test_cut_flags_only_at_inner_edges():
     boxes = np.array([[0, 10, 50, 100], [300, 10, 398, 100], [150, 10, 200, 100]], float)
     cut = cut_by_inner_edge(boxes, (0, 0, 400, 300), (300, 1000), 4)
     assert cut.tolist() == [False, True, False]  # the left edge is the image's own
-
-
-@pytest.mark.parametrize("field", ["iou", "containment", "oks", "keypoint_min_confidence"])
-def test_merge_config_is_checked(field):
-    with pytest.raises(ValueError, match=rf"merge.{field} must be in \[0.0, 1.0\]"):
-        MergeConfig(**{field: 1.5})
 
 
 def test_a_box_spanning_the_band_from_edge_to_edge_is_a_fragment():

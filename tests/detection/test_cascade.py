@@ -5,10 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from pedenv.detection.cascade import accept, candidates
+from pedenv.detection.config import CascadeConfig, DetectionConfig, StreamConfig
 from pedenv.errors import InputError
-from pedenv.pose.cascade import accept, candidates
-from pedenv.pose.stream_config import CascadeConfig, StreamConfig
-from pedenv.pose.tiling import DetectionConfig
 from pedenv.records import Detections
 
 #: Measured on MOT17-13 frame 1: far finds 2 of its 8 people 40-80 px tall (1 false positive),
@@ -32,7 +31,7 @@ def test_candidates_are_small_new_people_best_first():
                   [101, 101, 121, 151]],  # the first one again: merged
                  [0.1, 0.2, 0.2, 0.2, 0.15, 0.08])
     kept = people([[700, 100, 720, 150]], [0.9])
-    found = candidates(low, kept, CascadeConfig())
+    found = candidates(low, kept)
     np.testing.assert_allclose(found.boxes, [[900, 100, 915, 140], [100, 100, 120, 150]])
 
 
@@ -45,7 +44,7 @@ def test_candidates_are_small_new_people_best_first():
 ])
 def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, conf, cut, expected):
     found = people([box], [score], conf)
-    rows = accept(np.array([100.0, 100, 120, 150]), found, np.array([cut]), CascadeConfig())
+    rows = accept(np.array([100.0, 100, 120, 150]), found, np.array([cut]))
     assert rows.tolist() == expected
 
 
@@ -54,27 +53,15 @@ def test_accept_needs_a_whole_plausible_skeleton_at_the_same_place(box, score, c
     ("stream", {"budget_units": 0.5}, "detection.stream.budget_units"),  # below one pass
     ("stream", {"scan_period_s": 0.0}, "detection.stream.scan_period_s"),
     ("stream", {"scan_period_s": math.nan}, "detection.stream.scan_period_s"),
-    ("stream", {"mosaic_width": 600}, "detection.stream.mosaic_width"),
+    ("stream", {"packed_width": 600}, "detection.stream.packed_width"),
     ("stream", {"cold_start": "yes"}, "detection.stream.cold_start"),
     ("stream", {"credit_units": -1.0}, "detection.stream.credit_units"),
     ("stream", {"credit_units": math.nan}, "detection.stream.credit_units"),
-    ("stream", {"track_edge_px": 40.0}, "detection.stream.track_edge_px"),  # not below the 33.6 px of context
-    ("stream", {"crowd_edge_px": 20.0}, "detection.stream.crowd_edge_px"),  # not below the 20 px of context
-    ("stream", {"crowd_person_px": 8.0}, "detection.stream.crowd_person_px"),
-    ("stream", {"merge_scale_ratio": 0.9}, "detection.stream.merge_scale_ratio"),
-    ("stream", {"merge_scale_ratio": math.nan}, "detection.stream.merge_scale_ratio"),
-    ("stream", {"merge_crops": 1}, "detection.stream.merge_crops"),
-    ("stream", {"search_untracked": "no"}, "detection.stream.search_untracked"),
-    ("stream", {"track_max_shift": -1.0}, "detection.stream.track_max_shift"),
-    ("stream", {"track_max_shift": math.inf}, "detection.stream.track_max_shift"),
-    ("stream", {"crop_min_width": -0.1}, "detection.stream.crop_min_width"),
-    ("stream", {"crop_min_width": math.nan}, "detection.stream.crop_min_width"),
-    ("stream", {"band_row_stretch": 0.5}, "detection.stream.band_row_stretch"),
-    ("stream", {"band_row_stretch": 2.5}, "detection.stream.band_row_stretch"),
-
-    ("cascade", {"min_score": 0.0}, "detection.cascade.min_score"),
+    ("stream", {"max_gap_s": 0.0}, "detection.stream.max_gap_s"),
+    ("stream", {"packed_height": 96}, "detection.stream.packed_height"),
+    ("cascade", {"enabled": "yes"}, "detection.cascade.enabled"),
     ("cascade", {"max_units": 0}, "detection.cascade.max_units"),
-    ("cascade", {"min_height_px": 200.0, "max_height_px": 100.0}, "detection.cascade.min_height_px"),
+    ("cascade", {"max_units": 17}, "detection.cascade.max_units"),
 ])
 def test_bad_values_get_one_clear_error_naming_the_field(section, changes, field):
     make = StreamConfig if section == "stream" else CascadeConfig
@@ -96,10 +83,10 @@ def test_the_cascade_finds_more_small_people_on_a_real_frame(pose_cache):
     from dataclasses import replace
     from pathlib import Path
 
+    from pedenv.detection import create_detector
     from pedenv.evaluation.detections import match_detections, mot17_samples
     from pedenv.images import read_image_rgb
     from pedenv.pose.models import find_onnx_model
-    from pedenv.pose.onnx_backend import OnnxPose
 
     root = Path(__file__).resolve().parents[2].parent / "shared" / "samples" / "real" / "mot17"
     sample = next(s for s in mot17_samples(root) if s.name == "MOT17-13-FRCNN/000001")
@@ -109,7 +96,7 @@ def test_the_cascade_finds_more_small_people_on_a_real_frame(pose_cache):
     for cascade in (False, True):
         config = DetectionConfig.named("far")
         config = replace(config, cascade=replace(config.cascade, enabled=cascade))
-        pose = OnnxPose(find_onnx_model(None, cache=pose_cache), detection=config)
+        pose = create_detector("onnx", model_path=find_onnx_model(None, cache=pose_cache), detection=config)
         dets = pose.detect(image, sample.geometry)
         match = match_detections(sample, dets.boxes, dets.scores)
         found[cascade] = (int((match.hit & small).sum()), match.false_positives)

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from pedenv.pose.stream_accounts import TrackFinder
+from pedenv.detection import RedetectConfig
+from pedenv.detection.track_search import TrackFinder
 from pedenv.records import Detections
 
 
@@ -14,7 +15,7 @@ def person(box) -> Detections:
 
 
 def test_a_track_is_searched_at_its_detected_size_moved_by_the_prediction():
-    finder = TrackFinder()
+    finder = TrackFinder(RedetectConfig())
     ids = np.array([7, 8])
     detected = np.array([[100.0, 200, 130, 290], [400, 200, 430, 290]])  # 90 px tall
     finder.update(ids, detected, detected, 0.0, 0.3)
@@ -36,7 +37,7 @@ def test_a_track_is_searched_at_its_detected_size_moved_by_the_prediction():
 
 
 def test_a_track_never_detected_here_is_searched_at_its_prediction():
-    finder = TrackFinder()
+    finder = TrackFinder(RedetectConfig())
     predicted = np.array([[10.0, 20, 30, 80]])
     searched, last = finder.search_boxes(np.array([3]), predicted, 1.0)
     np.testing.assert_allclose(searched, predicted)
@@ -44,7 +45,7 @@ def test_a_track_never_detected_here_is_searched_at_its_prediction():
 
 
 def test_a_person_found_at_the_last_detection_re_detects_the_track_when_the_motion_was_wrong():
-    finder = TrackFinder()
+    finder = TrackFinder(RedetectConfig())
     searched = np.array([[160.0, 200, 190, 290], [600, 200, 630, 290]])  # track 0 predicted 60 px right
     last = np.array([[100.0, 200, 130, 290], [600, 200, 630, 290]])
     found = person([101, 202, 131, 291])  # it stood still
@@ -54,7 +55,7 @@ def test_a_person_found_at_the_last_detection_re_detects_the_track_when_the_moti
 
 
 def test_forgotten_tracks_are_dropped():
-    finder = TrackFinder()
+    finder = TrackFinder(RedetectConfig())
     box = np.array([[0.0, 0, 10, 30]])
     finder.update(np.array([1]), box, box, 0.0, 0.3)
     finder.update(np.array([2]), box, box, 0.1, 0.3)  # track 1 is no longer live

@@ -19,16 +19,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pedenv.pose.tiling import (
-    Band,
-    CameraGeometry,
+from pedenv.detection.config import (
+    BAND_MARGIN_PX,
+    FIT_MARGIN,
+    MAX_TILES,
+    SHORT_PERSON_M,
+    TOP_M,
+    WHOLE_IMAGE_FINEST_MPX,
+    WHOLE_IMAGE_MAX_MPX,
     DetectionConfig,
-    Pass,
-    far_band,
-    full_pass,
-    ground_rows,
-    tile_region,
 )
+from pedenv.detection.geometry import Band, CameraGeometry, far_band, ground_rows
+from pedenv.detection.tiling import Pass, full_pass, tile_region
 
 
 @dataclass(frozen=True)
@@ -93,10 +95,12 @@ class HeightLine:
         return Band(top, bottom) if bottom - top >= 8 else None
 
 
-def calibrated(geometry: CameraGeometry | None, width: int, height: int, config: DetectionConfig) -> bool:
-    """Whether the calibration places the levels: usable, and the ground ``near_m``..``far_m``
-    away lies in the image (else the rows come from a fit, or the whole image)."""
-    return far_band(geometry, width, height, config) is not None
+def placing_geometry(geometry: CameraGeometry | None, width: int, height: int,
+                     config: DetectionConfig) -> CameraGeometry | None:
+    """``geometry`` when its calibration places the levels (usable, and the ground ``near_m``..``far_m``
+    away lies in the image), else None (the rows come from a fit, or the whole image). Derived once
+    per frame and handed to :func:`plan_level`."""
+    return geometry if far_band(geometry, width, height, config) is not None else None
 
 
 def calibrated_rows(level: Level, geometry: CameraGeometry, width: int, height: int,
@@ -105,37 +109,41 @@ def calibrated_rows(level: Level, geometry: CameraGeometry, width: int, height: 
     ``short_person_m``..``top_m`` tall has the level's heights in px, within ``near_m``..``far_m``,
     up to the head of the tallest of them (taller people there belong to a coarser level)."""
     focal = float(geometry.K[1, 1])
-    near = max(config.near_m, focal * config.short_person_m / level.max_height_px)
-    far = min(config.far_m, focal * config.top_m / level.min_height_px)
+    near = max(config.near_m, focal * SHORT_PERSON_M / level.max_height_px)
+    far = min(config.far_m, focal * TOP_M / level.min_height_px)
     if near >= far:
         return None
-    return ground_rows(geometry, width, height, near, far, config, level.max_height_px)
+    return ground_rows(geometry, width, height, near, far, level.max_height_px)
 
 
 def plan_level(level: Level, width: int, height: int, config: DetectionConfig, geometry: CameraGeometry | None,
-               line: HeightLine | None, finest: bool = False) -> tuple[list[Pass], str]:
+               line: HeightLine | None, finest: bool = False,
+               tiles: tuple[int, int] | None = None) -> tuple[list[Pass], str]:
     """The passes of one finer level and a note on how its rows were chosen (no passes: skipped).
+    geometry: the camera when its calibration places the levels (:func:`placing_geometry`), else None.
     ``finest``: the pyramid's finest level, which covers the whole image when its rows are
-    unknown (at a scale lowered to ``whole_image_finest_mpx``) instead of being skipped."""
+    unknown (at a scale lowered to :data:`~pedenv.detection.config.WHOLE_IMAGE_FINEST_MPX`) instead of
+    being skipped. ``tiles``: (tile width, most tiles) of the level; None: ``config.tile_width`` and
+    :data:`~pedenv.detection.config.MAX_TILES` (``stream`` cuts its band into packed-input-wide tiles)."""
     scale = level.scale
-    if calibrated(geometry, width, height, config):
-        assert geometry is not None
+    if geometry is not None:
         band, how = calibrated_rows(level, geometry, width, height, config), "calibration"
     elif line is not None:
-        margin = config.fit_margin * min(level.max_height_px, height) + config.band_margin_px
+        margin = FIT_MARGIN * min(level.max_height_px, height) + BAND_MARGIN_PX
         band, how = line.rows(level.min_height_px, level.max_height_px, margin, height), f"fit to {line.people}"
-    elif width * height * scale**2 <= config.whole_image_max_mpx * 1e6:
+    elif width * height * scale**2 <= WHOLE_IMAGE_MAX_MPX * 1e6:
         band, how = Band(0, height), "whole image: no calibration, no fit"
     elif finest:
-        scale = min(scale, math.sqrt(config.whole_image_finest_mpx * 1e6 / (width * height)))
+        scale = min(scale, math.sqrt(WHOLE_IMAGE_FINEST_MPX * 1e6 / (width * height)))
         band, how = Band(0, height), "whole image at the finest level: no calibration, too few people to fit"
     else:
         return [], f"x{level.scale:g} skipped: no calibration, too few people to fit"
     if band is None:
         return [], f"x{level.scale:g} skipped: its people would stand outside the image ({how})"
     kind = "tile" if (band.top, band.bottom) == (0, height) else "band"
-    tiles, scale = tile_region((0, band.top, width, band.bottom), scale, config, kind)
-    return tiles, f"x{scale:.2f} rows {band.top}-{band.bottom} ({how}), {len(tiles)} tiles"
+    tile_width, max_tiles = tiles if tiles is not None else (config.tile_width, MAX_TILES)
+    passes, scale = tile_region((0, band.top, width, band.bottom), scale, tile_width, kind, max_tiles)
+    return passes, f"x{scale:.2f} rows {band.top}-{band.bottom} ({how}), {len(passes)} tiles"
 
 
 def plan_passes(width: int, height: int, config: DetectionConfig,
@@ -146,11 +154,12 @@ def plan_passes(width: int, height: int, config: DetectionConfig,
     passes = [full_pass(width, height, config)]
     if config.mode == "fast":
         return passes, "one pass"
-    notes = [] if calibrated(geometry, width, height, config) else [
+    placing = placing_geometry(geometry, width, height, config)
+    notes = [] if placing is not None else [
         "no calibration" if geometry is None else "no usable calibration (camera looks down or up, or the band "
                                                   "misses the image)"]
     for level in pyramid(width, height, config)[1:]:  # the finest level's whole-image fallback waits for the fit
-        more, note = plan_level(level, width, height, config, geometry, None)
+        more, note = plan_level(level, width, height, config, placing, None)
         passes += more
         notes.append(note)
     return passes, "; ".join(notes)

@@ -5,10 +5,10 @@ independent passes of a step (:data:`~pedenv.pose.postprocess.InferMany`); each 
 region, letterboxes it into its input size, decodes, shifts back to image pixels and
 marks the persons touching an inner tile edge as cut. A finer level keeps a person only
 when they are not too tall for it (``max_person_px``: fragments of someone the coarser
-levels see whole) and, below ``sure_score``, when the skeleton looks like a person
+levels see whole) and, below ``SURE_SCORE``, when the skeleton looks like a person
 (mean keypoint confidence at least ``plausible_keypoint_conf``). Without a usable
 calibration each level's rows come from a line fitted to the people found so far
-(:mod:`pedenv.pose.levels`). :func:`merge_detections` merges everything.
+(:mod:`pedenv.detection.levels`). :func:`merge_detections` merges everything.
 """
 
 from __future__ import annotations
@@ -18,16 +18,25 @@ from functools import partial
 
 import numpy as np
 
-from pedenv.pose.cascade import candidates, concat, verify
-from pedenv.pose.levels import HeightLine, calibrated, plan_level, pyramid
-from pedenv.pose.merge import MergeConfig, merge_detections
-from pedenv.pose.mosaic import cut_by_inner_edge
+from pedenv.detection.cascade import candidates, verify
+from pedenv.detection.config import (
+    CASCADE_MIN_SCORE,
+    EDGE_MARGIN_PX,
+    FIT_MIN_PEOPLE,
+    FIT_MIN_SCORE,
+    MAX_PERSON_PX,
+    PLAUSIBLE_KEYPOINT_CONF,
+    SURE_SCORE,
+    DetectionConfig,
+)
+from pedenv.detection.geometry import CameraGeometry
+from pedenv.detection.levels import HeightLine, placing_geometry, plan_level, pyramid
+from pedenv.detection.merge import merge_detections
+from pedenv.detection.packing import cut_by_inner_edge
+from pedenv.detection.tiling import Pass, full_pass
 from pedenv.pose.postprocess import DecodeSettings, InferMany, Letterbox, decode, letterbox, to_input_tensor
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass, full_pass
 from pedenv.records import Detections
 
-#: The default merge settings (frozen, shared).
-DEFAULT_MERGE = MergeConfig()
 #: The default decoding (frozen, shared).
 DEFAULT_DECODING = DecodeSettings()
 
@@ -72,13 +81,13 @@ def run_passes(infer: InferMany, image: np.ndarray, steps: list[Pass], input_siz
             for out, (_, box), step in zip(outputs, inputs, steps)]
 
 
-def level_filter(dets: Detections, step: Pass, config: DetectionConfig) -> np.ndarray:
+def level_filter(dets: Detections, step: Pass) -> np.ndarray:
     """(N,) bool: the persons of a finer level's pass to keep (module doc); all for ``full``."""
     if step.kind == "full" or not len(dets):
         return np.ones(len(dets), bool)
     heights = (dets.boxes[:, 3] - dets.boxes[:, 1]) * step.scale
-    plausible = (dets.scores >= config.sure_score) | (dets.confidences.mean(1) >= config.plausible_keypoint_conf)
-    return (heights <= config.max_person_px) & plausible
+    plausible = (dets.scores >= SURE_SCORE) | (dets.confidences.mean(1) >= PLAUSIBLE_KEYPOINT_CONF)
+    return (heights <= MAX_PERSON_PX) & plausible
 
 
 #: Per pass: its persons (px of the image) and which of them an inner tile edge cuts, (N,) bool.
@@ -87,29 +96,29 @@ Parts = list[tuple[Detections, np.ndarray]]
 
 def run_level(infer: InferMany, image: np.ndarray, passes: list[Pass],
               fixed_input: tuple[int, int] | None, settings: DecodeSettings,
-              config: DetectionConfig, low: list[Detections] | None = None) -> Parts:
+              low: list[Detections] | None = None) -> Parts:
     """Run ``passes``, independent of each other (``settings``: score threshold, NMS, max persons);
-    with ``low`` a list, persons scoring ``cascade.min_score`` up to the threshold (whole, not
-    too tall for the level) are appended to it for the cascade."""
+    with ``low`` a list, persons scoring :data:`~pedenv.detection.config.CASCADE_MIN_SCORE` up to the
+    threshold (whole, not too tall for the level) are appended to it for the cascade."""
     score_threshold, iou_threshold, max_detections = (settings.score_threshold, settings.iou_threshold,
                                                       settings.max_detections)
     parts = []
     image_size = (image.shape[0], image.shape[1])
-    floor = min(config.cascade.min_score, score_threshold) if low is not None else score_threshold
+    floor = min(CASCADE_MIN_SCORE, score_threshold) if low is not None else score_threshold
     sizes = [fixed_input or step.input_size for step in passes]
     for step, size, dets in zip(passes, sizes, run_passes(infer, image, passes, sizes, floor, iou_threshold,
                                                           max_detections)):
         scale = min(size[0] / (step.region[3] - step.region[1]), size[1] / (step.region[2] - step.region[0]))
-        margin = config.edge_margin_px / scale
+        margin = EDGE_MARGIN_PX / scale
         if len(dets):
             dets = dets.take(~spans_the_region(dets.boxes, step.region, image_size, margin))
         if low is not None and len(dets):
             weak = dets.take(dets.scores <= score_threshold)
-            tall = (weak.boxes[:, 3] - weak.boxes[:, 1]) * scale > config.max_person_px
+            tall = (weak.boxes[:, 3] - weak.boxes[:, 1]) * scale > MAX_PERSON_PX
             low.append(weak.take(~tall & ~cut_by_inner_edge(weak.boxes, step.region, image_size, margin)))
             dets = dets.take(dets.scores > score_threshold)
         if len(dets):
-            dets = dets.take(level_filter(dets, step, config))
+            dets = dets.take(level_filter(dets, step))
         parts.append((dets, cut_by_inner_edge(dets.boxes, step.region, image_size, margin)))
     return parts
 
@@ -117,12 +126,12 @@ def run_level(infer: InferMany, image: np.ndarray, passes: list[Pass],
 def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
                   geometry: CameraGeometry | None = None, *, decoding: DecodeSettings = DEFAULT_DECODING,
                   fixed_input: tuple[int, int] | None = None, base_input: tuple[int, int] | None = None,
-                  merge: MergeConfig = DEFAULT_MERGE) -> tuple[Detections, list[Pass], str]:
+) -> tuple[Detections, list[Pass], str]:
     """The pyramid over ``image`` (H, W, 3) uint8 RGB, coarse to fine, merged.
 
     geometry: the camera for the bands (None: rows fitted to the people found).
     decoding: score threshold, NMS IoU and max persons of every pass (its cut margin is
-        ``config.edge_margin_px``).
+        :data:`~pedenv.detection.config.EDGE_MARGIN_PX`).
     fixed_input: forces every pass's input size (a model with a fixed input).
     base_input: the whole-frame pass's input (height, width) instead of the config's.
     Returns the persons (px of ``image``), the passes run and a note per level.
@@ -132,11 +141,12 @@ def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
     if base_input is not None:
         first = Pass(first.region, base_input, "full")
     low: list[Detections] | None = [] if config.cascade.enabled and config.mode != "fast" else None
-    settings = replace(decoding, edge_margin_px=config.edge_margin_px)
+    settings = replace(decoding, edge_margin_px=EDGE_MARGIN_PX)
     max_detections = settings.max_detections
-    run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, config=config, low=low)
+    run = partial(run_level, infer, image, fixed_input=fixed_input, settings=settings, low=low)
     levels = pyramid(width, height, config)[1:]
-    if calibrated(geometry, width, height, config):  # every level's rows known now: one network call for all
+    geometry = placing_geometry(geometry, width, height, config)  # the ground band, once per frame
+    if geometry is not None:  # every level's rows known now: one network call for all
         planned = [plan_level(level, width, height, config, geometry, None) for level in levels]
         passes = [first, *(p for more, _ in planned for p in more)]
         parts, notes = run(passes), [note for _, note in planned]
@@ -144,21 +154,21 @@ def detect_levels(infer: InferMany, image: np.ndarray, config: DetectionConfig,
     else:
         parts, passes, notes = run([first]), [first], []
     for i, level in enumerate(levels):
-        whole = [d.take(~c & (d.scores >= config.fit_min_score)) for d, c in parts if len(d)]
+        whole = [d.take(~c & (d.scores >= FIT_MIN_SCORE)) for d, c in parts if len(d)]
         boxes = np.concatenate([d.boxes for d in whole]) if whole else np.zeros((0, 4))
-        line = HeightLine.fit(boxes, config.fit_min_people, height)
+        line = HeightLine.fit(boxes, FIT_MIN_PEOPLE, height)
         more, note = plan_level(level, width, height, config, geometry, line, finest=i == len(levels) - 1)
         notes.append(note)
         parts += run(more)
         passes += more
-    dets = parts[0][0] if len(passes) == 1 else merge_detections(parts, merge, max_detections)
+    dets = parts[0][0] if len(passes) == 1 else merge_detections(parts, max_detections)
     if low is not None:
-        verified, more = verify(infer, image, candidates(concat(low), dets, config.cascade), config.cascade,
-                                config.stream.mosaic_size, settings)
+        verified, more = verify(infer, image, candidates(Detections.concat(low), dets), config.cascade,
+                                config.stream.packed_size, settings)
         if more:
             notes.append(f"cascade: {len(verified)} confirmed in {len(more)} packed inputs")
             passes += more
             dets = merge_detections([(dets, np.zeros(len(dets), bool)), (verified, np.zeros(len(verified), bool))],
-                                    merge, max_detections)
+                                    max_detections)
     return dets, passes, "; ".join(notes) or "one pass"
 

@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from pedenv.pose.schedule import CreditBank, band_tiles, one_row, plan_frame, tracks_at_risk, units
-from pedenv.pose.stream_config import StreamConfig
-from pedenv.pose.tiling import CameraGeometry, DetectionConfig, Pass
+from pedenv.detection.budget import CreditBank, band_tiles, one_row, plan_frame, tracks_at_risk, units
+from pedenv.detection.config import DetectionConfig, StreamConfig
+from pedenv.detection.geometry import CameraGeometry
+from pedenv.detection.tiling import Pass
 
 
 def simulate(config: StreamConfig, tile_units: np.ndarray, wanted: list[int], dt: float, frames: int):
@@ -19,7 +20,7 @@ def simulate(config: StreamConfig, tile_units: np.ndarray, wanted: list[int], dt
         for i in plan.tiles:
             seen[i] = t
             visits[i].append(t)
-        spent.append(1.0 + plan.mosaics + tile_units[plan.tiles].sum())
+        spent.append(1.0 + plan.packed + tile_units[plan.tiles].sum())
     return visits, np.array(spent)
 
 
@@ -46,7 +47,7 @@ def test_the_budget_is_never_exceeded_by_more_than_one_pass():
         units = rng.uniform(0.2, 1.7, rng.integers(0, 40))
         ages = np.where(rng.random(len(units)) < 0.2, np.inf, rng.uniform(0, 5, len(units)))
         plan = plan_frame(1.0, 1.0, int(rng.integers(0, 6)), units, ages, float(rng.uniform(0.03, 0.5)), config)
-        spent = 1.0 + plan.mosaics + units[plan.tiles].sum()
+        spent = 1.0 + plan.packed + units[plan.tiles].sum()
         assert spent <= config.budget_units + max([1.0, *units]) + 1e-9
         assert len(set(plan.tiles)) == len(plan.tiles)
 
@@ -55,13 +56,13 @@ def test_tracks_at_risk_come_first_then_the_oldest_tiles():
     config = StreamConfig(budget_units=3.0, scan_period_s=10.0)
     ages = np.array([0.5, 3.0, np.inf, 1.0])
     plan = plan_frame(1.0, 1.0, 1, np.ones(4), ages, 0.1, config)
-    assert plan.mosaics == 1  # the at-risk tracks' packed input before any tile
+    assert plan.packed == 1  # the at-risk tracks' packed input before any tile
     assert plan.tiles == [2]  # then the tile never seen
     plan = plan_frame(1.0, 1.0, 0, np.ones(4), ages, 0.1, config)
     assert plan.tiles == [2, 1]  # no tracks: the two oldest tiles
     # a budget of one pass: only the whole-frame pass and the one tile that is due
     due = plan_frame(1.0, 1.0, 2, np.ones(4), np.array([0.1, 9.95, 0.2, 0.3]), 0.1, StreamConfig(1.0, 10.0))
-    assert (due.mosaics, due.tiles, due.over_budget) == (0, [1], True)
+    assert (due.packed, due.tiles, due.over_budget) == (0, [1], True)
 
 
 def test_the_room_no_tile_fits_in_goes_to_the_tracks():
@@ -69,7 +70,7 @@ def test_the_room_no_tile_fits_in_goes_to_the_tracks():
     # 1.75 units, all seen 0.2 s ago, so the rotation needs 2.1 units per frame: only the first
     # packed input came before the rotation, and no tile fit in the unit left (2 units spent of 3)
     plan = plan_frame(1.0, 1.0, 2, np.full(36, 1.75), np.full(36, 0.2), 1 / 30, StreamConfig())
-    assert (plan.mosaics, plan.tiles, plan.over_budget) == (2, [], False)
+    assert (plan.packed, plan.tiles, plan.over_budget) == (2, [], False)
     assert plan.reserve_units == pytest.approx(2.1)
 
 
@@ -81,7 +82,7 @@ def simulate_with_credit(config: StreamConfig, wanted: np.ndarray, tile_units: n
         plan = plan_frame(1.0, 1.0, int(w), tile_units, f * dt - seen, dt, config, bank.credit)
         seen[plan.tiles] = f * dt
         credit.append(bank.credit)
-        spent.append(1.0 + plan.mosaics + tile_units[plan.tiles].sum())
+        spent.append(1.0 + plan.packed + tile_units[plan.tiles].sum())
         bank.charge(spent[-1], config)
     return np.array(spent), np.array(credit)
 
@@ -105,9 +106,9 @@ def test_a_debt_is_paid_by_the_tiles_not_by_the_tracks_most_at_risk():
     # (before, it did not: 12 % fewer packed inputs, 86 % of far's people instead of 94 %)
     config = StreamConfig()
     plan = plan_frame(1.25, 1.0, 2, np.full(6, 0.67), np.full(6, 0.5), 0.1, config, credit=-0.9)
-    assert (plan.mosaics, plan.tiles, plan.over_budget) == (1, [], False)  # 2.25 units: 0.75 paid back
+    assert (plan.packed, plan.tiles, plan.over_budget) == (1, [], False)  # 2.25 units: 0.75 paid back
     plan = plan_frame(1.25, 1.0, 2, np.full(6, 0.67), np.full(6, 0.5), 0.1, config)
-    assert (plan.mosaics, plan.tiles) == (1, [0])  # no debt: a tile too (2.92 units)
+    assert (plan.packed, plan.tiles) == (1, [0])  # no debt: a tile too (2.92 units)
 
 
 def test_credit_from_quiet_frames_is_spent_on_a_crowded_one():
@@ -131,7 +132,7 @@ def test_credit_from_quiet_frames_is_spent_on_a_crowded_one():
 def test_tracks_at_risk_order(unseen, hits, found, expected):
     predicted = np.array([[100, 100, 140, 200], [300, 100, 340, 200], [500, 100, 540, 200]], float)
     rows = tracks_at_risk(predicted, np.array(hits), np.array(unseen), np.array(found, float).reshape(-1, 4),
-                          (480, 640), StreamConfig(track_min_hits=2))
+                          (480, 640), min_hits=2)
     assert rows.tolist() == expected
 
 
@@ -140,7 +141,7 @@ def test_band_tiles_cover_the_calibrated_band_in_packed_input_sized_tiles():
     config = DetectionConfig.named("stream")
     tiles, note = band_tiles(1600, 900, config, CameraGeometry.level(K, 1.5), None)
     assert "calibration" in note and len(tiles) >= 4
-    assert all(max(t.step.input_size) <= config.stream.mosaic_width for t in tiles)
+    assert all(max(t.step.input_size) <= config.stream.packed_width for t in tiles)
     assert len({t.key for t in tiles}) == len(tiles)
     for level in {t.key[0] for t in tiles}:  # each level's tiles span the image's width
         regions = np.array([t.step.region for t in tiles if t.key[0] == level])
