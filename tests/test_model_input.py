@@ -42,6 +42,14 @@ def test_timestamps_going_backwards_name_the_frame():
         model.update(frame_with_people(1, 0.9, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 0.0)]))
 
 
+def test_a_huge_timestamp_is_shown_short():
+    model = PedestrianEnvironmentModel()
+    model.update(frame_with_people(0, 1e300, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 0.0)]))
+    with pytest.raises(InputError) as err:
+        model.update(frame_with_people(1, 1.0, EgoPose.from_xy_yaw(0, 0, 0), [(20.0, 0.0)]))
+    assert str(err.value) == "frame 1: field 'timestamp' goes backwards or repeats (1.000000 s after 1e+300 s)"
+
+
 def test_missing_detections_name_the_frame():
     with pytest.raises(InputError, match="frame 3 of scene 'x': field 'detections' is missing"):
         PedestrianEnvironmentModel().update(Frame(3, 0.0, Camera.from_fov(), EgoPose.from_xy_yaw(0, 0, 0), scene="x"))

@@ -165,8 +165,14 @@ class PedestrianEnvironmentModel:
             raise InputError(f"{where}: field 'detections' is missing; run a pose backend first")
         if self._last is not None and frame.timestamp <= self._last.timestamp:
             raise InputError(f"{where}: field 'timestamp' goes backwards or repeats "
-                             f"({frame.timestamp:.6f} s after {self._last.timestamp:.6f} s)")
+                             f"({_seconds(frame.timestamp)} s after {_seconds(self._last.timestamp)} s)")
         return frame.detections
 
     def _make_transition(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         return kalman.transition(dt, self.config.kalman.acceleration_std_mps2)
+
+
+def _seconds(t: float) -> str:
+    """A timestamp for an error line: microseconds where they are meaningful, else 7 significant
+    digits (a stamp of 1e300 s is not 300 digits long)."""
+    return f"{t:.6f}" if abs(t) < 1e12 else f"{t:.7g}"
