@@ -7,7 +7,8 @@ Runs ``pedenv evaluate --dataset kitti-tracking`` in-process (the detector model
 with ``--method paper`` and the fused default on the moving drives (0013, 0015, 0011, 0004, 0001,
 0000) and the parked ones (0016, 0017), each group evaluated as one dataset, and prints per drive
 and per group: relative and absolute position error and count, 1- and 2-sigma coverage, MOTA,
-IDF1, ID switches (per drive too: one evaluation per drive), the predicted path's mean error at
+IDF1, ID switches, false positives and misses of the labelled boxes (per drive too: one
+evaluation per drive), the predicted path's mean error at
 1 / 2 / 3 s beside constant velocity from pedenv's own state, motion-state agreement against the
 labelled speed and conflict recall / precision (fused), and the seconds per 1,000 frames of each
 method (wall time, with the load average). ``--config``: a pedenv config YAML applied to both.
@@ -40,7 +41,8 @@ def figures(metrics) -> str:
     fde = " ".join(f"{_f(b.get(f'fde_{h}s_m'))}/{_f(b.get(f'fde_{h}s_constant_velocity_m'))}" for h in (1, 2, 3))
     return (f"{_f(o.rel_error_pct)} % {_f(o.abs_error_m)} m n={o.count} | 1s {_f(100 * c['within_1sigma'], 1)} % "
             f"2s {_f(100 * c['within_2sigma'], 1)} % | MOTA {_f(t.get('mota'), 3)} IDF1 {_f(t.get('idf1'), 3)} "
-            f"IDsw {t.get('id_switches', '-')} | FDE 1/2/3 s pred/cv {fde} | state {_f(m.get('agreement'), 3)} "
+            f"IDsw {t.get('id_switches', '-')} FP {t.get('false_positives', '-')} FN {t.get('misses', '-')} "
+            f"of {t.get('objects', '-')} | FDE 1/2/3 s pred/cv {fde} | state {_f(m.get('agreement'), 3)} "
             f"(n={m.get('count', 0)}) | conflict R {_f(k.get('recall'))} P {_f(k.get('precision'))} "
             f"({k.get('labelled_entries', 0)} entries, {k.get('flagged', 0)} flagged of {k.get('count', 0)})")
 

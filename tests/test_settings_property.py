@@ -61,7 +61,7 @@ def test_a_config_whose_values_contradict_is_reset_field_by_field():
     data = {"behaviour": {"walk_exit_mps": 1.0, "walk_enter_mps": 0.5}}
     config, reset, refused = build(data)
     assert refused == "" and reset == ["behaviour.walk_exit_mps"]
-    assert (config.behaviour.walk_exit_mps, config.behaviour.walk_enter_mps) == (0.35, 0.5)
+    assert (config.behaviour.walk_exit_mps, config.behaviour.walk_enter_mps) == (0.3, 0.5)
 
 
 def test_a_range_declared_as_a_sequence_is_read():

@@ -25,10 +25,10 @@ def test_on_in_fused_off_in_paper_and_round_trips():
     ("corridor_half_width_m", 0.0, "behaviour.corridor_half_width_m"),
     ("horizons_s", (2.0, 1.0), "behaviour.horizons_s"),
     ("horizons_s", (0.5, float("nan")), "behaviour.horizons_s"),
-    ("walk_exit_mps", 0.9, "behaviour.walk_exit_mps (0.9) must be below behaviour.walk_enter_mps (0.6)"),
-    ("walk_enter_mps", 0.3, "behaviour.walk_exit_mps (0.35) must be below behaviour.walk_enter_mps (0.3)"),
+    ("walk_exit_mps", 0.9, "behaviour.walk_exit_mps (0.9) must be below behaviour.walk_enter_mps (0.45)"),
+    ("walk_enter_mps", 0.25, "behaviour.walk_exit_mps (0.3) must be below behaviour.walk_enter_mps (0.25)"),
     ("walk_enter_mps", 2.5, "behaviour.walk_enter_mps (2.5) must not exceed behaviour.run_exit_mps (2.3)"),
-    ("run_exit_mps", 0.5, "behaviour.walk_enter_mps (0.6) must not exceed behaviour.run_exit_mps (0.5)"),
+    ("run_exit_mps", 0.4, "behaviour.walk_enter_mps (0.45) must not exceed behaviour.run_exit_mps (0.4)"),
     ("run_enter_mps", 2.0, "behaviour.run_exit_mps (2.3) must be below behaviour.run_enter_mps (2.0)"),
     ("conflict_horizon_s", 0.05, "behaviour.conflict_horizon_s"),
 ])

@@ -9,7 +9,7 @@ CFG = BehaviourConfig(enabled=True)
 
 
 def test_hysteresis_does_not_flicker():
-    speeds = [0.0, 0.5, 0.9, 0.5, 0.4, 0.3, 0.5, 3.5, 2.5, 2.0]
+    speeds = [0.0, 0.5, 0.9, 0.5, 0.4, 0.25, 0.5, 3.5, 2.5, 2.0]
     state, out = np.array([STANDING], np.int8), []
     for v in speeds:
         state = next_state(state, np.array([v]), np.array([0.05]), CFG)

@@ -121,3 +121,22 @@ def test_frame_without_ground_truth_skeletons_is_an_input_error():
     frame = Frame(3, 0.3, CAMERA, EgoPose.from_xy_yaw(0, 0, 0), scene="bare")
     with pytest.raises(InputError, match="frame 3 of bare"):
         DetectorModel()(frame)
+
+
+@pytest.mark.parametrize("outside", [0.0, 1.0])
+def test_false_positives_outside_people_keep_their_rate(outside):
+    """With ``false_positives_outside_people`` no ghost lies half inside a person, and as many appear."""
+    from pedenv.boxes import containment_matrix
+    from pedenv.records import boxes_from_keypoints
+
+    model = DetectorModel(seed=5, false_positives_per_frame=5.0, false_positives_outside_people=outside)
+    inside, ghosts = 0, 0
+    for i in range(200):
+        frame = person_frame(i, 200.0, centre_u=200.0, people=3)
+        people = boxes_from_keypoints(frame.ground_truth.keypoints, np.ones((3, 17), bool))
+        det = model(frame)
+        ghost = det.boxes[det.boxes[:, 3] - det.boxes[:, 1] < 70.0]
+        ghosts += len(ghost)
+        inside += int((containment_matrix(ghost, people).max(1) >= 0.5).sum())
+    assert ghosts / 200 == pytest.approx(5.0, abs=0.3)
+    assert inside == 0 if outside else inside > 20

@@ -10,8 +10,9 @@ every frame of the poses is a frame (10 Hz). The frames are those of :mod:`peden
 Without images the skeletons are rendered from the labels (:mod:`pedenv.synthetic.labelled`:
 each ``Pedestrian`` box's bottom centre, height and ``rotation_y``, the gait from its labelled
 motion, ``occluded`` hiding keypoints and causing misses) and the default pose backend is the
-detector model fitted to the real network in the default ``far`` detection mode
-(``detector-model:yolo11n-pose-far``): every figure is **real motion, modelled perception**.
+detector model fitted to the real network in the default ``far`` detection mode, with its false
+positives per image area (``detector-model:yolo11n-pose-far-kitti``): every figure is **real
+motion, modelled perception**.
 The ground-truth boxes are then the rendered skeletons' boxes (clipped to the image), as on the
 synthetic scenes, so that the tracking metrics match a detection to the person it was rendered
 from (the labelled 2D boxes reach from head top to soles and arms, a skeleton's only from eyes to
@@ -61,7 +62,7 @@ class KittiDrivesDataset:
     """Whole KITTI tracking sequences, every frame, skeletons rendered from the labels (module doc)."""
 
     name = "kitti-tracking"
-    default_pose_backend = "detector-model:yolo11n-pose-far"
+    default_pose_backend = "detector-model:yolo11n-pose-far-kitti"
 
     def __init__(self, data_root: str | Path, camera_height_m: float = 1.65, seed: int = 0,
                  images_only: bool = False, ego_poses: str = "orbslam3") -> None:

@@ -37,12 +37,17 @@ class TrackingAccumulator:
         acc.update(gt_ids.tolist(), track_ids.tolist(), dist)
 
     def summary(self) -> dict | None:
-        """``{"mota", "idf1", "id_switches", "motp_iou"}`` over all scenes, None without ids."""
+        """``{"mota", "idf1", "id_switches", "motp_iou", "false_positives", "misses", "objects"}`` over all
+        scenes (``objects``: labelled boxes; MOTA = 1 - (misses + false_positives + id_switches) / objects),
+        None without ids."""
         if not self.scenes:
             return None
         mh = self._mm.metrics.create()
         df = mh.compute_many(list(self.scenes.values()), names=list(self.scenes),
-                             metrics=["mota", "idf1", "num_switches", "motp"], generate_overall=True)
+                             metrics=["mota", "idf1", "num_switches", "motp", "num_false_positives",
+                                      "num_misses", "num_objects"], generate_overall=True)
         row = df.loc["OVERALL"]
         return {"mota": float(row["mota"]), "idf1": float(row["idf1"]), "id_switches": int(row["num_switches"]),
-                "motp_iou": float(1.0 - row["motp"]) if np.isfinite(row["motp"]) else None}
+                "motp_iou": float(1.0 - row["motp"]) if np.isfinite(row["motp"]) else None,
+                "false_positives": int(row["num_false_positives"]), "misses": int(row["num_misses"]),
+                "objects": int(row["num_objects"])}
