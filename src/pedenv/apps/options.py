@@ -55,6 +55,11 @@ class RecordingSource:
 
         if self.calibration is None:
             raise InputError("a recording needs its calibration (--calibration)")
+        if self.ego_poses is None and not self.static:  # a vehicle without poses: visual odometry (pedenv.odometry)
+            from pedenv.odometry.recording import load_with_odometry
+
+            return load_with_odometry(calibration=self.calibration, images=self.images, video=self.video,
+                                      fps=self.fps, start_time=self.start_time)
         return load_recording(calibration=self.calibration, ego_poses=self.ego_poses, images=self.images,
                               video=self.video, fps=self.fps, start_time=self.start_time, static=self.static)
 

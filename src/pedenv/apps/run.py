@@ -20,6 +20,8 @@ from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.model import PedestrianEnvironmentModel
+from pedenv.odometry.estimator import ESTIMATED_SOURCE
+from pedenv.odometry.poses_file import write_ego_poses
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import holds_files, prepare_output_dir
 from pedenv.outputs.png import write_png
@@ -112,6 +114,8 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
         # the frames before a bad one are run and stay on disk
     out = prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv run")
     cfg.save(out / "config.json")
+    if isinstance(rec, Recording) and rec.trajectory is not None and rec.trajectory.source == ESTIMATED_SOURCE:
+        write_ego_poses(out / ESTIMATED_SOURCE, rec.trajectory)  # visual odometry's poses (pedenv.odometry)
     return rec, backend, out
 
 

@@ -88,9 +88,9 @@ def check_single_recording(source: RecordingSource, executor: ExecutorOptions) -
         given = [f"--{k.replace('_', '-')}" for k, v in chosen.items() if v is not None]
         if given:
             raise InputError(f"{', '.join(given)} apply to --bag")
-        if source.calibration is None or (source.ego_poses is None and not source.static):
-            raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
-                             "(or a --bag, or a --manifest of recordings)")
+        if source.calibration is None:  # without --ego-poses a vehicle's are estimated (pedenv.odometry)
+            raise InputError("give --calibration (with --ego-poses, or --static for a fixed camera; without them a "
+                             "vehicle's ego poses are estimated from the images), or a --bag, or a --manifest")
     elif any(v is not None for v in (source.images, source.video, source.calibration, source.ego_poses)) \
             or source.static:
         raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, "
