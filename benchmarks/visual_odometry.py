@@ -76,7 +76,8 @@ def kitti_raw(root: Path) -> None:
                        if t.strip()])
     seconds = (stamps - stamps[0]) / np.timedelta64(1, "ns") * 1e-9
     images = sorted((sync / "image_02/data").glob("*.png"))
-    measure_or_say(images, seconds, k, read_oxts(sorted((sync / "oxts/data").glob("*.txt"))), "kitti raw 2011_09_26_0002")
+    oxts = read_oxts(sorted((sync / "oxts/data").glob("*.txt")))
+    measure_or_say(images, seconds, k, oxts, "kitti raw 2011_09_26_0002")
 
 
 def kitti_tracking(folder: Path, frames: list[int], name: str, oxts_file: Path) -> None:

@@ -7,7 +7,7 @@ import numpy as np
 
 from pedenv.errors import InputError, check_array
 from pedenv.geometry import invert_transform, rotation_to_quaternion
-from pedenv.odometry.motion import Step, estimate_step, fill_lengths
+from pedenv.odometry.motion import Step, estimate_step, fill_lengths, road_length
 from pedenv.recordings.ego_poses import EgoTrajectory
 
 #: The ``source`` of an estimated trajectory (what its InputErrors and ``run.json`` name).
@@ -56,9 +56,17 @@ class VisualOdometry:
         road was not seen get their neighbours' speed (:func:`~pedenv.odometry.motion.fill_lengths`)."""
         if not self.timestamps:
             raise InputError(f"{where}: no frames for visual odometry")
-        lengths = fill_lengths(np.array([s.length for s in self.steps]), np.diff(self.timestamps), where)
+        lengths = fill_lengths(self.lengths(), np.diff(self.timestamps), where)
         return chain_poses([s.rotation for s in self.steps],
                            [s.direction * n for s, n in zip(self.steps, lengths)], self.cam_to_vehicle)
+
+    def lengths(self) -> np.ndarray:
+        """(S,) metres: each step's length refitted with the road's pitch fixed at the median of the
+        steps' own fits (the camera's mounting pitch over the drive: one step's pitch and length trade
+        off against each other); NaN where the road was not seen."""
+        pitches = [s.pitch for s in self.steps if s.moved and np.isfinite(s.length)]
+        pitch = float(np.median(pitches)) if pitches else None
+        return np.array([road_length(s, self.intrinsics, self.cam_to_vehicle, pitch) for s in self.steps])
 
     def trajectory(self, where: str = "the recording") -> EgoTrajectory:
         """The poses as an :class:`~pedenv.recordings.ego_poses.EgoTrajectory` (``source`` :data:`ESTIMATED_SOURCE`)."""

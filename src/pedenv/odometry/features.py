@@ -17,7 +17,7 @@ GRID_CELLS = (8, 16)
 #: Extra corners taken on the road patch (:func:`pedenv.odometry.ground.road_mask`), whose texture is
 #: often too faint for FAST (a road in shade): Shi-Tomasi corners relative to the patch's best
 #: (OpenCV's ``goodFeaturesToTrack``, its quality level 0.01), at least :data:`ROAD_CORNER_SPACING_PX` apart.
-ROAD_CORNERS = 300
+ROAD_CORNERS = 600
 ROAD_CORNER_QUALITY = 0.003
 ROAD_CORNER_SPACING_PX = 7
 #: Lucas-Kanade window, pixels, and pyramid levels (OpenCV's window; 4 levels follow flows of
@@ -51,7 +51,7 @@ def person_mask(shape: tuple[int, int], boxes: np.ndarray | None) -> np.ndarray:
 def detect_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(N, 2) float32 pixel positions of FAST corners where ``mask`` is non-zero, at most
     :data:`CORNERS_PER_CELL` per grid cell, the strongest first."""
-    points = cv2.FastFeatureDetector_create(threshold=FAST_THRESHOLD, nonmaxSuppression=True).detect(gray, mask)
+    points = cv2.FastFeatureDetector.create(threshold=FAST_THRESHOLD, nonmaxSuppression=True).detect(gray, mask)
     if not points:
         return np.empty((0, 2), np.float32)
     xy = np.array([p.pt for p in points], np.float32)
@@ -70,18 +70,19 @@ def detect_road_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
     return np.empty((0, 2), np.float32) if found is None else found.reshape(-1, 2).astype(np.float32)
 
 
-def track(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The ``points`` (N, 2) of ``gray0`` that track into ``gray1`` and back: (M, 2) float64 pixels
-    in ``gray0`` and their (M, 2) positions in ``gray1``."""
+def track(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``points`` (N, 2) of ``gray0`` that track into ``gray1`` and back: (M, 2) float64 pixels in
+    ``gray0``, their (M, 2) positions in ``gray1``, and which of the ``points`` they are, (N,) bool."""
     if len(points) == 0:
-        return np.empty((0, 2)), np.empty((0, 2))
-    params = {"winSize": (FLOW_WINDOW_PX, FLOW_WINDOW_PX), "maxLevel": FLOW_LEVELS}
+        return np.empty((0, 2)), np.empty((0, 2)), np.zeros(0, bool)
+    window = (FLOW_WINDOW_PX, FLOW_WINDOW_PX)
     p0 = points.reshape(-1, 1, 2).astype(np.float32)
-    p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, None, **params)
-    back, ok2, _ = cv2.calcOpticalFlowPyrLK(gray1, gray0, p1, None, **params)
+    p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, np.empty(0), winSize=window, maxLevel=FLOW_LEVELS)
+    back, ok2, _ = cv2.calcOpticalFlowPyrLK(gray1, gray0, p1, np.empty(0), winSize=window, maxLevel=FLOW_LEVELS)
     error = np.linalg.norm((back - p0).reshape(-1, 2), axis=1)
     h, w = gray1.shape
     q = p1.reshape(-1, 2)
-    inside = (q[:, 0] >= 0) & (q[:, 0] < w) & (q[:, 1] >= 0) & (q[:, 1] < h)
+    edge = FLOW_WINDOW_PX // 2  # a window cut by the image's edge drags the flow
+    inside = (q[:, 0] >= edge) & (q[:, 0] < w - edge) & (q[:, 1] >= edge) & (q[:, 1] < h - edge)
     keep = ok1.ravel().astype(bool) & ok2.ravel().astype(bool) & (error < MAX_ROUND_TRIP_PX) & inside
-    return p0.reshape(-1, 2)[keep].astype(np.float64), q[keep].astype(np.float64)
+    return p0.reshape(-1, 2)[keep].astype(np.float64), q[keep].astype(np.float64), keep

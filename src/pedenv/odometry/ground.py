@@ -12,8 +12,8 @@ import numpy as np
 
 #: The road patch whose tracks scale a step: from :data:`ROAD_NEAR_M` to :data:`ROAD_FAR_M`
 #: ahead of the vehicle origin and within :data:`ROAD_HALF_WIDTH_M` of its centre line, metres
-#: (one lane each side; beyond about 25 m a 1 px flow error moves a triangulated road point
-#: by more than the plane's tolerance at 10 Hz and 9 m/s).
+#: (the vehicle's own lane, where parked cars are not; beyond about 25 m the road's flow at 10 Hz
+#: and 9 m/s is a few pixels, too little to weigh).
 ROAD_NEAR_M = 3.0
 ROAD_FAR_M = 25.0
 ROAD_HALF_WIDTH_M = 2.0
@@ -22,11 +22,11 @@ ROAD_HALF_WIDTH_M = 2.0
 MIN_ROAD_POINTS = 15
 #: The road plane's fit: a track is on it when the plane's homography puts it within this many
 #: pixels of where it was tracked (1.5 px: the essential matrix's tolerance plus the road's
-#: fainter corners); the fit maximises the pixels' truncated squared error over the plane's
+#: fainter corners); the fit minimises the pixels' truncated squared error over the plane's
 #: distance and its pitch, within :data:`MAX_ROAD_TILT_DEG` of the calibrated pitch (the car
 #: pitching under braking, a pitch slightly off).
 ROAD_TOLERANCE_PX = 1.5
-MAX_ROAD_TILT_DEG = 1.0
+MAX_ROAD_TILT_DEG = 3.0
 #: The searched distances to the plane, in step lengths (0.01 to 100: a step of 1.65 m / 100 to 165 m
 #: for a camera 1.65 m up), and the grids of the coarse and the fine search.
 PLANE_DISTANCES = (0.01, 100.0)
@@ -66,28 +66,31 @@ def road_mask(shape: tuple[int, int], intrinsics: np.ndarray, cam_to_vehicle: np
     return cv2.resize(coarse, (w, h), interpolation=cv2.INTER_NEAREST)
 
 
-def road_height(p0: np.ndarray, p1: np.ndarray, intrinsics: np.ndarray, rotation: np.ndarray,
-                direction: np.ndarray, down: np.ndarray) -> float:
-    """The camera's distance to the road, in lengths of the step ``direction`` (3,), from road tracks
-    ``p0`` (N, 2) -> ``p1`` (N, 2) pixels; NaN with fewer than :data:`MIN_ROAD_POINTS` tracks on the plane.
+def fit_road(p0: np.ndarray, p1: np.ndarray, intrinsics: np.ndarray, rotation: np.ndarray, direction: np.ndarray,
+             down: np.ndarray, pitch: float | None = None) -> tuple[float, float]:
+    """(distance, pitch): the camera's distance to the road plane in lengths of the step ``direction``
+    (3,), and the plane normal's pitch, radians, from road tracks ``p0`` (N, 2) -> ``p1`` (N, 2) pixels;
+    distance NaN with fewer than :data:`MIN_ROAD_POINTS` tracks on the plane.
 
     A road point ``x`` (camera-0 frame) with ``normal @ x = distance`` moves to
-    ``(rotation + direction normal^T / distance) x``; the distance and the normal's pitch
-    (about the camera's x axis, around ``down`` (3,), the calibrated normal) that put the most
-    tracks within :data:`ROAD_TOLERANCE_PX` (truncated squared error) are searched on a grid.
+    ``(rotation + direction normal^T / distance) x``; ``normal`` is ``down`` (3,), the calibrated
+    normal, turned by ``pitch`` about the camera's x axis (positive: the camera pitched further down).
+    The distance, and the pitch within :data:`MAX_ROAD_TILT_DEG` unless ``pitch`` is given, that put
+    the tracks closest (truncated squared error, :data:`ROAD_TOLERANCE_PX`) are searched on a grid.
     """
     if len(p0) < MIN_ROAD_POINTS:
-        return float("nan")
+        return float("nan"), float("nan")
     k = np.asarray(intrinsics, dtype=np.float64)
     rays = np.linalg.inv(k) @ np.column_stack([p0, np.ones(len(p0))]).T
-    span, tilt = np.log(PLANE_DISTANCES), np.radians(MAX_ROAD_TILT_DEG)
-    logs, pitches = np.linspace(*span, COARSE_STEPS[0]), np.linspace(-tilt, tilt, COARSE_STEPS[1])
+    tilt = np.radians(MAX_ROAD_TILT_DEG)
+    logs = np.linspace(np.log(PLANE_DISTANCES[0]), np.log(PLANE_DISTANCES[1]), COARSE_STEPS[0])
+    pitches = np.linspace(-tilt, tilt, COARSE_STEPS[1]) if pitch is None else np.array([pitch])
     best = _best_plane(p1, rays, k, rotation, direction, down, logs, pitches)
-    log_step, pitch_step = logs[1] - logs[0], pitches[1] - pitches[0]
+    log_step, pitch_step = logs[1] - logs[0], (pitches[1] - pitches[0] if len(pitches) > 1 else 0.0)
     logs = np.linspace(best[0] - log_step, best[0] + log_step, FINE_STEPS[0])
-    pitches = np.linspace(best[1] - pitch_step, best[1] + pitch_step, FINE_STEPS[1])
-    log_distance, pitch, inliers = _best_plane(p1, rays, k, rotation, direction, down, logs, pitches)
-    return float(np.exp(log_distance)) if inliers >= MIN_ROAD_POINTS else float("nan")
+    pitches = np.linspace(best[1] - pitch_step, best[1] + pitch_step, FINE_STEPS[1] if pitch_step else 1)
+    log_distance, found, inliers = _best_plane(p1, rays, k, rotation, direction, down, logs, pitches)
+    return (float(np.exp(log_distance)) if inliers >= MIN_ROAD_POINTS else float("nan")), float(found)
 
 
 def _best_plane(p1: np.ndarray, rays: np.ndarray, k: np.ndarray, rotation: np.ndarray, direction: np.ndarray,
@@ -98,7 +101,8 @@ def _best_plane(p1: np.ndarray, rays: np.ndarray, k: np.ndarray, rotation: np.nd
     for pitch in pitches:
         c, s = np.cos(pitch), np.sin(pitch)
         normal = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]) @ down
-        shift = np.outer(direction, normal @ rays)  # (3, N): direction * (normal . ray)
+        along = direction - (direction @ normal) * normal  # the vehicle moves along the road, not into it
+        shift = np.outer(along / np.linalg.norm(along), normal @ rays)  # (3, N): along * (normal . ray)
         moved = turned[None] + shift[None] / np.exp(logs)[:, None, None]  # (D, 3, N)
         pixels = np.einsum("ij,djn->din", k, moved)
         with np.errstate(divide="ignore", invalid="ignore"):

@@ -14,7 +14,7 @@ import numpy as np
 
 from pedenv.errors import InputError
 from pedenv.odometry.features import detect_corners, detect_road_corners, person_mask, track
-from pedenv.odometry.ground import camera_down, on_road, road_height, road_mask
+from pedenv.odometry.ground import camera_down, fit_road, on_road, road_mask
 
 #: Fewest tracks between two frames, and fewest of them agreeing on one motion (the essential
 #: matrix's inliers): below these the frame is too dark, blurred or covered for odometry.
@@ -35,7 +35,9 @@ RANSAC_CONFIDENCE = 0.999
 class Step:
     """The camera's motion between two frames (module doc). rotation: (3, 3); direction: (3,) unit
     or zeros when the camera did not translate; length: metres (0 without translation, NaN when
-    the road was not seen); tracks, inliers: counts; parallax: median flow without rotation, pixels."""
+    the road was not seen); pitch: the road plane's pitch fitted with it, radians (NaN without);
+    road: the road tracks, (M, 2) pixels in each frame; tracks, inliers: counts; parallax: median
+    flow without rotation, pixels."""
 
     rotation: np.ndarray
     direction: np.ndarray
@@ -43,16 +45,28 @@ class Step:
     tracks: int
     inliers: int
     parallax: float
+    pitch: float = float("nan")
+    road: tuple[np.ndarray, np.ndarray] = (np.empty((0, 2)), np.empty((0, 2)))
 
     @property
-    def translation(self) -> np.ndarray:
-        """(3,) metres, camera-1 frame (``direction * length``; NaN without a length)."""
-        return self.direction * self.length if self.length else np.zeros(3)
+    def moved(self) -> bool:
+        """Whether the camera translated measurably (its parallax at least :data:`MIN_PARALLAX_PX`)."""
+        return bool(np.any(self.direction))
 
 
-def still(tracks: int, parallax: float) -> Step:
-    """A step without motion (a static camera)."""
-    return Step(np.eye(3), np.zeros(3), 0.0, tracks, tracks, parallax)
+def still(tracks: int, parallax: float, rotation: np.ndarray | None = None, inliers: int | None = None) -> Step:
+    """A step without translation (a static camera, or one turning on the spot by ``rotation``)."""
+    return Step(np.eye(3) if rotation is None else rotation, np.zeros(3), 0.0, tracks,
+                tracks if inliers is None else inliers, parallax)
+
+
+def road_length(step: Step, intrinsics: np.ndarray, cam_to_vehicle: np.ndarray, pitch: float | None = None) -> float:
+    """``step``'s length, metres, from its road tracks with the road's pitch fixed at ``pitch`` (radians,
+    :func:`~pedenv.odometry.ground.fit_road`), or fitted when None; NaN when the road does not fit."""
+    if not step.moved:
+        return 0.0
+    distance, _ = fit_road(*step.road, intrinsics, step.rotation, step.direction, camera_down(cam_to_vehicle), pitch)
+    return float(cam_to_vehicle[2][3] / distance)
 
 
 def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, cam_to_vehicle: np.ndarray, *,
@@ -64,16 +78,18 @@ def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, 
     whose corners are left out. ``where`` names the frame in the InputError raised when too few
     tracks or inliers are found (:data:`MIN_TRACKS`, :data:`MIN_INLIERS`).
     """
-    k = np.asarray(intrinsics, dtype=np.float64)
-    allowed = person_mask(gray0.shape, boxes)
+    k = np.array(intrinsics, dtype=np.float64)  # a contiguous copy: USAC misreads a strided matrix
+    shape = (gray0.shape[0], gray0.shape[1])
+    allowed = person_mask(shape, boxes)
     corners = detect_corners(gray0, allowed)
-    _require(len(track(gray0, gray1, corners)[0]), MIN_TRACKS, "tracks", where)
-    road_corners = detect_road_corners(gray0, allowed & road_mask(gray0.shape, k, cam_to_vehicle))
-    p0, p1 = track(gray0, gray1, np.vstack([corners, road_corners]))
+    road_corners = detect_road_corners(gray0, allowed & road_mask(shape, k, cam_to_vehicle))
+    p0, p1, kept = track(gray0, gray1, np.vstack([corners, road_corners]))
+    # the count of FAST's corners tracked says whether the images hold enough contrast (absolute)
+    _require(int(kept[:len(corners)].sum()), MIN_TRACKS, "tracks", where)
     flow = float(np.median(np.linalg.norm(p1 - p0, axis=1)))
     if flow < MIN_PARALLAX_PX:
         return still(len(p0), flow)
-    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.RANSAC, prob=RANSAC_CONFIDENCE,
+    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
                                            threshold=EPIPOLAR_TOLERANCE_PX)
     if essential is None or essential.shape != (3, 3):
         _require(0, MIN_INLIERS, "tracks agreeing on one motion", where)
@@ -82,12 +98,12 @@ def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, 
     inlier = mask.ravel() > 0
     parallax = _parallax(p0[inlier], p1[inlier], k, rotation)
     if parallax < MIN_PARALLAX_PX:
-        return Step(rotation, np.zeros(3), 0.0, len(p0), int(count), parallax)
+        return still(len(p0), parallax, rotation, int(count))
     direction = direction.ravel()
     road = inlier & on_road(p0, k, cam_to_vehicle)
-    height = road_height(p0[road], p1[road], k, rotation, direction, camera_down(cam_to_vehicle))
-    length = float(cam_to_vehicle[2][3] / height) if np.isfinite(height) else float("nan")
-    return Step(rotation, direction, length, len(p0), int(count), parallax)
+    distance, pitch = fit_road(p0[road], p1[road], k, rotation, direction, camera_down(cam_to_vehicle))
+    return Step(rotation, direction, float(cam_to_vehicle[2][3] / distance), len(p0), int(count), parallax, pitch,
+                (p0[road], p1[road]))
 
 
 def _parallax(p0: np.ndarray, p1: np.ndarray, k: np.ndarray, rotation: np.ndarray) -> float:
