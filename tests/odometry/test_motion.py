@@ -38,10 +38,31 @@ def test_a_rendered_drive_gives_its_distance_and_yaw(step_m, yaw_step_deg, pitch
 
 
 def test_a_static_camera_does_not_move():
-    # the same view twice with independent sensor noise: tracks jitter, the camera stays
-    poses = _drive([vehicle_pose(0.0, 0.0, 0.0)] * 3, noise=2.0)
-    assert np.abs(poses[:, :3, 3]).max() < 0.01
-    np.testing.assert_allclose(poses[:, :3, :3], np.broadcast_to(np.eye(3), (3, 3, 3)), atol=1e-9)
+    # the same view with independent sensor noise: tracks jitter, the camera stays, no keyframe is added
+    mount, tex, rng = cam_to_vehicle(), texture(), np.random.default_rng(1)
+    view = render(tex, vehicle_pose(0.0, 0.0, 0.0), mount).astype(np.float64)
+    odometry = VisualOdometry(K, mount)
+    for i in range(3):
+        odometry.update(np.clip(view + rng.normal(0.0, 2.0, view.shape), 0, 255).astype(np.uint8), 0.1 * i)
+    trajectory = odometry.trajectory()
+    np.testing.assert_allclose(trajectory.timestamps, [0.0, 0.2])
+    assert np.abs(trajectory.translations).max() < 0.01
+    np.testing.assert_allclose(trajectory.quaternions, [[1.0, 0.0, 0.0, 0.0]] * 2)
+
+
+def test_a_creeping_car_adds_up_its_motion():
+    # 4 cm a frame moves the image less than the parallax threshold: keyframes wait until it shows
+    poses = [vehicle_pose(0.04 * i, 0.0, 0.0) for i in range(9)]
+    mount, tex = cam_to_vehicle(), texture()
+    odometry = VisualOdometry(K, mount)
+    for i, pose in enumerate(poses):
+        odometry.update(render(tex, pose, mount), 0.1 * i)
+    keys = np.array(odometry.key_timestamps)
+    assert 2 < len(keys) < 9
+    forward = odometry.poses()[:, 0, 3]
+    np.testing.assert_allclose(forward, 0.4 * keys, atol=0.05 * 0.4 * keys[-1])  # 4 cm per 0.1 s, within 5 %
+    trajectory = odometry.trajectory()  # the frames after the last keyframe stay at its pose
+    assert trajectory.timestamps[-1] == pytest.approx(0.8) and trajectory.translations[-1, 0] == forward[-1]
 
 
 def test_a_black_image_is_one_input_error_naming_the_frame():

@@ -22,7 +22,7 @@ class NoPeople:
 
     name = "no-people"
 
-    def __call__(self, frame: Frame) -> Detections:
+    def __call__(self, frame: Frame) -> Detections:  # noqa: ARG002 - the PoseBackend protocol
         return Detections.empty()
 
 

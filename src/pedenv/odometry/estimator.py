@@ -30,8 +30,9 @@ class VisualOdometry:
             raise InputError(f"cam_to_vehicle: the camera must be above the road (z > 0 m), "
                              f"got {self.cam_to_vehicle[2, 3]:g} m")
         self.timestamps: list[float] = []
+        self.key_timestamps: list[float] = []
         self.steps: list[Step] = []
-        self._previous: np.ndarray | None = None
+        self._key: np.ndarray | None = None
         self._boxes: np.ndarray | None = None
         self._where = "frame"
 
@@ -39,24 +40,33 @@ class VisualOdometry:
                where: str = "frame") -> None:
         """Add the next frame: ``image`` (H, W) grey or (H, W, 3) RGB uint8 at ``timestamp`` seconds
         (after the previous one); ``boxes`` (N, 4) ``[x1, y1, x2, y2]`` pixels: its people (left out).
-        ``where`` names the frame in errors (InputError: too dark or blurred to track into the next frame,
+
+        The frame is compared with the last keyframe; when the image changed measurably (a
+        :class:`~pedenv.odometry.motion.Step` ``seen``) the step is kept and the frame becomes the
+        keyframe, else the keyframe stays (a static camera does not drift; a slow car's motion adds up
+        until it shows). ``where`` names the frame in errors (InputError: too dark or blurred to track,
         timestamps out of order)."""
         gray = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
         if self.timestamps and not timestamp > self.timestamps[-1]:
             raise InputError(f"{where}: timestamp {timestamp:.6f} s is not after the previous frame's "
                              f"{self.timestamps[-1]:.6f} s")
-        if self._previous is not None:
-            self.steps.append(estimate_step(self._previous, gray, self.intrinsics, self.cam_to_vehicle,
-                                            boxes=self._boxes, where=self._where))
-        self._previous, self._boxes, self._where = gray, boxes, where
         self.timestamps.append(float(timestamp))
+        if self._key is not None:
+            step = estimate_step(self._key, gray, self.intrinsics, self.cam_to_vehicle, boxes=self._boxes,
+                                 where=self._where)
+            if not step.seen:
+                return
+            self.steps.append(step)
+        self._key, self._boxes, self._where = gray, boxes, where
+        self.key_timestamps.append(float(timestamp))
 
     def poses(self, where: str = "the recording") -> np.ndarray:
-        """(T, 4, 4) vehicle -> world transforms, one per frame given (the first the identity); steps whose
-        road was not seen get their neighbours' speed (:func:`~pedenv.odometry.motion.fill_lengths`)."""
+        """(K, 4, 4) vehicle -> world transforms, one per keyframe (at :attr:`key_timestamps`; the first
+        the identity); steps whose road was not seen get their neighbours' speed
+        (:func:`~pedenv.odometry.motion.fill_lengths`)."""
         if not self.timestamps:
             raise InputError(f"{where}: no frames for visual odometry")
-        lengths = fill_lengths(self.lengths(), np.diff(self.timestamps), where)
+        lengths = fill_lengths(self.lengths(), np.diff(self.key_timestamps), where)
         return chain_poses([s.rotation for s in self.steps],
                            [s.direction * n for s, n in zip(self.steps, lengths)], self.cam_to_vehicle)
 
@@ -69,10 +79,15 @@ class VisualOdometry:
         return np.array([road_length(s, self.intrinsics, self.cam_to_vehicle, pitch) for s in self.steps])
 
     def trajectory(self, where: str = "the recording") -> EgoTrajectory:
-        """The poses as an :class:`~pedenv.recordings.ego_poses.EgoTrajectory` (``source`` :data:`ESTIMATED_SOURCE`)."""
+        """The poses as an :class:`~pedenv.recordings.ego_poses.EgoTrajectory` (``source`` :data:`ESTIMATED_SOURCE`):
+        the keyframes' poses, and the last frame's (the last keyframe's: the image has not changed
+        measurably since) when it is no keyframe; frames between keyframes are interpolated."""
         poses = self.poses(where)
+        stamps = list(self.key_timestamps)
+        if self.timestamps[-1] > stamps[-1]:
+            poses, stamps = np.concatenate([poses, poses[-1:]]), [*stamps, self.timestamps[-1]]
         quats = np.array([rotation_to_quaternion(p[:3, :3]) for p in poses])
-        return EgoTrajectory(np.array(self.timestamps), poses[:, :3, 3].copy(), quats, ESTIMATED_SOURCE)
+        return EgoTrajectory(np.array(stamps), poses[:, :3, 3].copy(), quats, ESTIMATED_SOURCE)
 
 
 def chain_poses(rotations: list[np.ndarray], translations: list[np.ndarray], cam_to_vehicle: np.ndarray) -> np.ndarray:

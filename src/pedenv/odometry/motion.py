@@ -25,6 +25,9 @@ MIN_INLIERS = 25
 #: (a static camera: tracking noise is about 0.05 px) and the flow left after taking out the
 #: rotation (a camera turning on the spot). Such a step's translation is zero, not noise.
 MIN_PARALLAX_PX = 0.5
+#: Median flow, pixels, below which an essential matrix that finds no motion means too little
+#: baseline yet, not a bad image (on the rendered road it fails up to about 1.1 px of flow).
+MIN_BASELINE_FLOW_PX = 2.0
 #: RANSAC of the essential matrix: the largest distance of a track from its epipolar line, pixels,
 #: and the confidence (OpenCV's defaults).
 EPIPOLAR_TOLERANCE_PX = 1.0
@@ -37,7 +40,8 @@ class Step:
     or zeros when the camera did not translate; length: metres (0 without translation, NaN when
     the road was not seen); pitch: the road plane's pitch fitted with it, radians (NaN without);
     road: the road tracks, (M, 2) pixels in each frame; tracks, inliers: counts; parallax: median
-    flow without rotation, pixels."""
+    flow without rotation, pixels; seen: whether the motion was measurable (else the frame is no new
+    keyframe of :class:`~pedenv.odometry.estimator.VisualOdometry`)."""
 
     rotation: np.ndarray
     direction: np.ndarray
@@ -47,6 +51,7 @@ class Step:
     parallax: float
     pitch: float = float("nan")
     road: tuple[np.ndarray, np.ndarray] = (np.empty((0, 2)), np.empty((0, 2)))
+    seen: bool = True
 
     @property
     def moved(self) -> bool:
@@ -54,10 +59,11 @@ class Step:
         return bool(np.any(self.direction))
 
 
-def still(tracks: int, parallax: float, rotation: np.ndarray | None = None, inliers: int | None = None) -> Step:
-    """A step without translation (a static camera, or one turning on the spot by ``rotation``)."""
-    return Step(np.eye(3) if rotation is None else rotation, np.zeros(3), 0.0, tracks,
-                tracks if inliers is None else inliers, parallax)
+
+def still(tracks: int, flow: float) -> Step:
+    """A step without measurable motion: the tracks' median flow ``flow`` (pixels) below
+    :data:`MIN_PARALLAX_PX`, or below :data:`MIN_BASELINE_FLOW_PX` with no essential matrix."""
+    return Step(np.eye(3), np.zeros(3), 0.0, tracks, tracks, flow, seen=False)
 
 
 def road_length(step: Step, intrinsics: np.ndarray, cam_to_vehicle: np.ndarray, pitch: float | None = None) -> float:
@@ -91,14 +97,16 @@ def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, 
         return still(len(p0), flow)
     essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
                                            threshold=EPIPOLAR_TOLERANCE_PX)
-    if essential is None or essential.shape != (3, 3):
-        _require(0, MIN_INLIERS, "tracks agreeing on one motion", where)
-    count, rotation, direction, mask = cv2.recoverPose(essential, p0, p1, k, mask=mask)
+    count, rotation, direction = 0, np.eye(3), np.zeros(3)
+    if essential is not None and essential.shape == (3, 3):
+        count, rotation, direction, mask = cv2.recoverPose(essential, p0, p1, k, mask=mask)
+    if count < MIN_INLIERS and flow < MIN_BASELINE_FLOW_PX:
+        return still(len(p0), flow)  # too little baseline yet: the keyframe waits for more
     _require(int(count), MIN_INLIERS, "tracks agreeing on one motion", where)
     inlier = mask.ravel() > 0
     parallax = _parallax(p0[inlier], p1[inlier], k, rotation)
     if parallax < MIN_PARALLAX_PX:
-        return still(len(p0), parallax, rotation, int(count))
+        return Step(rotation, np.zeros(3), 0.0, len(p0), int(count), parallax)  # turning on the spot
     direction = direction.ravel()
     road = inlier & on_road(p0, k, cam_to_vehicle)
     distance, pitch = fit_road(p0[road], p1[road], k, rotation, direction, camera_down(cam_to_vehicle))
