@@ -97,18 +97,20 @@ def fit_road(p0: np.ndarray, p1: np.ndarray, intrinsics: np.ndarray, rotation: n
 def _best_plane(p1: np.ndarray, rays: np.ndarray, k: np.ndarray, rotation: np.ndarray, direction: np.ndarray,
                 down: np.ndarray, logs: np.ndarray, pitches: np.ndarray) -> tuple[float, float, int]:
     """(log distance, pitch, tracks within tolerance) of the grid's plane with the least truncated error."""
-    turned = rotation @ rays  # (3, N)
+    turned = k @ rotation @ rays  # (3, N): the points' pixels (homogeneous) at infinite distance
+    inverse = np.exp(-logs)[:, None]  # (D, 1)
     best = (np.inf, 0.0, 0.0, 0)
     for pitch in pitches:
         c, s = np.cos(pitch), np.sin(pitch)
         normal = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]) @ down
         along = direction - (direction @ normal) * normal  # the vehicle moves along the road, not into it
-        shift = np.outer(along / np.linalg.norm(along), normal @ rays)  # (3, N): along * (normal . ray)
-        moved = turned[None] + shift[None] / np.exp(logs)[:, None, None]  # (D, 3, N)
-        pixels = np.einsum("ij,djn->din", k, moved)
+        shift = k @ np.outer(along / np.linalg.norm(along), normal @ rays)  # (3, N): K along (normal . ray)
+        depth = turned[2] + shift[2] * inverse  # (D, N): homogeneous pixels are turned + shift / distance
         with np.errstate(divide="ignore", invalid="ignore"):
-            error = np.sum((pixels[:, :2] / pixels[:, 2:3] - p1.T[None]) ** 2, axis=1)  # (D, N)
-        cost = np.minimum(np.nan_to_num(error, nan=np.inf), ROAD_TOLERANCE_PX ** 2).sum(axis=1)
+            error = ((turned[0] + shift[0] * inverse) / depth - p1[:, 0]) ** 2 \
+                + ((turned[1] + shift[1] * inverse) / depth - p1[:, 1]) ** 2
+        error = np.where(depth > 0, error, np.inf)
+        cost = np.minimum(error, ROAD_TOLERANCE_PX ** 2).sum(axis=1)
         i = int(np.argmin(cost))
         if cost[i] < best[0]:
             best = (cost[i], logs[i], pitch, int((error[i] < ROAD_TOLERANCE_PX ** 2).sum()))
