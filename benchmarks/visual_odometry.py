@@ -26,8 +26,9 @@ import numpy as np
 from pedenv.datasets.kitti_files import read_calib
 from pedenv.errors import InputError
 from pedenv.geometry import rotation_from_ypr
+from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
-from pedenv.odometry.reference import mercator_positions, read_oxts, travelled, yaw_change
+from pedenv.odometry.reference import integrated_distance, mercator_positions, read_oxts, travelled, yaw_change
 
 #: KITTI's colour camera is about 1.65 m above the road, looking straight ahead (KITTI's setup page).
 KITTI_CAMERA_HEIGHT_M = 1.65
@@ -43,27 +44,32 @@ def mounting(height_m: float, pitch_down_deg: float = 0.0) -> np.ndarray:
     return t
 
 
-def measure_or_say(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: np.ndarray, name: str) -> None:
+def measure_or_say(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: np.ndarray, oxts_times: np.ndarray,
+                   name: str) -> None:
     """:func:`measure`, or the one line saying why the odometry could not run."""
     try:
-        measure(images, stamps, k, oxts, name)
+        measure(images, stamps, k, oxts, oxts_times, name)
     except InputError as exc:
         print(f"{name}: not measured: {exc}")
 
 
-def measure(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: np.ndarray, name: str) -> None:
-    """Print the odometry of ``images`` at ``stamps`` (seconds) against ``oxts`` (the rows spanning them)."""
+def measure(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: np.ndarray, oxts_times: np.ndarray,
+            name: str) -> None:
+    """Print the odometry of ``images`` at ``stamps`` (seconds) against ``oxts`` (the rows spanning them,
+    at ``oxts_times`` seconds): the GPS positions' path and the speed integrated."""
     vo = VisualOdometry(k, mounting(KITTI_CAMERA_HEIGHT_M))
     start = time.perf_counter()
     for path, stamp in zip(images, stamps):
-        vo.update(cv2.imread(str(path), cv2.IMREAD_GRAYSCALE), float(stamp), where=str(path))
+        vo.update(read_image_rgb(path), float(stamp), where=str(path))  # as pedenv run reads them
     per_step = (time.perf_counter() - start) / max(len(images) - 1, 1)
     poses = vo.poses()
     distance, truth = travelled(poses[:, :3, 3]), travelled(mercator_positions(oxts))
+    speed = integrated_distance(oxts, oxts_times)
     yaw = np.degrees(np.arctan2(poses[-1, 1, 0], poses[-1, 0, 0]))
     truth_yaw = np.degrees(yaw_change(oxts))
-    print(f"{name}: {len(images)} frames, distance {distance:.3f} m vs GPS/IMU {truth:.3f} m "
-          f"({100 * (distance / truth - 1):+.2f} %), yaw change {yaw:+.3f} deg vs {truth_yaw:+.3f} deg "
+    print(f"{name}: {len(images)} frames, distance {distance:.3f} m vs GPS positions {truth:.3f} m "
+          f"({100 * (distance / truth - 1):+.2f} %) and integrated speed {speed:.3f} m "
+          f"({100 * (distance / speed - 1):+.2f} %), yaw change {yaw:+.3f} deg vs {truth_yaw:+.3f} deg "
           f"(error {yaw - truth_yaw:+.3f} deg), {1e3 * per_step:.0f} ms per frame")
 
 
@@ -74,10 +80,10 @@ def kitti_raw(root: Path) -> None:
     k = np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3]
     stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02/timestamps.txt").read_text().split("\n")
                        if t.strip()])
-    seconds = (stamps - stamps[0]) / np.timedelta64(1, "ns") * 1e-9
-    images = sorted((sync / "image_02/data").glob("*.png"))
+    images = sorted((sync / "image_02/data").glob("*.png"))  # the first frames of the drive's timestamps
+    seconds = ((stamps - stamps[0]) / np.timedelta64(1, "ns") * 1e-9)[:len(images)]
     oxts = read_oxts(sorted((sync / "oxts/data").glob("*.txt")))
-    measure_or_say(images, seconds, k, oxts, "kitti raw 2011_09_26_0002")
+    measure_or_say(images, seconds, k, oxts, seconds, "kitti raw 2011_09_26_0002")  # OXTS synced to the images
 
 
 def kitti_tracking(folder: Path, frames: list[int], name: str, oxts_file: Path) -> None:
@@ -85,7 +91,7 @@ def kitti_tracking(folder: Path, frames: list[int], name: str, oxts_file: Path) 
     k = read_calib(training / "calib/0001.txt").K
     oxts = read_oxts(oxts_file)[frames[0]:frames[-1] + 1]
     images = [training / f"image_02/0001/{f:06d}.png" for f in frames]
-    measure_or_say(images, np.array(frames) / 10.0, k, oxts, name)
+    measure_or_say(images, np.array(frames) / 10.0, k, oxts, frames[0] / 10.0 + np.arange(len(oxts)) / 10.0, name)
 
 
 def static_video(video: Path) -> None:

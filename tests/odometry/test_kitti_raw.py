@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 import pytest
 
+from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
 from pedenv.odometry.reference import mercator_positions, read_oxts, travelled
 
@@ -23,8 +23,7 @@ def test_three_real_frames_travel_the_gps_distance():
     mount[2, 3] = 1.65
     odometry = VisualOdometry(k, mount)
     for i in range(3):
-        image = cv2.imread(str(SYNC / f"image_02/data/{i:010d}.png"), cv2.IMREAD_GRAYSCALE)
-        odometry.update(image, 0.1 * i, where=f"frame {i}")
+        odometry.update(read_image_rgb(SYNC / f"image_02/data/{i:010d}.png"), 0.1 * i, where=f"frame {i}")
     oxts = read_oxts([SYNC / f"oxts/data/{i:010d}.txt" for i in range(3)])
     truth = travelled(mercator_positions(oxts))
     assert truth == pytest.approx(1.83, abs=0.02)  # about 9.1 m/s over 0.2 s (GPS)

@@ -43,6 +43,13 @@ def travelled(positions: np.ndarray) -> float:
     return float(np.linalg.norm(np.diff(positions, axis=0), axis=1).sum())
 
 
+def integrated_distance(oxts: np.ndarray, times: np.ndarray) -> float:
+    """The distance travelled, metres: the speed over the ground (``vf``, ``vl``) integrated over the
+    rows' ``times`` (N,) seconds (trapezoids); free of the GPS positions' timing jitter."""
+    speed = np.hypot(oxts[:, 8], oxts[:, 9])
+    return float(np.sum(0.5 * (speed[1:] + speed[:-1]) * np.diff(times)))
+
+
 def yaw_change(oxts: np.ndarray) -> float:
     """The heading's change from the first row to the last, radians (counter-clockwise positive)."""
     return float(wrap_angle(oxts[-1, 5] - oxts[0, 5]))
