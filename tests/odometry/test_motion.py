@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 from road_scene import K, cam_to_vehicle, render, texture, vehicle_pose
@@ -65,11 +66,22 @@ def test_a_creeping_car_adds_up_its_motion():
     assert trajectory.timestamps[-1] == pytest.approx(0.8) and trajectory.translations[-1, 0] == forward[-1]
 
 
-def test_a_black_image_is_one_input_error_naming_the_frame():
-    mount = cam_to_vehicle()
-    black = np.zeros((360, 640), np.uint8)
+@pytest.mark.parametrize("spoil", [
+    lambda image: np.zeros_like(image),  # black
+    lambda image: (image * 0.05).astype(np.uint8),  # a twentieth of the light (a tenth still works)
+    lambda image: cv2.GaussianBlur(image, (0, 0), 8.0),  # blurred over 8 px
+])
+def test_a_dark_or_blurred_image_is_one_input_error_naming_the_frame(spoil):
+    mount, tex = cam_to_vehicle(), texture()
+    first, second = (spoil(render(tex, vehicle_pose(x, 0.0, 0.0), mount)) for x in (0.0, 1.0))
     with pytest.raises(InputError, match=r"^night\.png: too dark, blurred or covered for visual odometry: 0 tracks"):
-        estimate_step(black, render(texture(), vehicle_pose(0.0, 0.0, 0.0), mount), K, mount, where="night.png")
+        estimate_step(first, second, K, mount, where="night.png")
+
+
+def test_a_slightly_blurred_image_still_gives_the_step():
+    mount, tex = cam_to_vehicle(), texture()
+    first, second = (cv2.GaussianBlur(render(tex, vehicle_pose(x, 0.0, 0.0), mount), (0, 0), 2.0) for x in (0.0, 1.0))
+    assert estimate_step(first, second, K, mount).length == pytest.approx(1.0, rel=0.03)
 
 
 def test_people_boxes_are_left_out():

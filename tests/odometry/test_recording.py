@@ -67,3 +67,10 @@ def test_a_calibration_without_the_mounting_is_refused_in_one_line(tmp_path):
     with pytest.raises(InputError, match=r"calib\.yaml: estimating the ego motion from the images needs the "
                                          r"camera's mounting: add cam_to_vehicle"):
         load_with_odometry(calibration=calib, images=images, fps=10.0)
+
+
+def test_a_static_mount_needs_no_odometry(tmp_path):
+    images, calib = _recording(tmp_path / "rec")
+    calib.write_text(calib.read_text() + "mount: static\n")
+    recording = load_with_odometry(calibration=calib, images=images, fps=10.0)
+    assert recording.camera.static and recording.trajectory is None
