@@ -74,3 +74,16 @@ def test_a_static_mount_needs_no_odometry(tmp_path):
     calib.write_text(calib.read_text() + "mount: static\n")
     recording = load_with_odometry(calibration=calib, images=images, fps=10.0)
     assert recording.camera.static and recording.trajectory is None
+
+
+def test_a_video_gets_its_poses_too(tmp_path):
+    images, calib = _recording(tmp_path / "rec")
+    video = tmp_path / "drive.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (WIDTH, HEIGHT))
+    for path in sorted(images.iterdir()):
+        writer.write(cv2.imread(str(path)))
+    writer.release()
+    trajectory = load_with_odometry(calibration=calib, video=video).trajectory
+    assert trajectory is not None
+    np.testing.assert_allclose(trajectory.timestamps, [0.0, 0.1, 0.2, 0.3], atol=1e-6)
+    np.testing.assert_allclose(trajectory.translations[:, 0], [0.0, 0.9, 1.8, 2.7], atol=0.054)
