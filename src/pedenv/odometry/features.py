@@ -15,8 +15,9 @@ CORNERS_PER_CELL = 12
 #: The grid over the image, (rows, columns).
 GRID_CELLS = (8, 16)
 #: Extra corners taken on the road patch (:func:`pedenv.odometry.ground.road_mask`), whose texture is
-#: often too faint for FAST (a road in shade): Shi-Tomasi corners relative to the patch's best
-#: (OpenCV's ``goodFeaturesToTrack``, its quality level 0.01), at least :data:`ROAD_CORNER_SPACING_PX` apart.
+#: often too faint for FAST (a road in shade): Shi-Tomasi corners (OpenCV's ``goodFeaturesToTrack``)
+#: at least :data:`ROAD_CORNER_QUALITY` of the patch's best (a third of OpenCV's example 0.01: a
+#: shaded road's corners are weak beside a car's on it) and :data:`ROAD_CORNER_SPACING_PX` apart.
 ROAD_CORNERS = 600
 ROAD_CORNER_QUALITY = 0.003
 ROAD_CORNER_SPACING_PX = 7
