@@ -29,6 +29,7 @@ class RecordingSource:
     """A user's recording: ``images`` (a folder) or ``video``, with ``calibration`` and ``ego_poses``, or a ``bag``.
 
     static: the camera is fixed to the ground (``mount: static``); ``ego_poses`` may then be None.
+    Without ``ego_poses`` a vehicle's are estimated from the images (:mod:`pedenv.odometry`).
     fps: frame rate when the folder has no timestamps.csv (or to override a video's), Hz.
     start_time: timestamp of the first frame with ``fps`` or a video, seconds (default: the first ego pose).
     bag: a ROS bag (rosbag2 folder, .mcap or ROS 1 .bag) instead of the files above, read with
