@@ -107,3 +107,14 @@ def test_steps_without_the_road_take_their_neighbours_speed(lengths, durations, 
 def test_no_road_at_all_is_one_input_error():
     with pytest.raises(InputError, match="^drive.mp4: visual odometry saw no road ahead of the camera"):
         fill_lengths(np.array([np.nan, np.nan]), np.array([0.1, 0.1]), "drive.mp4")
+
+
+def test_a_long_drive_pools_the_pitch_and_lets_the_road_tracks_go(monkeypatch):
+    monkeypatch.setattr("pedenv.odometry.estimator.PITCH_POOL_STEPS", 2)
+    mount, tex = cam_to_vehicle(), texture()
+    odometry = VisualOdometry(K, mount)
+    for i in range(4):
+        odometry.update(render(tex, vehicle_pose(1.0 * i, 0.0, 0.0), mount), 0.1 * i)
+    assert [len(s.road[0]) for s in odometry.steps[:2]] == [0, 0] and len(odometry.steps[2].road[0]) > 15
+    np.testing.assert_allclose(odometry.lengths(), 1.0, rtol=0.03)
+    assert all(len(s.road[0]) == 0 for s in odometry.steps)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 
@@ -12,6 +14,10 @@ from pedenv.recordings.ego_poses import EgoTrajectory
 
 #: The ``source`` of an estimated trajectory (what its InputErrors and ``run.json`` name).
 ESTIMATED_SOURCE = "ego_poses_estimated.csv"
+#: Steps whose road pitches are pooled (their median) before each is refitted with it and its road
+#: tracks are let go: 100 steps (10 s at 10 Hz) follow a slow change of the car's load while
+#: keeping at most 100 steps' tracks in memory on a long video.
+PITCH_POOL_STEPS = 100
 
 
 class VisualOdometry:
@@ -32,6 +38,7 @@ class VisualOdometry:
         self.timestamps: list[float] = []
         self.key_timestamps: list[float] = []
         self.steps: list[Step] = []
+        self._settled = 0  # the steps before this one have their final length and no road tracks
         self._key: np.ndarray | None = None
         self._boxes: np.ndarray | None = None
         self._where = "frame"
@@ -57,6 +64,8 @@ class VisualOdometry:
             if not step.seen:
                 return
             self.steps.append(step)
+            if len(self.steps) - self._settled >= PITCH_POOL_STEPS:
+                self._settle()
         self._key, self._boxes, self._where = gray, boxes, where
         self.key_timestamps.append(float(timestamp))
 
@@ -72,11 +81,20 @@ class VisualOdometry:
 
     def lengths(self) -> np.ndarray:
         """(S,) metres: each step's length refitted with the road's pitch fixed at the median of the
-        steps' own fits (the camera's mounting pitch over the drive: one step's pitch and length trade
-        off against each other); NaN where the road was not seen."""
-        pitches = [s.pitch for s in self.steps if s.moved and np.isfinite(s.length)]
+        steps' own fits over its pool of :data:`PITCH_POOL_STEPS` (the camera's pitch over the road:
+        one step's pitch and length trade off against each other); NaN where the road was not seen."""
+        self._settle()
+        return np.array([s.length for s in self.steps])
+
+    def _settle(self) -> None:
+        """Give the steps not yet settled their pooled pitch's length and let their road tracks go."""
+        pool = self.steps[self._settled:]
+        pitches = [s.pitch for s in pool if s.moved and np.isfinite(s.length)]
         pitch = float(np.median(pitches)) if pitches else None
-        return np.array([road_length(s, self.intrinsics, self.cam_to_vehicle, pitch) for s in self.steps])
+        self.steps[self._settled:] = [
+            dataclasses.replace(s, length=road_length(s, self.intrinsics, self.cam_to_vehicle, pitch),
+                                road=(np.empty((0, 2)), np.empty((0, 2)))) for s in pool]
+        self._settled = len(self.steps)
 
     def trajectory(self, where: str = "the recording") -> EgoTrajectory:
         """The poses as an :class:`~pedenv.recordings.ego_poses.EgoTrajectory` (``source`` :data:`ESTIMATED_SOURCE`):
