@@ -44,10 +44,9 @@ def test_a_manifest_refuses_the_flags_of_single_recordings(tmp_path, given, mess
     (Source(**FILES, bag_options=BagOptions(image_topic="/cam", world_frame="map")), ExecutorOptions(),
      "--image-topic, --world-frame apply to --bag"),
     (Source(images=Path("images"), ego_poses=Path("poses.csv")), ExecutorOptions(),
-     "give --calibration and --ego-poses, or --calibration and --static for a fixed camera (or a --bag, or a "
-     "--manifest of recordings)"),
-    (Source(images=Path("images"), calibration=Path("c.yaml")), ExecutorOptions(),
-     "give --calibration and --ego-poses, or --calibration and --static"),
+     "give --calibration (with --ego-poses, or without them a vehicle's ego poses are estimated from the images), "
+     "or --static for a fixed camera (without --calibration it is estimated from the people it sees), or a --bag, "
+     "or a --manifest of recordings"),
     (Source(bag=Path("drive.mcap"), static=True), ExecutorOptions(),
      "--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, --ego-poses and "
      "--static"),

@@ -24,8 +24,8 @@ class SceneBackend:
 
         self.frames, self.model = frames, DetectorModel(0)
 
-    def __call__(self, frame: Frame):
-        return self.model(self.frames[frame.index])
+    def __call__(self, frame: Frame, tracks=None):
+        return self.model(self.frames[frame.index], tracks)
 
 
 @pytest.fixture(scope="module")

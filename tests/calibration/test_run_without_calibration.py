@@ -22,8 +22,8 @@ class SceneBackend:
 
         self.frames, self.model = frames, DetectorModel(0)
 
-    def __call__(self, frame: Frame):
-        return self.model(self.frames[frame.index])
+    def __call__(self, frame: Frame, tracks=None):
+        return self.model(self.frames[frame.index], tracks)
 
 
 def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariances(tmp_path: Path) -> None:

@@ -29,6 +29,7 @@ class RecordingSource:
     """A user's recording: ``images`` (a folder) or ``video``, with ``calibration`` and ``ego_poses``, or a ``bag``.
 
     static: the camera is fixed to the ground (``mount: static``); ``ego_poses`` may then be None.
+    Without ``ego_poses`` a vehicle's are estimated from the images (:mod:`pedenv.odometry`).
     fps: frame rate when the folder has no timestamps.csv (or to override a video's), Hz.
     start_time: timestamp of the first frame with ``fps`` or a video, seconds (default: the first ego pose).
     bag: a ROS bag (rosbag2 folder, .mcap or ROS 1 .bag) instead of the files above, read with
@@ -55,6 +56,11 @@ class RecordingSource:
 
         if self.calibration is None:
             raise InputError("a recording needs its calibration (--calibration)")
+        if self.ego_poses is None and not self.static:  # a vehicle without poses: visual odometry (pedenv.odometry)
+            from pedenv.odometry.recording import load_with_odometry
+
+            return load_with_odometry(calibration=self.calibration, images=self.images, video=self.video,
+                                      fps=self.fps, start_time=self.start_time)
         return load_recording(calibration=self.calibration, ego_poses=self.ego_poses, images=self.images,
                               video=self.video, fps=self.fps, start_time=self.start_time, static=self.static)
 

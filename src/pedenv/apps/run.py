@@ -27,6 +27,8 @@ from pedenv.apps.run_outputs import (
 from pedenv.config import Config
 from pedenv.detection import Detector, backend_options, create_detector
 from pedenv.errors import InputError
+from pedenv.odometry.estimator import ESTIMATED_SOURCE
+from pedenv.odometry.poses_file import write_ego_poses
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import holds_files
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
@@ -127,6 +129,8 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
         # the frames before a bad one are run and stay on disk
     folder = open_run_folder(output.folder, overwrite=output.overwrite, command="pedenv run")
     cfg.save(folder.work / "config.json")
+    if isinstance(rec, Recording) and rec.trajectory is not None and rec.trajectory.source == ESTIMATED_SOURCE:
+        write_ego_poses(folder.work / ESTIMATED_SOURCE, rec.trajectory)  # visual odometry's poses (pedenv.odometry)
     return rec, backend, folder
 
 

@@ -99,10 +99,10 @@ def check_single_recording(source: RecordingSource, executor: ExecutorOptions) -
         given = [f"--{k.replace('_', '-')}" for k, v in chosen.items() if v is not None]
         if given:
             raise InputError(f"{', '.join(given)} apply to --bag")
-        if not source.static and (source.calibration is None or source.ego_poses is None):
-            raise InputError("give --calibration and --ego-poses, or --calibration and --static for a fixed camera "
-                             "(or a --bag, or a --manifest of recordings); --static alone estimates a fixed camera "
-                             "from the people it sees")
+        if not source.static and source.calibration is None:  # without --ego-poses: pedenv.odometry
+            raise InputError("give --calibration (with --ego-poses, or without them a vehicle's ego poses are "
+                             "estimated from the images), or --static for a fixed camera (without --calibration "
+                             "it is estimated from the people it sees), or a --bag, or a --manifest of recordings")
     elif any(v is not None for v in (source.images, source.video, source.calibration, source.ego_poses)) \
             or source.static:
         raise InputError("--bag holds the images, camera and ego poses: leave out --images, --video, --calibration, "

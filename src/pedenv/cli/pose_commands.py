@@ -97,7 +97,8 @@ def run(
         None, "--calibration", help="Calibration YAML (required without --manifest)."
     ),
     ego_poses: Path | None = typer.Option(
-        None, "--ego-poses", help="Ego poses CSV (required without --manifest, unless the camera is static)."),
+        None, "--ego-poses", help="Ego poses CSV; without it a vehicle's are estimated from the images (written to "
+        "ego_poses_estimated.csv), a static camera needs none."),
     static: bool = typer.Option(
         False, "--static", help="A camera fixed to the ground (mount: static); runs without --ego-poses."),
     output: Path = typer.Option(..., "--output", help="Output folder."),

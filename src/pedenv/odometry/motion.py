@@ -1,0 +1,144 @@
+"""One step of the camera between two frames, and the steps' lengths completed (pure functions).
+
+A step is in the camera frame (optical: x right, y down, z forward): camera 1 maps camera-0
+points ``x`` to ``rotation @ x + translation``; the translation is ``direction * length``,
+``direction`` unit and ``length`` in metres (NaN until the road has given it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from pedenv.errors import InputError
+from pedenv.odometry.features import detect_corners, detect_road_corners, person_mask, track
+from pedenv.odometry.ground import camera_down, fit_road, on_road, road_mask
+
+#: Fewest tracks between two frames, and fewest of them agreeing on one motion (the essential
+#: matrix's inliers): below these the frame is too dark, blurred or covered for odometry.
+#: (The five-point essential matrix needs 5; tens make its RANSAC and the road plane reliable.)
+MIN_TRACKS = 40
+MIN_INLIERS = 25
+#: Median parallax, pixels, below which the camera did not translate measurably: the raw flow
+#: (a static camera: on vtest.avi at most 0.095 px against its first frame) and the flow left after taking out the
+#: rotation (a camera turning on the spot). Such a step's translation is zero, not noise.
+MIN_PARALLAX_PX = 0.5
+#: Median flow, pixels, below which an essential matrix that finds no motion means too little
+#: baseline yet, not a bad image (on the rendered road it fails up to about 1.1 px of flow).
+MIN_BASELINE_FLOW_PX = 2.0
+#: The essential matrix's robust fit (OpenCV's USAC_ACCURATE: RANSAC with local optimisation, which
+#: on the rendered road gives the direction of travel to about 0.1 deg where plain RANSAC's best
+#: five-point sample was 1-2 deg off): the largest distance of a track from its epipolar line,
+#: pixels, and the confidence (OpenCV's defaults).
+EPIPOLAR_TOLERANCE_PX = 1.0
+RANSAC_CONFIDENCE = 0.999
+
+
+@dataclass(frozen=True)
+class Step:
+    """The camera's motion between two frames (module doc). rotation: (3, 3); direction: (3,) unit
+    or zeros when the camera did not translate; length: metres (0 without translation, NaN when
+    the road was not seen); pitch: the road plane's pitch fitted with it, radians (NaN without);
+    road: the road tracks, (M, 2) pixels in each frame; tracks, inliers: counts; parallax: median
+    flow without rotation, pixels; seen: whether the motion was measurable (else the frame is no new
+    keyframe of :class:`~pedenv.odometry.estimator.VisualOdometry`)."""
+
+    rotation: np.ndarray
+    direction: np.ndarray
+    length: float
+    tracks: int
+    inliers: int
+    parallax: float
+    pitch: float = float("nan")
+    road: tuple[np.ndarray, np.ndarray] = (np.empty((0, 2)), np.empty((0, 2)))
+    seen: bool = True
+
+    @property
+    def moved(self) -> bool:
+        """Whether the camera translated measurably (its parallax at least :data:`MIN_PARALLAX_PX`)."""
+        return bool(np.any(self.direction))
+
+
+def still(tracks: int, flow: float) -> Step:
+    """A step without measurable motion: the tracks' median flow ``flow`` (pixels) below
+    :data:`MIN_PARALLAX_PX`, or below :data:`MIN_BASELINE_FLOW_PX` with no essential matrix."""
+    return Step(np.eye(3), np.zeros(3), 0.0, tracks, tracks, flow, seen=False)
+
+
+def road_length(step: Step, intrinsics: np.ndarray, cam_to_vehicle: np.ndarray, pitch: float | None = None) -> float:
+    """``step``'s length, metres, from its road tracks with the road's pitch fixed at ``pitch`` (radians,
+    :func:`~pedenv.odometry.ground.fit_road`), or fitted when None; NaN when the road does not fit."""
+    if not step.moved:
+        return 0.0
+    distance, _ = fit_road(*step.road, intrinsics, step.rotation, step.direction, camera_down(cam_to_vehicle), pitch)
+    return float(cam_to_vehicle[2][3] / distance)
+
+
+def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, cam_to_vehicle: np.ndarray, *,
+                  boxes: np.ndarray | None = None, where: str = "frame") -> Step:
+    """The camera's :class:`Step` from grey image ``gray0`` (H, W) uint8 to ``gray1``.
+
+    intrinsics: (3, 3) pixels. cam_to_vehicle: (4, 4) camera -> vehicle (the road's normal and
+    the camera's height over it). boxes: (N, 4) ``[x1, y1, x2, y2]`` pixels of ``gray0``'s people,
+    whose corners are left out. ``where`` names the frame in the InputError raised when too few
+    tracks or inliers are found (:data:`MIN_TRACKS`, :data:`MIN_INLIERS`).
+    """
+    k = np.array(intrinsics, dtype=np.float64)  # a contiguous copy: USAC misreads a strided matrix
+    shape = (gray0.shape[0], gray0.shape[1])
+    allowed = person_mask(shape, boxes)
+    corners = detect_corners(gray0, allowed)
+    road_corners = detect_road_corners(gray0, allowed & road_mask(shape, k, cam_to_vehicle))
+    p0, p1, kept = track(gray0, gray1, np.vstack([corners, road_corners]))
+    # the count of FAST's corners tracked says whether the images hold enough contrast (absolute)
+    _require(int(kept[:len(corners)].sum()), MIN_TRACKS, "tracks", where)
+    flow = float(np.median(np.linalg.norm(p1 - p0, axis=1)))
+    if flow < MIN_PARALLAX_PX:
+        return still(len(p0), flow)
+    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
+                                           threshold=EPIPOLAR_TOLERANCE_PX)
+    count, rotation, direction = 0, np.eye(3), np.zeros(3)
+    if essential is not None and essential.shape[0] >= 3:  # several solutions stack up: the first, the best
+        count, rotation, direction, mask = cv2.recoverPose(essential[:3], p0, p1, k, mask=mask)
+    if count < MIN_INLIERS and flow < MIN_BASELINE_FLOW_PX:
+        return still(len(p0), flow)  # too little baseline yet: the keyframe waits for more
+    _require(int(count), MIN_INLIERS, "tracks agreeing on one motion", where)
+    inlier = mask.ravel() > 0
+    parallax = _parallax(p0[inlier], p1[inlier], k, rotation)
+    if parallax < MIN_PARALLAX_PX:
+        return Step(rotation, np.zeros(3), 0.0, len(p0), int(count), parallax)  # turning on the spot
+    direction = direction.ravel()
+    road = inlier & on_road(p0, k, cam_to_vehicle)
+    distance, pitch = fit_road(p0[road], p1[road], k, rotation, direction, camera_down(cam_to_vehicle))
+    return Step(rotation, direction, float(cam_to_vehicle[2][3] / distance), len(p0), int(count), parallax, pitch,
+                (p0[road], p1[road]))
+
+
+def _parallax(p0: np.ndarray, p1: np.ndarray, k: np.ndarray, rotation: np.ndarray) -> float:
+    """Median distance, pixels, between ``p1`` and ``p0`` turned by ``rotation`` alone (the infinite homography)."""
+    turned = (k @ rotation @ np.linalg.inv(k) @ np.column_stack([p0, np.ones(len(p0))]).T).T
+    return float(np.median(np.linalg.norm(turned[:, :2] / turned[:, 2:] - p1, axis=1)))
+
+
+def _require(count: int, needed: int, what: str, where: str) -> None:
+    if count < needed:
+        raise InputError(f"{where}: too dark, blurred or covered for visual odometry: {count} {what} to the next "
+                         f"frame, {needed} needed; give the ego poses (--ego-poses)")
+
+
+def fill_lengths(lengths: np.ndarray, durations: np.ndarray, where: str = "the recording") -> np.ndarray:
+    """(S,) step lengths, metres, with each NaN (road not seen) replaced by the duration (S,) seconds
+    times the speed interpolated from the nearest measured steps. InputError when no moving step
+    has a length (the road was never seen)."""
+    lengths = np.asarray(lengths, dtype=np.float64).copy()
+    missing = np.isnan(lengths)
+    if not missing.any():
+        return lengths
+    known = np.flatnonzero(~missing & (lengths > 0))
+    if len(known) == 0:
+        raise InputError(f"{where}: visual odometry saw no road ahead of the camera to give the motion its scale "
+                         "(check the calibration's cam_to_vehicle: the camera's height and pitch); give --ego-poses")
+    speeds = lengths[known] / durations[known]
+    lengths[missing] = np.interp(np.flatnonzero(missing), known, speeds) * durations[missing]
+    return lengths

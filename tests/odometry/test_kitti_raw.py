@@ -1,0 +1,30 @@
+"""Visual odometry on three real KITTI raw frames (2011_09_26_drive_0002) against their GPS/IMU."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pedenv.images import read_image_rgb
+from pedenv.odometry.estimator import VisualOdometry
+from pedenv.odometry.reference import mercator_positions, read_oxts, travelled
+
+from shared_paths import REAL_SAMPLES
+
+DRIVE = REAL_SAMPLES / "kitti" / "raw_2011_09_26_drive_0002"
+SYNC = DRIVE / "2011_09_26_drive_0002_sync"
+
+
+def test_three_real_frames_travel_the_gps_distance():
+    line = next(t for t in (DRIVE / "calib_cam_to_cam.txt").read_text().splitlines() if t.startswith("P_rect_02:"))
+    k = np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3]
+    mount = np.eye(4)  # KITTI's colour camera looks ahead, 1.65 m above the road
+    mount[:3, :3] = [[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]
+    mount[2, 3] = 1.65
+    odometry = VisualOdometry(k, mount)
+    for i in range(3):
+        odometry.update(read_image_rgb(SYNC / f"image_02/data/{i:010d}.png"), 0.1 * i, where=f"frame {i}")
+    oxts = read_oxts([SYNC / f"oxts/data/{i:010d}.txt" for i in range(3)])
+    truth = travelled(mercator_positions(oxts))
+    assert truth == pytest.approx(1.83, abs=0.02)  # about 9.1 m/s over 0.2 s (GPS)
+    assert travelled(odometry.poses()[:, :3, 3]) == pytest.approx(truth, rel=0.05)
