@@ -20,8 +20,6 @@
   skeletons' ankle and eye points rendered from the pedestrians' 3D boxes with 2 px noise:
   height and tilt with the intrinsics known, against the plane of the boxes' bottoms.
 - cost: what ``pedenv run`` adds per frame after the warm-up (the positions' spread of 30 people).
-- odometry: the vehicle's motion from the images against GPS/IMU on KITTI raw 0002 (10 frames,
-  the camera's height 1.65 m as KITTI gives it), and on the static vtest.avi (it should not move).
 - vehicle: intrinsics known, height, tilt and roll from the people: KITTI tracking 0016 (3
   images; truth: a plane fitted to the bottoms of every labelled object's 3D box over the
   sequence's 209 frames) and nuScenes 0061 (5 cameras; truth: the calibrated mounting).
@@ -269,44 +267,6 @@ def vehicle(samples: Path) -> None:
             truth)
 
 
-def odometry(samples: Path, video: Path, frames: int) -> None:
-    """Visual odometry against GPS/IMU (KITTI raw 0002, 10 frames) and on a static camera (vtest)."""
-    from pedenv.apps.calibrate import warmup_frames
-    from pedenv.calibration.odometry import trajectory
-    from pedenv.images import read_image_rgb
-    from pedenv.records import default_cam_to_vehicle
-
-    backend = onnx_far()
-    root = samples / "kitti" / "raw_2011_09_26_drive_0002" / "2011_09_26_drive_0002_sync"
-    paths = sorted((root / "image_02" / "data").glob("*.png"))
-    images = [read_image_rgb(p) for p in paths]
-    k = np.array([[721.5377, 0.0, 609.5593], [0.0, 721.5377, 172.854], [0.0, 0.0, 1.0]])  # P_rect_02
-    oxts = np.array([np.loadtxt(p)[:6] for p in sorted((root / "oxts" / "data").glob("*.txt"))])
-    lat, lon, yaw = np.radians(oxts[:, 0]), np.radians(oxts[:, 1]), oxts[:, 5]
-    scale, earth = np.cos(lat[0]), 6378137.0  # KITTI's Mercator projection of the GPS fixes
-    east, north = scale * earth * lon, scale * earth * np.log(np.tan(np.pi / 4 + lat / 2))
-    gps = float(np.hypot(east[-1] - east[0], north[-1] - north[0]))
-    print("visual odometry, KITTI raw 2011_09_26_drive_0002 (10 frames, camera 1.65 m, level), against GPS/IMU")
-    for label, boxes in (("corners everywhere", None), ("people and cyclists masked", [backend.detect(i).boxes
-                                                                                        for i in images])):
-        poses = trajectory(images, k, default_cam_to_vehicle(1.65), boxes)
-        dist = float(np.linalg.norm(poses[-1, :3, 3]))
-        est_yaw = float(np.degrees(np.arctan2(poses[-1, 1, 0], poses[-1, 0, 0])))
-        imu = float(np.degrees(yaw[-1] - yaw[0]))
-        print(f"  {label:34s} distance {dist:.2f} m (GPS {gps:.2f} m, {100 * (dist / gps - 1):+.1f} %)  yaw change "
-              f"{est_yaw:+.2f} deg (IMU {imu:+.2f} deg, {est_yaw - imu:+.2f})")
-    if video.is_file():
-        frames_rgb = [image for _, image in warmup_frames(None, video, frames)]
-        w, h = frames_rgb[0].shape[1], frames_rgb[0].shape[0]
-        k = np.array([[w, 0.0, w / 2], [0.0, w, h / 2], [0.0, 0.0, 1.0]])  # about 53 deg; no truth
-        from pedenv.calibration.geometry import static_camera
-
-        mount = static_camera(float(w), 7.0, np.radians(25.0), 0.0, (w, h)).cam_to_vehicle
-        poses = trajectory(frames_rgb, k, mount)
-        print(f"  vtest.avi ({len(frames_rgb)} frames, static): largest distance from the start "
-              f"{np.linalg.norm(poses[:, :3, 3], axis=1).max():.3f} m")
-
-
 def label_truth(labels) -> tuple[float, float]:
     """(height m, tilt rad) of the camera over the plane fitted to every labelled object's 3D box
     bottom (rectified camera frame: x right, y down, z forward)."""
@@ -371,7 +331,7 @@ def cost() -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "sequences", "odometry", "cost"))
+    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "sequences", "cost"))
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
     parser.add_argument("--frames", type=int, default=200)
     args = parser.parse_args(argv)
@@ -385,8 +345,6 @@ def main(argv: list[str] | None = None) -> int:
         vehicle(args.samples)
     if args.only in (None, "sequences"):
         sequences(args.samples)
-    if args.only in (None, "odometry"):
-        odometry(args.samples, args.video, args.frames)
     if args.only in (None, "cost"):
         cost()
     return 0

@@ -87,3 +87,16 @@ def test_a_video_gets_its_poses_too(tmp_path):
     assert trajectory is not None
     np.testing.assert_allclose(trajectory.timestamps, [0.0, 0.1, 0.2, 0.3], atol=1e-6)
     np.testing.assert_allclose(trajectory.translations[:, 0], [0.0, 0.9, 1.8, 2.7], atol=0.054)
+
+
+def test_calibrate_odometry_writes_the_same_poses_as_the_run(tmp_path):
+    from pedenv.apps.odometry import estimate_ego_poses
+
+    images, calib = _recording(tmp_path / "rec")
+    summary = estimate_ego_poses(output=tmp_path / "vo", calibration=calib, images=images, fps=10.0,
+                                 backend=NoPeople())
+    assert summary["frames"] == 4 and abs(summary["distance_m"] - 2.7) < 0.054 and abs(summary["yaw_deg"]) < 0.1
+    run_recording(RecordingSource(images=images, calibration=calib, fps=10.0), OutputOptions(tmp_path / "out"),
+                  backend=NoPeople())
+    assert (tmp_path / "vo" / "ego_poses_estimated.csv").read_bytes() == \
+        (tmp_path / "out" / "ego_poses_estimated.csv").read_bytes()
