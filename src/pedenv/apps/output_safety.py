@@ -8,7 +8,9 @@
 * :class:`RunFolder`: an earlier run in the folder (``--overwrite``) is replaced only when the
   new one has finished: the new run is written into a sibling folder and swapped in at the end;
   a run that stops leaves the earlier one as it was. Only what pedenv wrote is removed: the
-  marker file lists a run's own files, and a folder holding anything else is refused.
+  marker file lists a run's own files, and a folder holding anything else is refused. An earlier
+  ``--rerun``/``--mcap``/``--parquet``/``--ros-out`` file outside the folder is kept the same way:
+  the new one is written to a hidden sibling (:data:`SIDE_PREFIX`) and renamed over it at the end.
 * :class:`DiskGuard`: a full disk stops the run at a frame boundary with one line, with room
   kept back (a reserve file) so that every output can still be closed valid; a run that will
   not fit at its measured rate is warned about after its first frames; the bytes written go to
@@ -26,6 +28,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from pedenv.errors import InputError
+from pedenv.outputs.output_dir import glob_escape
 from pedenv.paths import MARKER
 
 #: Bytes kept back on the output's disk while a run writes (a file of zeros, deleted before the
@@ -37,6 +40,9 @@ RESERVE_BYTES = 4 * 2**20
 ESTIMATE_AFTER = 3
 #: The first line of the marker file of a ``pedenv run`` folder; the names it wrote follow, one a line.
 RUN_MARKER_HEAD = "written by pedenv run; --overwrite may delete the files listed below\n"
+#: The start of the hidden sibling an output file outside the folder is written to while an earlier
+#: file of that name waits for the swap (``.pedenv-new-<random>-<name>``, in the same folder: the rename is atomic).
+SIDE_PREFIX = ".pedenv-new-"
 
 
 def _resolved(path: str | Path) -> Path:
@@ -101,6 +107,7 @@ class RunFolder:
 
     def __init__(self, final: Path, work: Path) -> None:
         self.final, self.work = final, work
+        self.sides: list[tuple[str, Path]] = []  # (prefix of the hidden sibling, the file it replaces at the end)
 
     @property
     def beside(self) -> bool:
@@ -110,10 +117,44 @@ class RunFolder:
     def final_path(self, path: str | Path) -> Path:
         """Where ``path`` (in ``work``) will be once the run is committed."""
         path = Path(path)
+        for prefix, final in self.sides:  # a file beside an earlier one (a Rerun scene's <stem>-<scene>.rrd too)
+            if path.parent == final.parent and path.name.startswith(prefix):
+                return final.parent / path.name[len(prefix):]
         try:
             return self.final / path.relative_to(self.work)
         except ValueError:
             return path
+
+    def output_path(self, path: str | Path | None, overwrite: bool) -> Path | None:
+        """Where the run writes the output file ``path``: in ``work`` for one inside the folder; for one
+        outside it with an earlier file there (``overwrite``), a fresh hidden sibling renamed over it by
+        :meth:`commit`; else ``path``."""
+        if path is None:
+            return None
+        path = Path(path)
+        if self.final == path or _resolved(self.final) in _resolved(path).parents or not overwrite:
+            return self.work_path(path)
+        earlier = path.exists() or any(path.parent.glob(f"{glob_escape(path.stem)}-*{path.suffix}"))
+        if not earlier:
+            return path
+        try:
+            fd, name = tempfile.mkstemp(prefix=SIDE_PREFIX, suffix=f"-{path.name}", dir=path.parent)
+        except OSError as exc:
+            raise InputError(f"{path}: cannot write the new file beside the earlier one: "
+                             f"{exc.strerror or exc}") from None
+        os.close(fd)
+        self.sides.append((Path(name).name[: -len(path.name)], path))
+        return Path(name)
+
+    def _side_files(self, files: Iterable[str | Path]) -> list[tuple[Path, Path]]:
+        """(written, final) of ``files`` written beside earlier ones, and the hidden siblings nothing wrote."""
+        pairs = {Path(f): self.final_path(f) for f in files}
+        pairs = {w: f for w, f in pairs.items() if w != f and w.name.startswith(SIDE_PREFIX)}
+        for prefix, final in self.sides:
+            placeholder = final.parent / f"{prefix}{final.name}"
+            if placeholder not in pairs and placeholder.exists():
+                placeholder.unlink()  # created empty and never written (a Rerun recording split into scenes)
+        return list(pairs.items())
 
     def work_path(self, path: str | Path | None) -> Path | None:
         """``path`` in ``final`` moved to ``work`` (others as they are)."""
@@ -131,8 +172,15 @@ class RunFolder:
         with contextlib.suppress(OSError):  # a full disk: the marker of prepare_output_dir stays
             (self.work / MARKER).write_text(RUN_MARKER_HEAD + "".join(f"{n}\n" for n in names))
 
-    def commit(self) -> None:
-        """The new run in place of the earlier one (nothing to do when written in place)."""
+    def commit(self, files: Iterable[str | Path] = ()) -> None:
+        """The new run in place of the earlier one (nothing to do when written in place), and each of
+        ``files`` (the outputs written) written beside an earlier file renamed over it."""
+        for written, final in self._side_files(files):
+            try:
+                written.replace(final)
+            except OSError as exc:
+                raise InputError(f"{final}: cannot put the new file in place of the earlier one "
+                                 f"({exc.strerror or exc}); the new one is {written}") from None
         if not self.beside:
             return
         old = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.pedenv-old-", dir=self.final.parent))
@@ -146,8 +194,15 @@ class RunFolder:
                              f"({exc.strerror or exc}); the new run is in {self.work}") from None
         shutil.rmtree(old, ignore_errors=True)
 
-    def abandon(self, frames: int) -> None:
-        """A run that stopped: the earlier run stays; the new one's frames stay beside it (or none, removed)."""
+    def abandon(self, frames: int, files: Iterable[str | Path] = ()) -> None:
+        """A run that stopped: the earlier run and earlier files stay; the new one's frames stay beside
+        them (or none, removed)."""
+        for written, final in self._side_files(files):
+            if frames == 0:
+                written.unlink(missing_ok=True)
+            else:
+                warnings.warn(f"the run stopped; the earlier {final} is kept as it was, this run's {frames} frames "
+                              f"are in {written}", stacklevel=2)
         if not self.beside:
             return
         if frames == 0:

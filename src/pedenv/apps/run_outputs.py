@@ -75,10 +75,14 @@ def outside(extra: ExtraOutputs, folder: Path) -> list[Path]:
 
 
 def in_work_folder(extra: ExtraOutputs, folder: RunFolder) -> ExtraOutputs:
-    """``extra`` with the outputs inside the run's folder moved to where it writes, and the
-    bird's-eye video there by default."""
-    return dataclasses.replace(extra, parquet=folder.work_path(extra.parquet), rerun=folder.work_path(extra.rerun),
-                               mcap=folder.work_path(extra.mcap), birds_eye_video=folder.work_path(
+    """``extra`` with the outputs inside the run's folder moved to where it writes, those outside it
+    that replace an earlier file written beside it (:meth:`RunFolder.output_path`), and the
+    bird's-eye video in the folder by default."""
+    def place(path: Path | None) -> Path | None:
+        return folder.output_path(path, extra.overwrite)
+
+    return dataclasses.replace(extra, parquet=place(extra.parquet), rerun=place(extra.rerun), mcap=place(extra.mcap),
+                               ros=place(extra.ros), birds_eye_video=folder.work_path(
                                    extra.birds_eye_video) or folder.work / "birds_eye.mp4")
 
 
@@ -114,6 +118,6 @@ def finish_run(folder: RunFolder, summary: dict, sinks: Sinks, *, finished: bool
         raise InputError(f"{run_json}: cannot be written: {exc.strerror or exc}") from None
     finally:
         if finished:
-            folder.commit()
+            folder.commit(sinks.files)
         else:
-            folder.abandon(summary["frames_done"])
+            folder.abandon(summary["frames_done"], sinks.files)
