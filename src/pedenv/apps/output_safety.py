@@ -26,10 +26,14 @@ import tempfile
 import warnings
 from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pedenv.errors import InputError
 from pedenv.outputs.output_dir import glob_escape
 from pedenv.paths import MARKER
+
+if TYPE_CHECKING:
+    from pedenv.outputs.sinks import ExtraOutputs
 
 #: Bytes kept back on the output's disk while a run writes (a file of zeros, deleted before the
 #: outputs close): room for the mp4 indexes, the last Parquet row group, the MCAP summary, the
@@ -38,8 +42,10 @@ from pedenv.paths import MARKER
 RESERVE_BYTES = 4 * 2**20
 #: Frames after which the bytes per frame are measured and a run that will not fit is warned about.
 ESTIMATE_AFTER = 3
-#: The first line of the marker file of a ``pedenv run`` folder; the names it wrote follow, one a line.
-RUN_MARKER_HEAD = "written by pedenv run; --overwrite may delete the files listed below\n"
+#: The end of the first line of a marker file that lists the names its command wrote, one a line after it.
+LISTED = "; --overwrite may delete the files listed below\n"
+#: The first line of the marker file of a ``pedenv run`` folder.
+RUN_MARKER_HEAD = f"written by pedenv run{LISTED}"
 #: The start of the hidden sibling an output file outside the folder is written to while an earlier
 #: file of that name waits for the swap (``.pedenv-new-<random>-<name>``, in the same folder: the rename is atomic).
 SIDE_PREFIX = ".pedenv-new-"
@@ -168,9 +174,7 @@ class RunFolder:
     def list_files(self, *more: str) -> None:
         """Write the marker listing the names this run wrote and ``more`` (what a later ``--overwrite`` may
         delete)."""
-        names = sorted({p.name for p in self.work.iterdir() if p.name != MARKER} | set(more))
-        with contextlib.suppress(OSError):  # a full disk: the marker of prepare_output_dir stays
-            (self.work / MARKER).write_text(RUN_MARKER_HEAD + "".join(f"{n}\n" for n in names))
+        list_files(self.work, "pedenv run", *more)
 
     def commit(self, files: Iterable[str | Path] = ()) -> None:
         """The new run in place of the earlier one (nothing to do when written in place), and each of
@@ -212,6 +216,43 @@ class RunFolder:
                       f"frames are in {self.work}", stacklevel=2)
 
 
+def list_files(folder: Path, command: str, *more: str) -> None:
+    """The marker of ``folder`` listing the names ``command`` wrote there and ``more``: what a later
+    ``--overwrite`` may delete (:func:`prepare_folder` refuses anything else)."""
+    with contextlib.suppress(OSError):  # a full disk, a folder gone: the marker of prepare_output_dir stays
+        names = sorted({p.name for p in folder.iterdir() if p.name != MARKER} | set(more))
+        (folder / MARKER).write_text(f"written by {command}{LISTED}" + "".join(f"{n}\n" for n in names))
+
+
+def extra_paths(extra: ExtraOutputs | None) -> list[tuple[str, Path | None]]:
+    """(flag, path) of the per-frame output files in ``extra`` (for :func:`check_paths`)."""
+    if extra is None:
+        return []
+    return [("--rerun", extra.rerun), ("--mcap", extra.mcap), ("--ros-out", extra.ros), ("--parquet", extra.parquet)]
+
+
+def check_outputs(folder: str | Path, inputs: Iterable[tuple[str, str | Path | None]],
+                  extra: ExtraOutputs | None) -> None:
+    """:func:`check_paths` of ``folder`` and ``extra``'s files against ``inputs`` and the files inside
+    each input folder (a dataset's, links followed)."""
+    given = [(flag, p) for flag, p in inputs if p is not None]
+    check_paths([*given, *((flag, f) for flag, p in given for f in input_files(p))], extra_paths(extra), folder)
+
+
+def prepare_folder(folder: str | Path, inputs: Iterable[tuple[str, str | Path | None]],
+                   extra: ExtraOutputs | None, *, overwrite: bool, command: str) -> Path:
+    """A command's output folder checked and prepared: no output on an input (:func:`check_paths`; an
+    input folder's files are checked one by one), then, with ``overwrite``, an earlier folder whose marker
+    lists its files refused when it holds anything else, then
+    :func:`~pedenv.outputs.output_dir.prepare_output_dir`. Call :func:`list_files` when the command ends."""
+    from pedenv.outputs.output_dir import holds_files, prepare_output_dir
+
+    check_outputs(folder, inputs, extra)
+    if overwrite and holds_files(Path(folder)) and (Path(folder) / MARKER).is_file():
+        _refuse_foreign_files(Path(folder))
+    return prepare_output_dir(folder, overwrite=overwrite, command=command)
+
+
 def open_run_folder(folder: str | Path, *, overwrite: bool, command: str) -> RunFolder:
     """Prepare ``folder`` for a run (:func:`pedenv.outputs.output_dir.prepare_output_dir`), or, when it holds
     an earlier pedenv run and ``overwrite`` is given, a fresh sibling to write beside it. A folder whose
@@ -233,10 +274,10 @@ def open_run_folder(folder: str | Path, *, overwrite: bool, command: str) -> Run
 
 def _refuse_foreign_files(folder: Path) -> None:
     """InputError naming the first thing in ``folder`` its marker does not list (when it lists names)."""
-    text = (folder / MARKER).read_text(errors="replace")
-    if not text.startswith(RUN_MARKER_HEAD):
-        return  # an older marker, or another command's: the whole folder is pedenv's
-    listed = set(text[len(RUN_MARKER_HEAD):].splitlines()) | {MARKER}
+    head, _, names = (folder / MARKER).read_text(errors="replace").partition("\n")
+    if not head.startswith("written by ") or not f"{head}\n".endswith(LISTED):
+        return  # an older marker, or one written when the command started: the whole folder is pedenv's
+    listed = set(names.splitlines()) | {MARKER}
     foreign = sorted(p.name for p in folder.iterdir() if p.name not in listed)
     if foreign:
         raise InputError(f"output folder {folder} holds {folder / foreign[0]}, which pedenv did not write; "

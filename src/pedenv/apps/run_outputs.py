@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.output_safety import RunFolder, bytes_written, check_paths, input_files
+from pedenv.apps.output_safety import RunFolder, bytes_written, check_paths, extra_paths, input_files
 from pedenv.errors import InputError
 from pedenv.outputs.png import write_jpeg, write_png
 from pedenv.video_files import VideoOut
@@ -54,18 +54,13 @@ class OverlayWriter:
 def check_run_paths(source: RecordingSource, output: OutputOptions, config: Config | str | Path | None) -> None:
     """No output of the run on one of its inputs (:func:`pedenv.apps.output_safety.check_paths`), before
     the recording is read: the files given and those in the image and bag folders (links followed)."""
-    extra = output.extra
     inputs: list[tuple[str, Any]] = [("--images", source.images), ("--video", source.video),
                                      ("--calibration", source.calibration), ("--ego-poses", source.ego_poses),
                                      ("--bag", source.bag),
                                      ("--config", config if isinstance(config, (str, Path)) else None)]
     inputs += [("--images", path) for path in input_files(source.images)]
     inputs += [("--bag", path) for path in input_files(source.bag)]
-    outputs: list[tuple[str, Any]] = []
-    if extra is not None:
-        outputs = [("--rerun", extra.rerun), ("--mcap", extra.mcap), ("--ros-out", extra.ros),
-                   ("--parquet", extra.parquet)]
-    check_paths(inputs, outputs, output.folder)
+    check_paths(inputs, extra_paths(output.extra), output.folder)
 
 
 def outside(extra: ExtraOutputs, folder: Path) -> list[Path]:
