@@ -33,7 +33,7 @@ class Nobody:
 
     name = "nobody"
 
-    def __call__(self, frame):  # noqa: ARG002 - the backend protocol
+    def __call__(self, frame, *_tracks):  # noqa: ARG002 - the backend protocol (tracks: where a pipeline passes them)
         return Detections.empty()
 
 
@@ -235,16 +235,17 @@ def test_a_write_that_fails_cuts_the_json_lines_back_to_a_whole_line(tmp_path):
 
 
 def test_a_run_that_will_not_fit_is_warned_about_early(tmp_path, monkeypatch):
-    """A disk of 700 kB on which each frame takes 100 kB: warned after 3 frames, stopped after 5."""
-    rec = recording(tmp_path / "rec", frames=8)
+    """A disk of 1 MB on which each frame takes 100 kB: warned after 3 frames, stopped after 5 (two
+    frames and the writers' buffers, 320 KiB, must fit)."""
+    rec = recording(tmp_path / "rec", frames=12)
     overlays = tmp_path / "o" / "overlays"
-    monkeypatch.setattr(safety, "_free", lambda _: 700_000 - 100_000 * len(list(overlays.glob("*.jpg"))))
+    monkeypatch.setattr(safety, "_free", lambda _: 1_000_000 - 100_000 * len(list(overlays.glob("*.jpg"))))
     with warnings.catch_warnings(record=True) as caught, \
             pytest.raises(InputError, match="the disk is full .* stopped after 5 frames"):
         warnings.simplefilter("always")
         run(rec, tmp_path / "o")
     assert [str(w.message).split(": ", 1)[1] for w in caught if "frames left" in str(w.message)] == [
-        "at 0.10 MB per frame the 5 frames left need 0 MB and 0 MB are free: the run will stop when the disk is "
+        "at 0.10 MB per frame the 9 frames left need 1 MB and 1 MB are free: the run will stop when the disk is "
         "full (--video-out writes the overlays as one small video)"]
     assert len(read_environment(tmp_path / "o" / "environment.jsonl")) == 5
 

@@ -27,7 +27,7 @@ class Slow:
     name = "slow-nobody"
     def __init__(self, **options):
         pass
-    def __call__(self, frame):
+    def __call__(self, frame, *tracks):
         time.sleep(0.02)
         return Detections.empty()
 

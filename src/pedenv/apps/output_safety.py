@@ -40,6 +40,10 @@ if TYPE_CHECKING:
 #: bird's-eye plot and run.json, which together stay under 1 MB for 10,000 frames; at most a
 #: quarter of the space free at the start.
 RESERVE_BYTES = 4 * 2**20
+#: Room kept free on top of two frames at the measured rate: bytes a writer holds and then writes at
+#: once, which the rate does not see coming (an MCAP chunk, ``MCAP_CHUNK_BYTES`` of
+#: :mod:`pedenv.outputs.mcap_log`, 256 KiB), and 64 KiB for the others' buffers.
+BUFFERED_BYTES = 2**18 + 2**16
 #: Frames after which the bytes per frame are measured and a run that will not fit is warned about.
 ESTIMATE_AFTER = 3
 #: The end of the first line of a marker file that lists the names its command wrote, one a line after it.
@@ -312,7 +316,7 @@ class DiskGuard:
             used = max(self.start[folder] - free, 0)
             if frames_done:
                 self.rate = max(self.rate, used / frames_done)
-            if free < 2 * self.rate + 2**16:
+            if free < 2 * self.rate + BUFFERED_BYTES:
                 self.release()
                 raise InputError(f"{folder}: the disk is full ({free / 1e6:.1f} MB free, a frame takes "
                                  f"{self.rate / 1e6:.2f} MB); the run stopped after {frames_done} frames, every output "
