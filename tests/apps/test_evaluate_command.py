@@ -172,3 +172,17 @@ def test_demo_refuses_an_output_on_its_config(tmp_path):
         demo_command(output=OutputOptions(tmp_path / "demo", overwrite=True), flags=OutputFlags(mcap=config),
                      method=MethodOptions(config=config))
     assert config.read_text() == "{}\n" and not (tmp_path / "demo").exists()
+
+
+def test_evaluate_refuses_an_output_hard_linked_to_a_dataset_file(stored, tmp_path):
+    root = _copy(stored, tmp_path)
+    data_file = next(p for p in sorted(root.rglob("*")) if p.is_file())
+    link = tmp_path / "x.mcap"
+    link.hardlink_to(data_file)
+    before = _digest(root)
+    with pytest.raises(InputError, match=rf"^--mcap {link} is the input --data-root {data_file}"):
+        evaluate_command(dataset=DatasetChoice("synthetic", root),
+                         output=OutputOptions(tmp_path / "out", overwrite=True), flags=OutputFlags(mcap=link),
+                         pose=PoseOptions("ground-truth", detection=None), method=MethodOptions(),
+                         executor=ExecutorOptions())
+    assert _digest(root) == before

@@ -59,13 +59,18 @@ def _resolved(path: str | Path) -> Path:
     return Path(os.path.abspath(path)).resolve()
 
 
-def _same(a: Path, b: Path) -> bool:
-    if a == b:
-        return True
+def _identity(path: Path) -> tuple[int, int] | None:
+    """(device, inode) of an existing ``path`` (hard links share it), else None."""
     try:
-        return os.path.samefile(a, b)  # hard links
+        st = os.stat(path)
     except OSError:
-        return False
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _same(a: tuple[Path, tuple[int, int] | None], b: tuple[Path, tuple[int, int] | None]) -> bool:
+    """Whether two (path, identity) pairs name one file."""
+    return a[0] == b[0] or (a[1] is not None and a[1] == b[1])
 
 
 def _inside(inner: Path, outer: Path) -> bool:
@@ -79,11 +84,14 @@ def check_paths(inputs: Iterable[tuple[str, str | Path | None]], outputs: Iterab
     path) pairs (None: not given); ``folder``: the output folder (``--output``)."""
     ins = [(flag, _resolved(p)) for flag, p in inputs if p is not None]
     outs = [(flag, _resolved(p)) for flag, p in outputs if p is not None]
+    ids = {p: _identity(p) for _, p in ins + outs}  # each file stat'ed once
     out_folder = _resolved(folder)
+    ids[out_folder] = _identity(out_folder)
     for oflag, out in [("--output", out_folder), *outs]:
         for iflag, source in ins:
-            if _same(out, source) or _inside(out, source):
-                where = "is" if _same(out, source) else "lies inside"
+            same = _same((out, ids[out]), (source, ids[source]))
+            if same or _inside(out, source):
+                where = "is" if same else "lies inside"
                 raise InputError(f"{oflag} {out} {where} the input {iflag} {source}: pedenv never writes over its "
                                  "inputs; choose another path")
             if _inside(source, out):
@@ -91,20 +99,36 @@ def check_paths(inputs: Iterable[tuple[str, str | Path | None]], outputs: Iterab
                                  "deletes its inputs; choose another output folder")
     for i, (aflag, a) in enumerate(outs):
         for bflag, b in outs[i + 1:]:
-            if _same(a, b):
+            if _same((a, ids[a]), (b, ids[b])):
                 raise InputError(f"{aflag} and {bflag} name one file, {a}: give each output its own file")
 
 
 def input_files(folder: str | Path | None, limit: int = 100_000) -> list[Path]:
-    """The files inside an input folder (a rosbag2 folder's database and metadata), at most ``limit``."""
+    """The files inside an input folder (a rosbag2 folder's, a dataset's) that a check of the folder
+    itself does not cover, among the first ``limit``: links (an output on their target is elsewhere)
+    and files with other hard links. The others cannot be an output outside the folder."""
     if folder is None or not Path(folder).is_dir():
         return []
     found: list[Path] = []
-    for root, _dirs, files in os.walk(folder):
-        found.extend(Path(root) / f for f in files)
-        if len(found) >= limit:
+    scanned = 0
+    for root, _dirs, _files in os.walk(folder):
+        with contextlib.suppress(OSError), os.scandir(root) as entries:
+            for entry in entries:
+                if entry.is_dir(follow_symlinks=False):
+                    continue
+                scanned += 1
+                if entry.is_symlink() or _links(entry) > 1:
+                    found.append(Path(entry.path))
+        if scanned >= limit:
             break
-    return found[:limit]
+    return found
+
+
+def _links(entry: os.DirEntry) -> int:
+    try:
+        return entry.stat(follow_symlinks=False).st_nlink
+    except OSError:
+        return 1
 
 
 class RunFolder:
