@@ -3,6 +3,7 @@
 
 import hashlib
 import shutil
+import warnings
 from functools import partial
 from pathlib import Path
 
@@ -186,3 +187,40 @@ def test_evaluate_refuses_an_output_hard_linked_to_a_dataset_file(stored, tmp_pa
                          pose=PoseOptions("ground-truth", detection=None), method=MethodOptions(),
                          executor=ExecutorOptions())
     assert _digest(root) == before
+
+
+def test_evaluate_overwrite_keeps_earlier_files_outside_the_folder_when_it_stops(stored, tmp_path):
+    """``--rerun`` (one file per scene) outside the output folder: an evaluation that stops at
+    a damaged scene leaves the earlier files byte for byte, the new ones beside them named in warnings;
+    one that finishes renames them over the earlier ones."""
+    root = _copy(stored, tmp_path)
+    side = tmp_path / "side"
+    flags = OutputFlags(rerun=side / "r.rrd")
+    first, *_, last = sorted(p.name for p in root.iterdir() if p.is_dir())
+
+    def evaluate(out):
+        return evaluate_command(dataset=DatasetChoice("synthetic", root, scenes=(first, last)),
+                                output=OutputOptions(out, overwrite=True), flags=flags,
+                                pose=PoseOptions("ground-truth", detection=None), method=MethodOptions(),
+                                executor=ExecutorOptions())
+
+    evaluate(tmp_path / "o1")
+    before = _digest(side)
+    assert len(before) == 2  # r-<scene>.rrd for each of the 2 scenes
+    damaged = root / last / "frames.npz"
+    good = damaged.read_bytes()
+    damaged.write_bytes(good[:100])
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(InputError, match="frames.npz"):
+        warnings.simplefilter("always")
+        evaluate(tmp_path / "o2")
+    assert _digest(side).items() >= before.items()
+    beside = [p for p in side.iterdir() if p.name.startswith(".pedenv-new-")]
+    kept = [str(w.message) for w in caught if "is kept as it was" in str(w.message)]
+    assert len(beside) == len(kept) >= 1  # one file (a recording split into scenes when it closes whole)
+    for path in beside:
+        path.unlink()
+    damaged.write_bytes(good)
+    inodes = {p.name: p.stat().st_ino for p in side.iterdir()}
+    evaluate(tmp_path / "o3")
+    assert sorted(p.name for p in side.iterdir()) == sorted(inodes)  # renamed over, nothing beside
+    assert all(p.stat().st_ino != inodes[p.name] for p in side.iterdir())

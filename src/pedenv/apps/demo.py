@@ -106,7 +106,7 @@ def demo_command(*, output: OutputOptions, flags: OutputFlags, method: MethodOpt
                  terrain: bool = False, pose_backend: str = "detector-model") -> EvaluationResult:
     """``pedenv demo``: :func:`run_demo` into ``output.folder`` with the command's outputs (``flags``,
     the bird's-eye video of :data:`VIDEO_SCENE`), after the outputs and the folder are checked."""
-    from pedenv.apps.output_safety import list_files, prepare_folder
+    from pedenv.apps.output_safety import list_files, outside_files, prepare_folder
 
     config = method.load()
     extra = flags.extra_outputs(output, matches=True, video_scene=VIDEO_SCENE)
@@ -115,8 +115,9 @@ def demo_command(*, output: OutputOptions, flags: OutputFlags, method: MethodOpt
     folder = prepare_folder(output.folder, [("--config", given)], extra, overwrite=output.overwrite,
                             command="pedenv demo")
     try:
-        return run_demo(folder, seed=seed, config=config, terrain=terrain, pose_backend=pose_backend,
-                        extra_outputs=extra)
+        with outside_files(folder, extra) as extra:  # earlier files outside the folder replaced at the end
+            return run_demo(folder, seed=seed, config=config, terrain=terrain, pose_backend=pose_backend,
+                            extra_outputs=extra)
     finally:
         list_files(folder, "pedenv demo")  # what a later --overwrite may delete
 

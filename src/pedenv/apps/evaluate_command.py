@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from pedenv.apps.options import ExecutorOptions, MethodOptions, OutputFlags, OutputOptions, PoseOptions
-from pedenv.apps.output_safety import check_outputs, list_files, prepare_folder
+from pedenv.apps.output_safety import check_outputs, list_files, outside_files, prepare_folder
 from pedenv.config import Config
 from pedenv.datasets import Dataset, open_dataset
 from pedenv.errors import InputError
@@ -91,8 +91,9 @@ def evaluate_command(*, dataset: DatasetChoice, output: OutputOptions, flags: Ou
     made = backend() if backend else pose.backend
     prepare_folder(folder, inputs, extra, overwrite=output.overwrite, command="pedenv evaluate")
     try:
-        outcome = _evaluate_serial(data, dataset.scenes, cfg, made, folder=folder, extra=extra,
-                                   both=method.method == "both")
+        with outside_files(folder, extra) as extra:  # earlier files outside the folder replaced at the end
+            outcome = _evaluate_serial(data, dataset.scenes, cfg, made, folder=folder, extra=extra,
+                                       both=method.method == "both")
         if ablation:
             from pedenv.apps.ablation import run_ablation
 

@@ -24,7 +24,7 @@ import os
 import shutil
 import tempfile
 import warnings
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -180,6 +180,11 @@ class RunFolder:
         self.sides.append((Path(name).name[: -len(path.name)], path))
         return Path(name)
 
+    def side_files(self) -> list[Path]:
+        """What was written beside earlier files (a scene's or a method's ``<stem>-<name>`` too), found on disk."""
+        found = [p for prefix, final in self.sides for p in final.parent.glob(f"{glob_escape(prefix)}*")]
+        return [p for p in found if p.stat().st_size > 0]  # the empty name made for the file: never written
+
     def _side_files(self, files: Iterable[str | Path]) -> list[tuple[Path, Path]]:
         """(written, final) of ``files`` written beside earlier ones, and the hidden siblings nothing wrote."""
         pairs = {Path(f): self.final_path(f) for f in files}
@@ -226,22 +231,42 @@ class RunFolder:
                              f"({exc.strerror or exc}); the new run is in {self.work}") from None
         shutil.rmtree(old, ignore_errors=True)
 
-    def abandon(self, frames: int, files: Iterable[str | Path] = ()) -> None:
+    def abandon(self, frames: int | None, files: Iterable[str | Path] = ()) -> None:
         """A run that stopped: the earlier run and earlier files stay; the new one's frames stay beside
-        them (or none, removed)."""
+        them (or none, removed; None: not counted, kept)."""
         for written, final in self._side_files(files):
             if frames == 0:
                 written.unlink(missing_ok=True)
             else:
-                warnings.warn(f"the run stopped; the earlier {final} is kept as it was, this run's {frames} frames "
-                              f"are in {written}", stacklevel=2)
-        if not self.beside:
+                what = "the new one is" if frames is None else f"this run's {frames} frames are"
+                warnings.warn(f"the run stopped; the earlier {final} is kept as it was, {what} in {written}",
+                              stacklevel=2)
+        if not self.beside or frames is None:
             return
         if frames == 0:
             shutil.rmtree(self.work, ignore_errors=True)
             return
         warnings.warn(f"the run stopped; the earlier run in {self.final} is kept as it was, this run's {frames} "
                       f"frames are in {self.work}", stacklevel=2)
+
+
+@contextlib.contextmanager
+def outside_files(folder: str | Path, extra: ExtraOutputs) -> Iterator[ExtraOutputs]:
+    """``extra`` with each ``--rerun``/``--mcap``/``--ros-out`` file outside ``folder`` that replaces an
+    earlier one (``extra.overwrite``) written to a hidden sibling (:meth:`RunFolder.output_path`): renamed
+    over the earlier files when the block ends, kept beside them (a warning) when it raises."""
+    import dataclasses
+
+    sides = RunFolder(Path(folder), Path(folder))
+    moved = dataclasses.replace(extra, rerun=sides.output_path(extra.rerun, extra.overwrite),
+                                mcap=sides.output_path(extra.mcap, extra.overwrite),
+                                ros=sides.output_path(extra.ros, extra.overwrite))
+    try:
+        yield moved
+    except BaseException:
+        sides.abandon(None, sides.side_files())
+        raise
+    sides.commit(sides.side_files())
 
 
 def list_files(folder: Path, command: str, *more: str) -> None:
