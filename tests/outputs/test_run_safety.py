@@ -33,7 +33,7 @@ class Nobody:
 
     name = "nobody"
 
-    def __call__(self, frame):  # noqa: ARG002 - the backend protocol
+    def __call__(self, frame, *_tracks):  # noqa: ARG002 - the backend protocol (tracks: where a pipeline passes them)
         return Detections.empty()
 
 
@@ -235,16 +235,17 @@ def test_a_write_that_fails_cuts_the_json_lines_back_to_a_whole_line(tmp_path):
 
 
 def test_a_run_that_will_not_fit_is_warned_about_early(tmp_path, monkeypatch):
-    """A disk of 700 kB on which each frame takes 100 kB: warned after 3 frames, stopped after 5."""
-    rec = recording(tmp_path / "rec", frames=8)
+    """A disk of 1 MB on which each frame takes 100 kB: warned after 3 frames, stopped after 5 (two
+    frames and the writers' buffers, 320 KiB, must fit)."""
+    rec = recording(tmp_path / "rec", frames=12)
     overlays = tmp_path / "o" / "overlays"
-    monkeypatch.setattr(safety, "_free", lambda _: 700_000 - 100_000 * len(list(overlays.glob("*.jpg"))))
+    monkeypatch.setattr(safety, "_free", lambda _: 1_000_000 - 100_000 * len(list(overlays.glob("*.jpg"))))
     with warnings.catch_warnings(record=True) as caught, \
             pytest.raises(InputError, match="the disk is full .* stopped after 5 frames"):
         warnings.simplefilter("always")
         run(rec, tmp_path / "o")
     assert [str(w.message).split(": ", 1)[1] for w in caught if "frames left" in str(w.message)] == [
-        "at 0.10 MB per frame the 5 frames left need 0 MB and 0 MB are free: the run will stop when the disk is "
+        "at 0.10 MB per frame the 9 frames left need 1 MB and 1 MB are free: the run will stop when the disk is "
         "full (--video-out writes the overlays as one small video)"]
     assert len(read_environment(tmp_path / "o" / "environment.jsonl")) == 5
 
@@ -366,3 +367,52 @@ def test_a_sink_that_cannot_be_finished_is_one_line_and_the_others_close(tmp_pat
     with pytest.raises(InputError, match=r"a.mcap: cannot be finished: No space left on device"):
         sinks.close()
     assert closed == ["a.mcap", "b.mp4"]
+
+
+# files outside the output folder: an earlier one replaced only when the run has finished ----------
+
+
+def test_overwrite_keeps_earlier_files_outside_the_folder_when_the_run_stops(tmp_path):
+    """``--rerun``/``--mcap``/``--ros-out`` files of an earlier run outside the output folder: a run that
+    stops at a cut image (frame 2) leaves their bytes as they were, the new ones beside them named in
+    a warning; a run that finishes renames them over the earlier ones and leaves nothing beside."""
+    rec = recording(tmp_path / "rec", frames=4)
+    side = tmp_path / "side"
+    extra = ExtraOutputs(rerun=side / "r.rrd", mcap=side / "m.mcap", ros=side / "b.mcap", overwrite=True)
+    run(rec, tmp_path / "o1", extra=extra)
+    before = digest(side)
+    assert sorted(Path(p).name for p in before) == ["b.mcap", "m.mcap", "r.rrd"]
+    cut = rec["images"] / "f002.png"
+    good = cut.read_bytes()
+    cut.write_bytes(good[:60])  # the header holds, the pixels are gone
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(InputError, match="f002.png"):
+        warnings.simplefilter("always")
+        run(rec, tmp_path / "o2", overwrite=True, extra=extra)
+    assert digest(side).items() >= before.items()  # the earlier files, byte for byte
+    beside = sorted(p.name for p in side.iterdir() if p.name.startswith(safety.SIDE_PREFIX))
+    assert sorted(n.rsplit("-", 1)[-1] for n in beside) == ["b.mcap", "m.mcap", "r.rrd"]
+    kept = [str(w.message) for w in caught if "is kept as it was" in str(w.message)]
+    assert len(kept) == 3 and all("2 frames" in k for k in kept)
+    from mcap.reader import make_reader
+
+    with next(side.glob(f"{safety.SIDE_PREFIX}*-m.mcap")).open("rb") as f:  # the stopped run's file is whole
+        assert make_reader(f).get_summary() is not None
+    for name in beside:
+        (side / name).unlink()
+    cut.write_bytes(good)
+    inodes = {p.name: p.stat().st_ino for p in side.iterdir()}
+    summary = run(rec, tmp_path / "o3", overwrite=True, extra=extra)
+    assert sorted(p.name for p in side.iterdir()) == ["b.mcap", "m.mcap", "r.rrd"]  # renamed over, none beside
+    assert all(p.stat().st_ino != inodes[p.name] for p in side.iterdir())
+    assert {str(side / n) for n in ["b.mcap", "m.mcap", "r.rrd"]} <= set(summary["files"])
+
+
+def test_a_run_that_stops_before_its_first_frame_leaves_nothing_beside_an_earlier_file(tmp_path):
+    rec = recording(tmp_path / "rec", frames=3)
+    side = tmp_path / "side"
+    side.mkdir()
+    (side / "m.mcap").write_bytes(b"an earlier recording")
+    (rec["images"] / "f000.png").write_bytes(b"\x89PNG\r\n\x1a\n")  # cut in frame 0
+    with pytest.raises(InputError, match="f000.png"):
+        run(rec, tmp_path / "o", overwrite=True, extra=ExtraOutputs(mcap=side / "m.mcap", overwrite=True))
+    assert [p.name for p in side.iterdir()] == ["m.mcap"] and (side / "m.mcap").read_bytes() == b"an earlier recording"

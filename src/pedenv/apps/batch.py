@@ -27,11 +27,11 @@ from rich.console import Console
 
 from pedenv.apps.executors import TaskContext, create_executor
 from pedenv.apps.options import ExecutorOptions, OutputOptions, PoseOptions, RecordingSource, load_config
+from pedenv.apps.output_safety import check_outputs, list_files, prepare_folder
 from pedenv.apps.progress import FrameCounter, progress_bar
 from pedenv.apps.run import detection_mode, run_recording
 from pedenv.config import Config
 from pedenv.errors import InputError
-from pedenv.outputs.output_dir import prepare_output_dir
 from pedenv.recordings.manifest import SUMMARY, ManifestRow, read_manifest
 from pedenv.structured_text import load_json
 
@@ -54,8 +54,12 @@ def run_manifest(manifest: str | Path, output: OutputOptions | str | Path, pose:
     output, pose, executor = OutputOptions.of(output), pose or PoseOptions(), executor or ExecutorOptions()
     rows = read_manifest(manifest)
     cfg = load_config(config, method)
-    out = prepare_resume_dir(Path(output.folder)) if executor.resume else prepare_output_dir(
-        output.folder, overwrite=output.overwrite, command="pedenv run --manifest")
+    inputs = [("--manifest", manifest), ("--config", config if isinstance(config, (str, Path)) else None)]
+    inputs += [(f"manifest row {r.row} {flag}", path) for r in rows for flag, path in (
+        ("images", r.images), ("video", r.video), ("calibration", r.calibration), ("ego_poses", r.ego_poses))]
+    check_outputs(output.folder, inputs, None)  # no recording's file in the folder (--overwrite empties it)
+    out = prepare_resume_dir(Path(output.folder)) if executor.resume else prepare_folder(
+        output.folder, [], None, overwrite=output.overwrite, command="pedenv run --manifest")
     entries: dict[str, dict[str, Any]] = {}
     if executor.resume:
         entries = {r.name: {**_complete(out / r.name), "status": "resumed"} for r in rows if _complete(out / r.name)}
@@ -80,6 +84,7 @@ def run_manifest(manifest: str | Path, output: OutputOptions | str | Path, pose:
         raise
     finally:  # also after Ctrl-C: the recordings finished so far are listed
         summary = _write_summary(manifest, out, executor.name, rows, entries, interrupted)
+        list_files(out, "pedenv run --manifest")  # what a later --overwrite may delete
     return summary
 
 

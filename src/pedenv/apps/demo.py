@@ -106,14 +106,20 @@ def demo_command(*, output: OutputOptions, flags: OutputFlags, method: MethodOpt
                  terrain: bool = False, pose_backend: str = "detector-model") -> EvaluationResult:
     """``pedenv demo``: :func:`run_demo` into ``output.folder`` with the command's outputs (``flags``,
     the bird's-eye video of :data:`VIDEO_SCENE`), after the outputs and the folder are checked."""
-    from pedenv.outputs.output_dir import prepare_output_dir
+    from pedenv.apps.output_safety import list_files, outside_files, prepare_folder
 
     config = method.load()
     extra = flags.extra_outputs(output, matches=True, video_scene=VIDEO_SCENE)
     extra.check()
-    prepare_output_dir(output.folder, overwrite=output.overwrite, command="pedenv demo")
-    return run_demo(output.folder, seed=seed, config=config, terrain=terrain, pose_backend=pose_backend,
-                    extra_outputs=extra)
+    given = method.config if isinstance(method.config, (str, Path)) else None
+    folder = prepare_folder(output.folder, [("--config", given)], extra, overwrite=output.overwrite,
+                            command="pedenv demo")
+    try:
+        with outside_files(folder, extra) as extra:  # earlier files outside the folder replaced at the end
+            return run_demo(folder, seed=seed, config=config, terrain=terrain, pose_backend=pose_backend,
+                            extra_outputs=extra)
+    finally:
+        list_files(folder, "pedenv demo")  # what a later --overwrite may delete
 
 
 def simulate_command(*, output: OutputOptions, scenes: int | None = None, seed: int = 0, fmt: str = "synthetic",

@@ -14,11 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from pedenv.apps.options import ExecutorOptions, MethodOptions, OutputFlags, OutputOptions, PoseOptions
+from pedenv.apps.output_safety import check_outputs, list_files, outside_files, prepare_folder
 from pedenv.config import Config
 from pedenv.datasets import Dataset, open_dataset
 from pedenv.errors import InputError
 from pedenv.evaluation.metrics import Metrics
 from pedenv.evaluation.result import EvaluationResult
+from pedenv.outputs.sinks import ExtraOutputs
 from pedenv.pose import PoseBackend
 
 
@@ -72,21 +74,33 @@ def evaluate_command(*, dataset: DatasetChoice, output: OutputOptions, flags: Ou
     cfg, backend = onnx_backend(data, cfg, pose)
     executor.check_serial()
     folder = Path(output.folder)
+    inputs = [("--data-root", dataset.root), ("--config", method.config if isinstance(method.config, (str, Path))
+                                              else None)]
     if executor.name != "serial" or executor.resume:
         refuse_with_tasks(method, flags, ablation=ablation)
         from pedenv.apps.distributed import evaluate_distributed
+
+        check_outputs(folder, inputs, None)
 
         result = evaluate_distributed(data, executor=executor, scenes=dataset.scenes, config=cfg,
                                       pose_backend=backend or pose.backend, output_dir=folder,
                                       overwrite=output.overwrite, progress=True)
         return EvaluateOutcome(folder, distributed=result)
+    extra = flags.extra_outputs(output, matches=True)
+    extra.check()
     made = backend() if backend else pose.backend
-    outcome = _evaluate_serial(data, dataset.scenes, cfg, made, output=output, flags=flags,
-                               both=method.method == "both")
-    if ablation:
-        from pedenv.apps.ablation import run_ablation
+    prepare_folder(folder, inputs, extra, overwrite=output.overwrite, command="pedenv evaluate")
+    try:
+        with outside_files(folder, extra) as extra:  # earlier files outside the folder replaced at the end
+            outcome = _evaluate_serial(data, dataset.scenes, cfg, made, folder=folder, extra=extra,
+                                       both=method.method == "both")
+        if ablation:
+            from pedenv.apps.ablation import run_ablation
 
-        outcome.ablation = run_ablation(data, scenes=dataset.scenes, config=cfg, pose_backend=made, output_dir=folder)
+            outcome.ablation = run_ablation(data, scenes=dataset.scenes, config=cfg, pose_backend=made,
+                                            output_dir=folder)
+    finally:
+        list_files(folder, "pedenv evaluate")  # what a later --overwrite may delete
     return outcome
 
 
@@ -119,15 +133,11 @@ def refuse_with_tasks(method: MethodOptions, flags: OutputFlags, *, ablation: bo
 
 
 def _evaluate_serial(data: Dataset, scenes: tuple[str, ...] | None, cfg: Config, backend: str | PoseBackend | None,
-                     *, output: OutputOptions, flags: OutputFlags, both: bool) -> EvaluateOutcome:
-    """The evaluation in this process: one method (its metrics) or both (each method's result)."""
+                     *, folder: Path, extra: ExtraOutputs, both: bool) -> EvaluateOutcome:
+    """The evaluation in this process into the prepared ``folder``: one method (its metrics) or both
+    (each method's result)."""
     from pedenv.apps.evaluate import evaluate_dataset
-    from pedenv.outputs.output_dir import prepare_output_dir
 
-    folder = Path(output.folder)
-    extra = flags.extra_outputs(output, matches=True)
-    extra.check()
-    prepare_output_dir(folder, overwrite=output.overwrite, command="pedenv evaluate")
     if not both:
         metrics = evaluate_dataset(data, scenes=scenes, config=cfg, pose_backend=backend, output_dir=folder,
                                    progress=True, extra_outputs=extra)

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.output_safety import RunFolder, bytes_written, check_paths, input_files
+from pedenv.apps.output_safety import RunFolder, bytes_written, check_paths, extra_paths, input_files
 from pedenv.errors import InputError
 from pedenv.outputs.png import write_jpeg, write_png
 from pedenv.video_files import VideoOut
@@ -54,18 +54,13 @@ class OverlayWriter:
 def check_run_paths(source: RecordingSource, output: OutputOptions, config: Config | str | Path | None) -> None:
     """No output of the run on one of its inputs (:func:`pedenv.apps.output_safety.check_paths`), before
     the recording is read: the files given and those in the image and bag folders (links followed)."""
-    extra = output.extra
     inputs: list[tuple[str, Any]] = [("--images", source.images), ("--video", source.video),
                                      ("--calibration", source.calibration), ("--ego-poses", source.ego_poses),
                                      ("--bag", source.bag),
                                      ("--config", config if isinstance(config, (str, Path)) else None)]
     inputs += [("--images", path) for path in input_files(source.images)]
     inputs += [("--bag", path) for path in input_files(source.bag)]
-    outputs: list[tuple[str, Any]] = []
-    if extra is not None:
-        outputs = [("--rerun", extra.rerun), ("--mcap", extra.mcap), ("--ros-out", extra.ros),
-                   ("--parquet", extra.parquet)]
-    check_paths(inputs, outputs, output.folder)
+    check_paths(inputs, extra_paths(output.extra), output.folder)
 
 
 def outside(extra: ExtraOutputs, folder: Path) -> list[Path]:
@@ -75,10 +70,14 @@ def outside(extra: ExtraOutputs, folder: Path) -> list[Path]:
 
 
 def in_work_folder(extra: ExtraOutputs, folder: RunFolder) -> ExtraOutputs:
-    """``extra`` with the outputs inside the run's folder moved to where it writes, and the
-    bird's-eye video there by default."""
-    return dataclasses.replace(extra, parquet=folder.work_path(extra.parquet), rerun=folder.work_path(extra.rerun),
-                               mcap=folder.work_path(extra.mcap), birds_eye_video=folder.work_path(
+    """``extra`` with the outputs inside the run's folder moved to where it writes, those outside it
+    that replace an earlier file written beside it (:meth:`RunFolder.output_path`), and the
+    bird's-eye video in the folder by default."""
+    def place(path: Path | None) -> Path | None:
+        return folder.output_path(path, extra.overwrite)
+
+    return dataclasses.replace(extra, parquet=place(extra.parquet), rerun=place(extra.rerun), mcap=place(extra.mcap),
+                               ros=place(extra.ros), birds_eye_video=folder.work_path(
                                    extra.birds_eye_video) or folder.work / "birds_eye.mp4")
 
 
@@ -114,6 +113,6 @@ def finish_run(folder: RunFolder, summary: dict, sinks: Sinks, *, finished: bool
         raise InputError(f"{run_json}: cannot be written: {exc.strerror or exc}") from None
     finally:
         if finished:
-            folder.commit()
+            folder.commit(sinks.files)
         else:
-            folder.abandon(summary["frames_done"])
+            folder.abandon(summary["frames_done"], sinks.files)

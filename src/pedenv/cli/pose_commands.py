@@ -85,7 +85,8 @@ def detect(
         from pedenv.recordings.footage import load_calibration
 
         camera = load_calibration(calibration)
-    path = annotate_images(images=images, output=output, backend=backend, camera=camera, overwrite=overwrite)
+    path = annotate_images(images=images, output=output, backend=backend, camera=camera, overwrite=overwrite,
+                           calibration=calibration)
     typer.echo(str(path))
 
 

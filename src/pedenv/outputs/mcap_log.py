@@ -31,6 +31,7 @@ import numpy as np
 from foxglove import channels as fc
 from foxglove import messages as fm
 
+from pedenv.errors import InputError
 from pedenv.outputs.ego_path import EgoPath
 from pedenv.outputs.mcap_behaviour import ego_path_line, pedestrian_primitives
 from pedenv.records import Frame
@@ -66,6 +67,12 @@ def _pose(position: np.ndarray, yaw: float = 0.0) -> fm.Pose:
     )
 
 
+#: Uncompressed bytes of an MCAP chunk (the writer's default is 768 KiB): what the file holds back in
+#: memory and writes at once. Kept small so that the room a full disk is watched for
+#: (:data:`pedenv.apps.output_safety.BUFFERED_BYTES`) covers it.
+MCAP_CHUNK_BYTES = 256 * 1024
+
+
 class McapWriter:
     """A :class:`pedenv.outputs.sinks.FrameSink` writing the topics above to one MCAP file."""
 
@@ -73,7 +80,10 @@ class McapWriter:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._context = foxglove.Context()
-        self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=self._context)
+        from foxglove.mcap import MCAPWriteOptions
+
+        self._writer = foxglove.open_mcap(self.path, allow_overwrite=True, context=self._context,
+                                          writer_options=MCAPWriteOptions(chunk_size=MCAP_CHUNK_BYTES))
         self._open_channels()
 
     def _open_channels(self) -> None:
@@ -118,9 +128,14 @@ class McapWriter:
         self._environment.log(json.dumps(record).encode(), log_time=ns)
 
     def close(self) -> None:
+        """Finish the file; one InputError naming it when a write failed (a full disk: the writer logs
+        the failure and refuses every later write, its summary too)."""
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            writer, self._writer = self._writer, None
+            try:
+                writer.close()
+            except RuntimeError as exc:
+                raise InputError(f"{self.path}: cannot be finished: {exc}") from None
 
     def _log_transforms(self, state: EnvironmentState, frame: Frame, stamp: fm.Timestamp, ns: int) -> None:
         mount = frame.camera.cam_to_vehicle
