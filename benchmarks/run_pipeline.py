@@ -135,8 +135,8 @@ def run_once(rec: dict, backend, clock: NetworkClock, folder: Path, variant: dic
 
     shutil.rmtree(folder, ignore_errors=True)
     output = {"video_out": variant["video_out"]}
-    if variant.get("png_compression"):
-        output["png_compression"] = variant["png_compression"]
+    if variant.get("png_compression"):  # PNG overlays at that compression (the default overlays are JPEG)
+        output.update(overlays="png", png_compression=variant["png_compression"])
     pipe = {"realtime": True} if variant.get("realtime") else {}
     if variant.get("nice") is not None:
         pipe["nice"] = variant["nice"]
@@ -146,7 +146,7 @@ def run_once(rec: dict, backend, clock: NetworkClock, folder: Path, variant: dic
                             PoseOptions(detection=variant["detection"]), backend=backend,
                             pipeline=PipelineConfig(**pipe) if pipe else None)
     run_s, done = time.perf_counter() - start, summary["frames_done"]
-    pngs = sorted((folder / "overlays").glob("*.png"))
+    pngs = sorted((folder / "overlays").glob("*.png")) or sorted((folder / "overlays").glob("*.jpg"))
     return {"ms_per_frame": 1e3 * run_s / done, "frames_per_second": done / run_s,
             "cpu_ms_per_frame": 1e3 * (time.process_time() - cpu) / done,
             "network_ms_per_frame": 1e3 * clock.seconds / done, "passes_per_frame": clock.runs / done,
@@ -192,10 +192,10 @@ def _side(side: bool | None) -> str:
 
 def _run_line(run: dict) -> str:
     v = run["variant"]
-    name = "mp4" if v["video_out"] else f"png {v.get('png_compression') or 'default'}"
+    name = "mp4" if v["video_out"] else (f"png {v['png_compression']}" if v.get("png_compression") else "jpeg")
     name += f", nice {v['nice']}" if v.get("nice") is not None else ""
     name += _side(v.get("side_by_side"))
-    png = f", {run['png_mb_per_frame']:.2f} MB/png" if run["png_mb_per_frame"] else ""
+    png = f", {run['png_mb_per_frame']:.2f} MB/overlay" if run["png_mb_per_frame"] else ""
     dropped = f", {run['frames_dropped']} dropped" if v.get("realtime") else ""
     return (f"  run ({name}{', realtime' if v.get('realtime') else ''}): {run['ms_per_frame']:.1f} ms/frame "
             f"({run['frames_per_second']:.2f} fps), network {run['network_ms_per_frame']:.1f} in the run, "
