@@ -8,24 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scene_backend import SceneBackend
 
 from pedenv.calibration.geometry import parameters_of
 from pedenv.recordings.footage import load_calibration, load_intrinsics
 from pedenv.records import Frame
-
-
-class SceneBackend:
-    """A pose backend answering each frame (by index) with the detector model on the scene's frame."""
-
-    name = "detector-model"
-
-    def __init__(self, frames: tuple[Frame, ...]) -> None:
-        from pedenv.synthetic.detector import DetectorModel
-
-        self.frames, self.model = frames, DetectorModel(0)
-
-    def __call__(self, frame: Frame, tracks=None):
-        return self.model(self.frames[frame.index], tracks)
 
 
 @pytest.fixture(scope="module")

@@ -7,23 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scene_backend import SceneBackend
 
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource
-from pedenv.records import Frame
-
-
-class SceneBackend:
-    """A pose backend answering each frame (by index) with the detector model on the scene's frame."""
-
-    name = "detector-model"
-
-    def __init__(self, frames: tuple[Frame, ...]) -> None:
-        from pedenv.synthetic.detector import DetectorModel
-
-        self.frames, self.model = frames, DetectorModel(0)
-
-    def __call__(self, frame: Frame, tracks=None):
-        return self.model(self.frames[frame.index], tracks)
 
 
 def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariances(tmp_path: Path) -> None:
