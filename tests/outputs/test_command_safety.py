@@ -68,3 +68,18 @@ def test_detect_lists_its_files_and_overwrite_refuses_a_users_file(tmp_path):
     with pytest.raises(InputError, match=r"mine\.txt, which pedenv did not write"):
         annotate_images([image], out, _Nobody(), overwrite=True)
     assert (out / "mine.txt").read_text() == "mine"
+
+
+def test_a_marker_lists_names_that_are_not_utf8_and_overwrite_takes_them_back(tmp_path):
+    import os
+
+    from pedenv.apps.output_safety import list_files, prepare_folder
+
+    out = tmp_path / "o"
+    prepare_folder(out, [], None, overwrite=False, command="pedenv detect")
+    odd = out / os.fsdecode(b"x\xff_pose.png")
+    odd.write_bytes(b"written by pedenv")
+    list_files(out, "pedenv detect")
+    assert b"x\xff_pose.png\n" in (out / MARKER).read_bytes()  # the name as the disk has it
+    prepare_folder(out, [], None, overwrite=True, command="pedenv detect")  # pedenv's own file: taken back
+    assert not odd.exists()

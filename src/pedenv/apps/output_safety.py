@@ -274,7 +274,8 @@ def list_files(folder: Path, command: str, *more: str) -> None:
     ``--overwrite`` may delete (:func:`prepare_folder` refuses anything else)."""
     with contextlib.suppress(OSError):  # a full disk, a folder gone: the marker of prepare_output_dir stays
         names = sorted({p.name for p in folder.iterdir() if p.name != MARKER} | set(more))
-        (folder / MARKER).write_text(f"written by {command}{LISTED}" + "".join(f"{n}\n" for n in names))
+        (folder / MARKER).write_text(f"written by {command}{LISTED}" + "".join(f"{n}\n" for n in names),
+                                     encoding="utf-8", errors="surrogateescape")  # names that are not UTF-8 too
 
 
 def extra_paths(extra: ExtraOutputs | None) -> list[tuple[str, Path | None]]:
@@ -327,7 +328,7 @@ def open_run_folder(folder: str | Path, *, overwrite: bool, command: str) -> Run
 
 def _refuse_foreign_files(folder: Path) -> None:
     """InputError naming the first thing in ``folder`` its marker does not list (when it lists names)."""
-    head, _, names = (folder / MARKER).read_text(errors="replace").partition("\n")
+    head, _, names = (folder / MARKER).read_text(encoding="utf-8", errors="surrogateescape").partition("\n")
     if not head.startswith("written by ") or not f"{head}\n".endswith(LISTED):
         return  # an older marker, or one written when the command started: the whole folder is pedenv's
     listed = set(names.splitlines()) | {MARKER}
