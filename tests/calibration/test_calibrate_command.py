@@ -36,8 +36,7 @@ def test_calibrate_writes_a_reusable_estimated_calibration(plaza: tuple[Path, tu
     from pedenv.apps.calibrate import calibrate
 
     folder, frames = plaza
-    summary = calibrate(output=tmp_path / "cal", images=folder, backend=SceneBackend(frames),
-                        backend_name="detector-model")
+    summary = calibrate(output=tmp_path / "cal", images=folder, backend=SceneBackend(frames))
     truth = parameters_of(frames[0].camera)
     assert summary["focal_px"] == pytest.approx(truth[0], rel=0.05)
     assert summary["height_m"] == pytest.approx(truth[1], rel=0.05)

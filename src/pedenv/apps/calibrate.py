@@ -136,14 +136,15 @@ def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backe
 
 
 def calibrate(*, output: str | Path, images: str | Path | None = None, video: str | Path | None = None,
-              backend: PoseBackend, backend_name: str, calibration: str | Path | None = None,
+              backend: PoseBackend, calibration: str | Path | None = None,
               static: bool = True, overwrite: bool = False, frames: int = WARMUP_MAX_FRAMES) -> dict:
     """Estimate the camera of ``images`` (a folder) or ``video`` from its warm-up's people and write
     ``calibration.yaml``, ``calibration.json`` and ``calibration.png`` into ``output``.
 
     calibration: a YAML with the image size and the intrinsics or ``fov_deg`` (no ``cam_to_vehicle``
     needed): the focal length is then taken from it. static: ``mount: static`` (else ``vehicle``,
-    the vehicle origin under the camera). Returns the summary (``calibration.json``). Raises
+    the vehicle origin under the camera). ``backend.name`` says where its keypoints sit on a person
+    (:func:`body_of`). Returns the summary (``calibration.json``). Raises
     :class:`~pedenv.calibration.refusals.CalibrationRefused` (one line: what could not be
     estimated and what to give instead) before ``output`` is touched.
     """
@@ -161,9 +162,9 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
     if calibration is not None and (warmup.image.shape[1], warmup.image.shape[0]) != (width, height):
         raise InputError(f"{calibration}: the calibration is {width}x{height} pixels, the frames "
                          f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
-    estimate = estimate_from(warmup, backend_name, k)
+    estimate = estimate_from(warmup, backend.name, k)
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
-    return write_estimate(folder, estimate, warmup, backend_name, "static" if static else "vehicle")
+    return write_estimate(folder, estimate, warmup, backend.name, "static" if static else "vehicle")
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.calibrate import estimate_for_source
+from pedenv.apps.calibrate import SelfCalibration, estimate_for_source
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
@@ -87,12 +87,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
     frames = Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update the model
-    summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
-                               "frames_total": len(rec), "frames_done": 0,
-                               "environment": str(folder.final / "environment.jsonl")}
-    if estimated is not None:
-        summary["calibration"] = estimated.write(out)  # calibration.yaml (estimated: true), .json and .png
-    stats = PipelineStats()
+    summary, stats = _start_summary(rec, cfg, folder, estimated), PipelineStats()
     extra = in_work_folder(output.extra or ExtraOutputs(), folder)
     writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
@@ -110,6 +105,18 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         summary["frames_done"] = writer.lines  # the frames whose every output was written
         _finish_summary(summary, out, frames, stats, pipe, outputs, sinks)
         finish_run(folder, summary, sinks, finished=finished)
+    return summary
+
+
+def _start_summary(rec: Recording | BagRecording, cfg: Config, folder: RunFolder,
+                   estimated: SelfCalibration | None) -> dict[str, Any]:
+    """The start of ``run.json``; a camera estimated in the warm-up is written beside it
+    (``calibration.yaml`` with ``estimated: true``, ``.json`` and ``.png``) and named there."""
+    summary: dict[str, Any] = {"recording": rec.name, "method": cfg.method, "pose_backend": {},
+                               "frames_total": len(rec), "frames_done": 0,
+                               "environment": str(folder.final / "environment.jsonl")}
+    if estimated is not None:
+        summary["calibration"] = estimated.write(folder.work)
     return summary
 
 

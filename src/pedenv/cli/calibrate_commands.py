@@ -42,7 +42,7 @@ def calibrate(
     if odometry:
         _odometry(output, calibration, images, video, fps, backend, overwrite)
         return
-    summary = run_calibration(output=output, images=images, video=video, backend=backend, backend_name=pose_backend,
+    summary = run_calibration(output=output, images=images, video=video, backend=backend,
                               calibration=calibration, static=static, overwrite=overwrite, frames=frames)
     std = summary["std"]
     typer.echo(f"focal {summary['focal_px']:.0f} +- {std['focal_px']:.0f} px, height {summary['height_m']:.2f} +- "
