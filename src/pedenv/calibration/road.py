@@ -15,12 +15,16 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from pedenv.calibration.geometry import camera_rotation
 from pedenv.errors import InputError, check_array
 from pedenv.records import default_cam_to_vehicle
+
+if TYPE_CHECKING:
+    from pedenv.odometry.estimator import VisualOdometry
 
 #: 1-sigma of one step's travel elevation, degrees, used while too few steps give their own scatter:
 #: the monocular essential matrix's direction against GPS/IMU on KITTI raw 2011_09_26_drive_0002
@@ -123,7 +127,7 @@ class TravelWatcher:
 
     def __init__(self, intrinsics: np.ndarray) -> None:
         self.intrinsics = check_array("intrinsics", intrinsics, (3, 3))
-        self._odometry = None
+        self._odometry: VisualOdometry | None = None
         self._directions: list[np.ndarray] = []
         self._taken = 0  # the current odometry's steps already in ``_directions``
         self.refused = 0
