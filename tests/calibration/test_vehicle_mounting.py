@@ -3,6 +3,8 @@ combination by uncertainties, the refusal, and the cue on real KITTI frames agai
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -112,3 +114,16 @@ def test_a_blank_recording_gives_no_road() -> None:
         watcher.add(i, np.full((480, 640), 90, np.uint8))
     # frame 1 is refused against frame 0, frame 2 starts afresh, frame 3 is refused against it
     assert watcher.cue() is None and watcher.refused == 2
+
+
+def test_the_roll_is_held_level_by_the_mounting_prior() -> None:
+    from pedenv.calibration.vehicle import MOUNT_ROLL_STD_DEG, PEOPLE_GROUND_ROLL_STD_DEG, level_roll
+
+    people = widen_people(dataclasses.replace(_people(1.65, 1.0, (0.05, 0.1), 0.0), roll=np.radians(2.0)))
+    spread = np.degrees(people.std[3])
+    assert spread == pytest.approx(np.hypot(0.2, PEOPLE_GROUND_ROLL_STD_DEG), rel=0.01)
+    level = level_roll(people)
+    shrink = MOUNT_ROLL_STD_DEG ** 2 / (MOUNT_ROLL_STD_DEG ** 2 + spread ** 2)
+    assert np.degrees(level.roll) == pytest.approx(2.0 * shrink, abs=0.01)
+    assert np.degrees(level.std[3]) == pytest.approx(spread * np.sqrt(shrink), rel=0.01)
+    assert level.height == pytest.approx(1.65) and level.tilt == pytest.approx(people.tilt)  # not correlated here

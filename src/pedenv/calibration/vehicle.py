@@ -5,8 +5,11 @@ The people fix the height (in units of their heights), the pitch and the roll
 through the direction of travel (:mod:`pedenv.calibration.road`). The two are combined with their
 uncertainties: the people's estimate, a Gaussian over (height, tilt, roll), is conditioned on the
 road's one constraint (the travel direction level: :meth:`RoadCue.misfit` zero within its 1-sigma),
-an iterated linearised update. The people's height and tilt are correlated (a horizon placed too
-high makes every person nearer and the camera lower), so a better pitch moves the height too.
+an iterated linearised update. The people's own spread is widened first by how far the ground they
+stand on (sidewalks, curbs, camber) may lie from the car's road, and the roll is held near zero by
+the mounting's prior (a vehicle camera is mounted level across the car). The people's height and
+tilt are correlated (a horizon placed too high makes every person nearer and the camera lower),
+so a better pitch moves the height too.
 
 Without enough people the height is not seen at all: the road alone gives the pitch, never a
 mounting, and the estimate is refused in one line that says what the road gave.
@@ -15,6 +18,7 @@ mounting, and the estimate is refused in one line that says what the road gave.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -31,49 +35,72 @@ from pedenv.calibration.road import RoadCue
 #: labelled boxes' bottoms by 0.55 deg RMS on the KITTI drives 0013, 0004 and 0016 (skeletons rendered
 #: from the labels; -0.04, +0.83, +0.45 deg), against the fit's own 0.05-0.12 deg.
 PEOPLE_GROUND_TILT_STD_DEG = 0.55
-#: Gauss-Newton iterations of the update (the road's constraint is nearly linear in tilt and roll
+#: The same for the people's roll, degrees: people on a sidewalk to one side, a curb higher than the
+#: road, tip the plane they stand on sideways. On the same drives the people-only roll misses KITTI's
+#: calibrated roll of the camera (-0.24 and -0.11 deg against its GPS/IMU) by +0.40, +1.82, +0.02 deg
+#: (1.08 RMS), against the fit's own 0.09-0.38 deg.
+PEOPLE_GROUND_ROLL_STD_DEG = 1.1
+#: A vehicle camera is mounted level across the car: its roll's prior is 0 with this 1-sigma, degrees
+#: (the RMS of the calibrated roll of KITTI's two colour-camera calibrations, -0.24 and -0.11 deg, and
+#: of nuScenes 0061's five cameras, 0.12 to 0.62 deg, against their vehicle frames: 0.35 deg).
+MOUNT_ROLL_STD_DEG = 0.35
+#: Gauss-Newton iterations of an update (the road's constraint is nearly linear in tilt and roll
 #: over the people's spread: three are many).
 UPDATE_ITERATIONS = 3
-#: Step of the numerical derivative of the road's misfit by tilt and roll, radians.
+#: Step of the numerical derivative of a constraint by tilt and roll, radians.
 DERIVATIVE_STEP = 1e-6
 #: What a user gives instead when the mounting cannot be estimated.
 INSTEAD = "give cam_to_vehicle (the camera's height over the road and its pitch) in the --calibration YAML"
 
 
 def widen_people(people: CameraEstimate) -> CameraEstimate:
-    """``people``'s estimate with :data:`PEOPLE_GROUND_TILT_STD_DEG` added to its tilt's variance, the
-    height's and roll's following the tilt as the fit's covariance regresses them on it."""
+    """``people``'s estimate with :data:`PEOPLE_GROUND_TILT_STD_DEG` and :data:`PEOPLE_GROUND_ROLL_STD_DEG`
+    added to its tilt's and roll's variances, the other parameters following each as the fit's
+    covariance regresses them on it (the focal length, given, stays)."""
     cov = people.covariance.copy()
-    tilt_var = cov[2, 2]
-    along = cov[:, 2] / tilt_var if tilt_var > 0 else np.eye(4)[2]
-    along[0] = 0.0  # the focal length is given
-    cov += np.radians(PEOPLE_GROUND_TILT_STD_DEG) ** 2 * np.outer(along, along)
+    for index, extra in ((2, PEOPLE_GROUND_TILT_STD_DEG), (3, PEOPLE_GROUND_ROLL_STD_DEG)):
+        var = people.covariance[index, index]
+        along = people.covariance[:, index] / var if var > 0 else np.eye(4)[index]
+        along[0] = 0.0
+        cov += np.radians(extra) ** 2 * np.outer(along, along)
     return dataclasses.replace(people, covariance=cov)
 
 
-def combine(people: CameraEstimate, road: RoadCue) -> CameraEstimate:
-    """``people``'s estimate conditioned on ``road``: (height, tilt, roll) and their covariance
-    updated; the focal length (given) stays. ``summary()`` then holds the road's own pitch and
-    the disagreement of the two cues in sigmas (``road``)."""
-    x0 = np.array([people.height, people.tilt, people.roll])
-    p0 = people.covariance[1:, 1:]
+def condition(estimate: CameraEstimate, misfit: Callable[[float, float], float],
+              std: float) -> tuple[CameraEstimate, float]:
+    """``estimate`` conditioned on one constraint ``misfit(tilt, roll) = 0`` (radians) of 1-sigma ``std``
+    (radians): (height, tilt, roll) and their covariance updated (an iterated linearised Gaussian update),
+    and how far the estimate was from the constraint before, in sigmas of both."""
+    x0 = np.array([estimate.height, estimate.tilt, estimate.roll])
+    p0 = estimate.covariance[1:, 1:]
     x = x0.copy()
     gain, jac = np.zeros(3), np.zeros(3)
     for _ in range(UPDATE_ITERATIONS):
-        miss = road.misfit(x[1], x[2])
-        jac = np.array([0.0,
-                        (road.misfit(x[1] + DERIVATIVE_STEP, x[2]) - miss) / DERIVATIVE_STEP,
-                        (road.misfit(x[1], x[2] + DERIVATIVE_STEP) - miss) / DERIVATIVE_STEP])
-        innovation = float(jac @ p0 @ jac) + road.std ** 2
-        gain = p0 @ jac / innovation
+        miss = misfit(x[1], x[2])
+        jac = np.array([0.0, (misfit(x[1] + DERIVATIVE_STEP, x[2]) - miss) / DERIVATIVE_STEP,
+                        (misfit(x[1], x[2] + DERIVATIVE_STEP) - miss) / DERIVATIVE_STEP])
+        gain = p0 @ jac / (float(jac @ p0 @ jac) + std ** 2)
         x = x0 + gain * (0.0 - miss - jac @ (x0 - x))
-    covariance = people.covariance.copy()
-    covariance[1:, 1:] = (np.eye(3) - np.outer(gain, jac)) @ p0
-    covariance[1:, 1:] = 0.5 * (covariance[1:, 1:] + covariance[1:, 1:].T)
-    disagreement = road.misfit(people.tilt, people.roll) / np.sqrt(float(jac @ p0 @ jac) + road.std ** 2)
-    return dataclasses.replace(people, height=float(x[0]), tilt=float(x[1]), roll=float(x[2]), covariance=covariance,
-                               road={**road.summary(), "people_tilt_deg": float(np.degrees(people.tilt)),
-                                     "disagreement_sigma": float(abs(disagreement))})
+    covariance = estimate.covariance.copy()
+    updated = (np.eye(3) - np.outer(gain, jac)) @ p0
+    covariance[1:, 1:] = 0.5 * (updated + updated.T)
+    apart = abs(misfit(estimate.tilt, estimate.roll)) / np.sqrt(float(jac @ p0 @ jac) + std ** 2)
+    return dataclasses.replace(estimate, height=float(x[0]), tilt=float(x[1]), roll=float(x[2]),
+                               covariance=covariance), float(apart)
+
+
+def level_roll(people: CameraEstimate) -> CameraEstimate:
+    """``people``'s estimate conditioned on the mounting's roll prior (0, :data:`MOUNT_ROLL_STD_DEG`)."""
+    return condition(people, lambda _tilt, roll: roll, float(np.radians(MOUNT_ROLL_STD_DEG)))[0]
+
+
+def combine(people: CameraEstimate, road: RoadCue) -> CameraEstimate:
+    """``people``'s estimate conditioned on ``road`` (its travel direction level, :meth:`RoadCue.misfit`
+    zero within ``road.std``). ``summary()`` then holds the road's own pitch, the people's tilt and the
+    disagreement of the two in sigmas (``road``)."""
+    both, apart = condition(people, road.misfit, road.std)
+    return dataclasses.replace(both, road={**road.summary(), "people_tilt_deg": float(np.degrees(people.tilt)),
+                                           "disagreement_sigma": apart})
 
 
 def estimate_mounting(people: Observations, size: tuple[int, int], *, focal: float,
@@ -98,5 +125,5 @@ def estimate_mounting(people: Observations, size: tuple[int, int], *, focal: flo
             f"the camera's height cannot be estimated: {reason}; the road alone gave only the pitch "
             f"({np.degrees(road.pitch):.2f} +- {np.degrees(road.std):.2f} deg from {road.steps} steps of travel), "
             f"the height needs people; {INSTEAD}") from exc
-    found = widen_people(found)
+    found = level_roll(widen_people(found))
     return found if road is None else combine(found, road)
