@@ -7,7 +7,8 @@ uncertainties: the people's estimate, a Gaussian over (height, tilt, roll), is c
 road's one constraint (the travel direction level: :meth:`RoadCue.misfit` zero within its 1-sigma),
 an iterated linearised update. The people's own spread is widened first by how far the ground they
 stand on (sidewalks, curbs, camber) may lie from the car's road, and the roll is held near zero by
-the mounting's prior (a vehicle camera is mounted level across the car). The people's height and
+the mounting's prior (a vehicle camera is mounted level across the car; the people's roll is mostly
+their ground's sideways slope). The people's height and
 tilt are correlated (a horizon placed too high makes every person nearer and the camera lower),
 so a better pitch moves the height too.
 
@@ -54,15 +55,15 @@ INSTEAD = "give cam_to_vehicle (the camera's height over the road and its pitch)
 
 
 def widen_people(people: CameraEstimate) -> CameraEstimate:
-    """``people``'s estimate with :data:`PEOPLE_GROUND_TILT_STD_DEG` and :data:`PEOPLE_GROUND_ROLL_STD_DEG`
-    added to its tilt's and roll's variances, the other parameters following each as the fit's
-    covariance regresses them on it (the focal length, given, stays)."""
+    """``people``'s estimate with :data:`PEOPLE_GROUND_TILT_STD_DEG` added to its tilt's variance (the
+    height following the tilt as the fit's covariance regresses it on the tilt; the focal length, given,
+    stays) and :data:`PEOPLE_GROUND_ROLL_STD_DEG` to its roll's."""
     cov = people.covariance.copy()
-    for index, extra in ((2, PEOPLE_GROUND_TILT_STD_DEG), (3, PEOPLE_GROUND_ROLL_STD_DEG)):
-        var = people.covariance[index, index]
-        along = people.covariance[:, index] / var if var > 0 else np.eye(4)[index]
-        along[0] = 0.0
-        cov += np.radians(extra) ** 2 * np.outer(along, along)
+    var = people.covariance[2, 2]
+    along = people.covariance[:, 2] / var if var > 0 else np.eye(4)[2]
+    along[0] = along[3] = 0.0
+    cov += np.radians(PEOPLE_GROUND_TILT_STD_DEG) ** 2 * np.outer(along, along)
+    cov[3, 3] += np.radians(PEOPLE_GROUND_ROLL_STD_DEG) ** 2
     return dataclasses.replace(people, covariance=cov)
 
 
@@ -90,8 +91,17 @@ def condition(estimate: CameraEstimate, misfit: Callable[[float, float], float],
 
 
 def level_roll(people: CameraEstimate) -> CameraEstimate:
-    """``people``'s estimate conditioned on the mounting's roll prior (0, :data:`MOUNT_ROLL_STD_DEG`)."""
-    return condition(people, lambda _tilt, roll: roll, float(np.radians(MOUNT_ROLL_STD_DEG)))[0]
+    """``people``'s estimate with its roll combined with the mounting's prior (0,
+    :data:`MOUNT_ROLL_STD_DEG`). The people's roll is mostly the sideways slope of the ground they stand
+    on (a sidewalk higher than the road), not the camera's: the roll is combined alone, and its link
+    to the height and tilt dropped, so the people's horizon (height, tilt) stays as they fitted it."""
+    cov = people.covariance.copy()
+    prior = np.radians(MOUNT_ROLL_STD_DEG) ** 2
+    var = cov[3, 3] * prior / (cov[3, 3] + prior)
+    roll = people.roll * prior / (cov[3, 3] + prior)
+    cov[3, :] = cov[:, 3] = 0.0
+    cov[3, 3] = var
+    return dataclasses.replace(people, roll=float(roll), covariance=cov)
 
 
 def combine(people: CameraEstimate, road: RoadCue) -> CameraEstimate:
