@@ -127,3 +127,27 @@ def test_the_roll_is_held_level_by_the_mounting_prior() -> None:
     assert np.degrees(level.roll) == pytest.approx(2.0 * shrink, abs=0.01)
     assert np.degrees(level.std[3]) == pytest.approx(spread * np.sqrt(shrink), rel=0.01)
     assert level.height == pytest.approx(1.65) and level.tilt == pytest.approx(people.tilt)  # not correlated here
+
+
+class _NoPeople:
+    """A pose backend that finds nobody (the raw drive holds no pedestrians)."""
+
+    name = "detector-model"
+
+    def detect(self, image: np.ndarray):
+        from pedenv.records import Detections
+
+        return Detections.empty()
+
+
+def test_calibrate_a_vehicle_camera_without_people_names_the_road_pitch(tmp_path) -> None:
+    from pedenv.apps.calibrate import calibrate
+
+    intrinsics = tmp_path / "k.yaml"
+    intrinsics.write_text("width: 1242\nheight: 375\nintrinsics: [[721.5377, 0, 609.5593], [0, 721.5377, 172.854], "
+                          "[0, 0, 1]]\n")
+    with pytest.raises(CalibrationRefused, match=r"the road alone gave only the pitch \(-0\.\d\d \+- 0\.\d\d deg from "
+                                                 r"3 steps of travel\).*give cam_to_vehicle"):
+        calibrate(output=tmp_path / "out", images=RAW / "2011_09_26_drive_0002_sync/image_02/data", backend=_NoPeople(),
+                  calibration=intrinsics, static=False, frames=4)
+    assert not (tmp_path / "out").exists()
