@@ -1,7 +1,7 @@
 """A vehicle camera's mounting (height, pitch, roll) from its intrinsics, the people and the road.
 
     PYTHONPATH=src python benchmarks/vehicle_mounting.py [--samples ../shared/samples/real]
-        [--only road|real|drives] [--drives 0015,0004] [--no-positions]
+        [--only road|real|synthetic|drives] [--drives 0015,0004] [--no-positions]
 
 - road: the road cue alone on real images (``pedenv.calibration.road``: the travel direction of the
   monocular visual odometry): KITTI raw 2011_09_26_drive_0002 (10 frames, 9 m/s) against the travel
@@ -11,6 +11,9 @@
 - real: the real network (``onnx``, ``far``) on the real samples with their true mounting: KITTI
   ``tracking_mini`` 0016 (parked, 3 images) and 0001 (driving, 3 images), ``object_samples`` (3
   single images), nuScenes 0061 (one image per camera): people, road and both combined.
+- synthetic: the built-in vehicle scenes (exact truth: a camera 1.5 m up, level), people from the
+  detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step; the
+  positions of the fused method with the true and the estimated mounting.
 - drives: the whole KITTI drives of ``tracking_sequences`` (labels only): skeletons' ankle and eye
   points rendered from the pedestrians' 3D boxes with 2 px noise (modelled perception), the road cue
   from ORB-SLAM3's stereo poses (the camera's real motion) with the monocular essential matrix's
@@ -302,19 +305,26 @@ def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None
 
 def positions(samples: Path, name: str, est) -> None:
     """The fused method on drive ``name`` (its ego poses) with KITTI's mounting and with ``est``'s."""
+    from pedenv.datasets import open_dataset
+
+    data = open_dataset("kitti-tracking", samples / "kitti" / "tracking_sequences")
+    compare_positions(lambda: data.frames(name), data.default_pose_backend, est)
+
+
+def compare_positions(frames, spec: str, est) -> None:
+    """The fused method over ``frames()`` (skeletons from backend ``spec``) with their own camera and
+    with ``est``'s mounting: mean relative error (to the ego) and the share within 1 and 2 sigma."""
     from pedenv.calibration.spread import widen_state
     from pedenv.config import Config
-    from pedenv.datasets import open_dataset
     from pedenv.detection import create_detector
     from pedenv.evaluation.matching import match_to_ground_truth
     from pedenv.model import PedestrianEnvironmentModel
 
-    data = open_dataset("kitti-tracking", samples / "kitti" / "tracking_sequences")
     for label in ("true mounting", "estimated", "estimated, spread"):
         cfg = Config() if label == "true mounting" else Config().replace(fused=est.fused_spreads(Config().fused))
-        model, backend = PedestrianEnvironmentModel(cfg), create_detector(data.default_pose_backend)
+        model, backend = PedestrianEnvironmentModel(cfg), create_detector(spec)
         rel, d2 = [], []
-        for frame in data.frames(name):
+        for frame in frames():
             if label != "true mounting":
                 frame = dataclasses.replace(frame, camera=est.camera("vehicle"))
             frame = dataclasses.replace(frame, detections=backend(frame))
@@ -333,10 +343,51 @@ def positions(samples: Path, name: str, est) -> None:
               f"{100 * np.mean(d2a <= 1):.1f} / {100 * np.mean(d2a <= 4):.1f} %  ({len(d2)} pairs)")
 
 
+def synthetic() -> None:
+    """The built-in vehicle scenes (exact truth: a camera 1.5 m up, level): people from the detector
+    model, linked by box overlap; the road from the scene's ego poses with :data:`STEP_NOISE_DEG`."""
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.calibration.road import road_cue
+    from pedenv.detection import create_detector
+    from pedenv.synthetic import generate_scenes
+
+    spec = "detector-model:yolo11n-pose-far"
+    print(f"synthetic vehicle scenes (seed 0; exact truth), people from the detector model ({spec}), road from the "
+          f"ego poses + {STEP_NOISE_DEG} deg noise per step")
+    for scene in generate_scenes(0):
+        camera = scene.frames[0].camera
+        if camera.static:
+            continue
+        _, h, tilt, _ = parameters_of(camera)
+        backend, linker, parts, moves = create_detector(spec), BoxLinker(), [], []
+        to_camera = camera.cam_to_vehicle[:3, :3].T
+        for a, b in zip(scene.frames[:-1], scene.frames[1:]):
+            step = a.ego.rotation.T @ (b.ego.translation - a.ego.translation)  # vehicle axes of frame a
+            moves.append(to_camera @ step / np.linalg.norm(step) if np.linalg.norm(step) >= MIN_STEP_M
+                         else np.full(3, np.nan))
+        for frame in scene.frames:
+            det = backend(frame)
+            parts.append(observations_of(det, frame.index, linker(det.boxes)))
+        obs = Observations.concat(parts)
+        moving = np.array(moves)
+        road = road_cue(noisy(moving, np.random.default_rng(0))) if np.isfinite(moving).all(axis=1).any() else None
+        print(f"  {scene.name}: {obs.people} people, {0 if road is None else road.steps} steps of travel")
+        best = None
+        for label, cue in (("people", None), ("people and road", road)):
+            if label == "people and road" and road is None:
+                continue
+            best = mounting(obs, (camera.width, camera.height), camera.intrinsics, None, cue)
+            show(label, best, (h, tilt))
+        if best is not None and not isinstance(best, Exception):
+            compare_positions(lambda frames=scene.frames: frames, spec, best)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--only", choices=("road", "real", "drives"))
+    parser.add_argument("--only", choices=("road", "real", "drives", "synthetic"))
     parser.add_argument("--drives", help="comma-separated drives (default: all of tracking_sequences)")
     parser.add_argument("--no-positions", action="store_true", help="drives: the mounting only")
     args = parser.parse_args(argv)
@@ -344,6 +395,8 @@ def main(argv: list[str] | None = None) -> int:
         road_real(args.samples)
     if args.only in (None, "real"):
         real(args.samples)
+    if args.only in (None, "synthetic"):
+        synthetic()
     if args.only in (None, "drives"):
         drives(args.samples, args.drives.split(",") if args.drives else None, not args.no_positions)
     return 0
