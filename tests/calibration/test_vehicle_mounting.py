@@ -134,7 +134,7 @@ class _NoPeople:
 
     name = "detector-model"
 
-    def detect(self, image: np.ndarray):
+    def detect(self, _image: np.ndarray):
         from pedenv.records import Detections
 
         return Detections.empty()
