@@ -160,6 +160,7 @@ def road_real(samples: Path) -> None:
     print(f"    pooled pitch {np.degrees(cue.pitch):+.2f} +- {np.degrees(cue.std):.2f} deg; GPS/IMU travel "
           f"{np.mean(t):+.2f} (error {np.degrees(cue.pitch) - np.mean(t):+.2f}); the IMU's forward axis "
           f"{imu_axis:+.2f} (error {np.degrees(cue.pitch) - imu_axis:+.2f})")
+    road_height(raw, k, images, oxts)
     for folder, name, frames in ((samples / "kitti" / "tracking_sequences" / "training", "0001", [0, 1]),
                                  (samples / "kitti" / "tracking_mini" / "training", "0001", [10, 15, 20])):
         seq_k = kitti_files.read_calib(folder / "calib" / f"{name}.txt").K
@@ -178,6 +179,26 @@ def road_real(samples: Path) -> None:
               f"{np.array2string(np.degrees(elevations(found)), precision=2)} vs ORB-SLAM3 "
               f"{np.array2string(np.degrees(elevations(ref)), precision=2)} deg; pooled {pitch} deg; "
               f"labelled ground plane {np.degrees(tilt):+.2f}")
+
+
+def road_height(raw: Path, k: np.ndarray, images: list[np.ndarray], oxts: np.ndarray) -> None:
+    """Not a cue pedenv uses: the camera's height the road would give where the step lengths are known
+    (ego poses): the odometry's road plane with a nominal 1.5 m camera, scaled by GPS/IMU's distance."""
+    from pedenv.calibration.road import NOMINAL_MOUNTING
+    from pedenv.odometry.estimator import VisualOdometry
+    from pedenv.odometry.reference import integrated_distance
+
+    sync = raw / "2011_09_26_drive_0002_sync"
+    stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02/timestamps.txt").read_text().split("\n")
+                       if t.strip()][: len(images)])
+    times = (stamps - stamps[0]) / np.timedelta64(1, "s")
+    odometry = VisualOdometry(k, NOMINAL_MOUNTING)
+    for i, image in enumerate(images):
+        odometry.update(image, float(times[i]), where=f"frame {i}")
+    travelled = float(np.nansum(odometry.lengths()))
+    gps = integrated_distance(oxts, times)
+    print(f"    the road plane's scale with GPS/IMU's distance ({gps:.2f} m) would put the camera "
+          f"{NOMINAL_MOUNTING[2, 3] * gps / travelled:.2f} m above the road (KITTI: 1.65 m); not used")
 
 
 def onnx_far():
