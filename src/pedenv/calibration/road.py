@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 
 #: 1-sigma of one step's travel elevation, degrees, used while too few steps give their own scatter:
 #: the monocular essential matrix's direction against GPS/IMU on KITTI raw 2011_09_26_drive_0002
-#: (9 steps at 9 m/s, 0.40 deg RMS), which holds the car's own pitching on the road's bumps.
+#: (9 steps at 9 m/s, 0.36 deg RMS, rounded up), which holds the car's own pitching on the road's bumps.
 STEP_ELEVATION_STD_DEG = 0.4
 #: Steps from which their own scatter replaces :data:`STEP_ELEVATION_STD_DEG`.
 MIN_STEPS_FOR_SCATTER = 10
