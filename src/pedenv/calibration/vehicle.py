@@ -30,7 +30,7 @@ from pedenv.calibration.refusals import CalibrationRefused
 from pedenv.calibration.road import RoadCue
 
 #: 1-sigma of the people's tilt against the road the car drives on, degrees, added to the people's own
-#: (along the fit's correlations: the height and roll follow a tilt error as the fit couples them). The
+#: (along the fit's correlation: the height follows a tilt error as the fit couples them). The
 #: people of a vehicle camera stand on sidewalks and crossings beside and ahead of the car, whose
 #: curbs, camber and slopes are not the car's road: the people-only tilt misses the plane of the
 #: labelled boxes' bottoms by 0.55 deg RMS on the KITTI drives 0013, 0004 and 0016 (skeletons rendered
