@@ -9,7 +9,8 @@
   against the IMU's forward axis; ``tracking_sequences`` 0001 frames 0-1 and ``tracking_mini`` 0001
   frames 10, 15, 20 against ORB-SLAM3's stereo poses and the plane of the labelled boxes' bottoms.
 - real: the real network (``onnx``, ``far``) on the real samples with their true mounting: KITTI
-  ``tracking_mini`` 0016 (parked, 3 images) and 0001 (driving, 3 images), ``object_samples`` (3
+  ``tracking_mini`` 0016 (parked, 3 images; with the positions of the fused method, true and estimated
+  mounting) and 0001 (driving, 3 images), ``object_samples`` (3
   single images), nuScenes 0061 (one image per camera): people, road and both combined.
 - synthetic: the built-in vehicle scenes (exact truth: a camera 1.5 m up, level), people from the
   detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step; the
@@ -240,7 +241,13 @@ def real(samples: Path) -> None:
         size = (rgb[0].shape[1], rgb[0].shape[0])
         print(f"  tracking_mini {name} frames {list(seq.frames)}: {len(obs)} person-images; "
               f"road: {'none (parked)' if road is None else f'{road.steps} steps'}")
-        show("people", mounting(obs, size, seq.calib.K, NETWORK_BODY, None), (h, tilt))
+        people = mounting(obs, size, seq.calib.K, NETWORK_BODY, None)
+        show("people", people, (h, tilt))
+        if not isinstance(people, Exception):
+            from pedenv.datasets import open_dataset
+
+            data = open_dataset("kitti", samples / "kitti" / "tracking_mini")
+            compare_positions(lambda scene=name, kitti=data: kitti.frames(scene), onnx_far, people)
         if road is not None:
             show("people and road", mounting(obs, size, seq.calib.K, NETWORK_BODY, road), (h, tilt))
     objects = samples / "kitti" / "object_samples" / "training"
@@ -332,9 +339,10 @@ def positions(samples: Path, name: str, est) -> None:
     compare_positions(lambda: data.frames(name), data.default_pose_backend, est)
 
 
-def compare_positions(frames, spec: str, est) -> None:
-    """The fused method over ``frames()`` (skeletons from backend ``spec``) with their own camera and
-    with ``est``'s mounting: mean relative error (to the ego) and the share within 1 and 2 sigma."""
+def compare_positions(frames, spec, est) -> None:
+    """The fused method over ``frames()`` (skeletons from backend ``spec``: a name, or a function that
+    makes the backend) with their own camera and with ``est``'s mounting: mean relative error (to the
+    ego) and the share within 1 and 2 sigma."""
     from pedenv.calibration.spread import widen_state
     from pedenv.config import Config
     from pedenv.detection import create_detector
@@ -343,7 +351,7 @@ def compare_positions(frames, spec: str, est) -> None:
 
     for label in ("true mounting", "estimated", "estimated, spread"):
         cfg = Config() if label == "true mounting" else Config().replace(fused=est.fused_spreads(Config().fused))
-        model, backend = PedestrianEnvironmentModel(cfg), create_detector(spec)
+        model, backend = PedestrianEnvironmentModel(cfg), create_detector(spec) if isinstance(spec, str) else spec()
         rel, d2 = [], []
         for frame in frames():
             if label != "true mounting":
