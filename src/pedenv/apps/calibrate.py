@@ -24,6 +24,8 @@ from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.fit import NETWORK_BODY, BodyModel, estimate_camera, fitted_heads
 from pedenv.calibration.linking import BoxLinker
 from pedenv.calibration.observations import Observations, observations_of
+from pedenv.calibration.road import TravelWatcher
+from pedenv.calibration.vehicle import estimate_mounting
 from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.pose.base import PoseBackend
@@ -108,13 +110,31 @@ def body_of(backend_name: str) -> BodyModel:
     return NETWORK_BODY if backend_name in NETWORK_BACKENDS else BodyModel()
 
 
-def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None) -> CameraEstimate:
+def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None,
+                  road: TravelWatcher | None = None) -> CameraEstimate:
     """The camera fitted to the warm-up's people (``intrinsics`` (3, 3) pixels fix focal length
-    and principal point when given)."""
+    and principal point when given); ``road``: a vehicle camera's travel directions seen during the
+    warm-up, combined with the people (:func:`pedenv.calibration.vehicle.estimate_mounting`)."""
     size = (warmup.image.shape[1], warmup.image.shape[0])
     focal = None if intrinsics is None else float(intrinsics[0, 0])
     centre = None if intrinsics is None else (float(intrinsics[0, 2]), float(intrinsics[1, 2]))
+    if road is not None and focal is not None:
+        return estimate_mounting(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
+                                 road=road.cue())
     return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name))
+
+
+def road_watcher(intrinsics: np.ndarray | None, mount: str) -> TravelWatcher | None:
+    """A vehicle camera with its intrinsics: a watcher of its direction of travel during the warm-up
+    (:class:`~pedenv.calibration.road.TravelWatcher`); else None (a static camera has no road cue)."""
+    return TravelWatcher(intrinsics) if mount == "vehicle" and intrinsics is not None else None
+
+
+def observe_warmup(images: str | Path | None, video: str | Path | None, backend: PoseBackend,
+                   road: TravelWatcher | None, limit: int = WARMUP_MAX_FRAMES) -> WarmUp:
+    """:func:`observe` over the warm-up's frames, ``road`` (or None) watching them on the way."""
+    frames = warmup_frames(images, video, limit)
+    return observe(road.watch(frames) if road is not None else frames, backend)
 
 
 def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backend_name: str,
@@ -158,11 +178,12 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
     k = None
     if calibration is not None:
         width, height, k = load_intrinsics(calibration)
-    warmup = observe(warmup_frames(images, video, frames), backend)
+    road = road_watcher(k, "static" if static else "vehicle")
+    warmup = observe_warmup(images, video, backend, road, frames)
     if calibration is not None and (warmup.image.shape[1], warmup.image.shape[0]) != (width, height):
         raise InputError(f"{calibration}: the calibration is {width}x{height} pixels, the frames "
                          f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
-    estimate = estimate_from(warmup, backend.name, k)
+    estimate = estimate_from(warmup, backend.name, k, road)
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
     return write_estimate(folder, estimate, warmup, backend.name, "static" if static else "vehicle")
 
@@ -231,8 +252,9 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
         from pedenv.detection import backend_options, create_detector
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
-    warmup = observe(warmup_frames(images, video), backend)
-    estimate = estimate_from(warmup, backend_name, k)
+    road = road_watcher(k, mount)
+    warmup = observe_warmup(images, video, backend, road)
+    estimate = estimate_from(warmup, backend_name, k, road)
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
                if key not in ("estimated", "uncertainty")}
     path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"

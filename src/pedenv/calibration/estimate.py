@@ -22,7 +22,9 @@ class CameraEstimate:
     covariance: (4, 4) of (focal px, height m, tilt rad, roll rad); a focal length that was
     given (``focal_given``) has zero variance. size: (width, height) pixels. centre: the
     principal point (u, v) pixels. people, observations: distinct people and person-images
-    the fit used. rms_px: root mean square of the head points' misfit, pixels.
+    the fit used. rms_px: root mean square of the head points' misfit, pixels. road: where a
+    vehicle camera's road cue was combined (:func:`pedenv.calibration.vehicle.combine`), its
+    summary (the road's own pitch, the people's tilt, their disagreement in sigmas), else None.
     """
 
     focal: float
@@ -36,6 +38,7 @@ class CameraEstimate:
     observations: int
     rms_px: float
     focal_given: bool = False
+    road: dict | None = None
 
     @property
     def std(self) -> np.ndarray:
@@ -73,4 +76,5 @@ class CameraEstimate:
         return {"focal_px": self.focal, "fov_deg": float(np.degrees(2 * np.arctan(self.size[0] / (2 * self.focal)))),
                 "height_m": self.height, "tilt_deg": float(np.degrees(self.tilt)),
                 "roll_deg": float(np.degrees(self.roll)), "std": self.uncertainty(), "people": self.people,
-                "observations": self.observations, "rms_px": self.rms_px, "focal_given": self.focal_given}
+                "observations": self.observations, "rms_px": self.rms_px, "focal_given": self.focal_given,
+                **({"road": self.road} if self.road is not None else {})}

@@ -1,0 +1,435 @@
+"""A vehicle camera's mounting (height, pitch, roll) from its intrinsics, the people and the road.
+
+    PYTHONPATH=src python benchmarks/vehicle_mounting.py [--samples ../shared/samples/real]
+        [--only road|real|synthetic|drives] [--drives 0015,0004] [--no-positions]
+
+- road: the road cue alone on real images (``pedenv.calibration.road``: the travel direction of the
+  monocular visual odometry): KITTI raw 2011_09_26_drive_0002 (10 frames, 9 m/s) against the travel
+  direction GPS/IMU gives (the OXTS velocity, roll and pitch, the calibrated camera -> IMU chain) and
+  against the IMU's forward axis; ``tracking_sequences`` 0001 frames 0-1 and ``tracking_mini`` 0001
+  frames 10, 15, 20 against ORB-SLAM3's stereo poses and the plane of the labelled boxes' bottoms.
+- real: the real network (``onnx``, ``far``) on the real samples with their true mounting: KITTI
+  ``tracking_mini`` 0016 (parked, 3 images; with the positions of the fused method, true and estimated
+  mounting) and 0001 (driving, 3 images), ``object_samples`` (3
+  single images), nuScenes 0061 (one image per camera): people, road and both combined.
+- synthetic: the built-in vehicle scenes (exact truth: a camera 1.5 m up, level), people from the
+  detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step; the
+  positions of the fused method with the true and the estimated mounting.
+- drives: the whole KITTI drives of ``tracking_sequences`` (labels only): skeletons' ankle and eye
+  points rendered from the pedestrians' 3D boxes with 2 px noise (modelled perception), the road cue
+  from ORB-SLAM3's stereo poses (the camera's real motion) with the monocular essential matrix's
+  per-step noise added (:data:`STEP_NOISE_DEG`, measured by ``--only road``): people only, road
+  only, both, against the plane of the labelled boxes' bottoms; then the fused method's positions
+  (detector model ``yolo11n-pose-far-kitti``, the dataset's ego poses) with the true mounting
+  (KITTI's camera 1.65 m up, level) and with the estimate, side by side.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
+#: Per-step noise added to ORB-SLAM3's travel direction on the drives (elevation and yaw, degrees,
+#: 1-sigma): the monocular essential matrix's RMS against GPS/IMU on the raw drive (``--only road``: 0.36, rounded up).
+STEP_NOISE_DEG = 0.4
+#: A drive's frame-to-frame motion below this (metres) is no step (a parked car: the odometry's
+#: parallax gate keeps no keyframe).
+MIN_STEP_M = 0.2
+SOLID = ("Pedestrian", "Car", "Van", "Cyclist", "Truck")
+
+
+def label_plane(labels) -> tuple[float, float, float]:
+    """(height m, tilt rad, roll rad) of the camera over the plane fitted to every labelled object's 3D
+    box bottom (rectified camera frame: x right, y down, z forward)."""
+    loc = labels.locations[np.isin(labels.types, SOLID)]
+    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
+    h, slope_z, slope_x = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
+    return float(h), float(np.arctan(-slope_z)), float(np.arctan(slope_x))
+
+
+def deg(x: float) -> str:
+    return f"{np.degrees(x):+.2f}"
+
+
+def show(label: str, est, truth: tuple[float, float] | None) -> None:
+    """One line: the estimate (or its refusal) against the truth (height m, tilt rad)."""
+    if isinstance(est, Exception):
+        print(f"  {label:24s} refused: {est}")
+        return
+    s = est.uncertainty()
+    text = (f"H {est.height:5.2f} +- {s['height_m']:.2f} m  tilt {np.degrees(est.tilt):5.2f} +- {s['tilt_deg']:.2f}  "
+            f"roll {np.degrees(est.roll):5.2f} +- {s['roll_deg']:.2f} deg ({est.people} people)")
+    if truth is not None:
+        h, t = truth
+        text += (f"  vs H {h:.2f} tilt {np.degrees(t):.2f}: H {100 * (est.height / h - 1):+.1f} % "
+                 f"({(est.height - h) / max(s['height_m'], 1e-9):+.1f} sigma), tilt {deg(est.tilt - t)} deg "
+                 f"({np.degrees(est.tilt - t) / max(s['tilt_deg'], 1e-9):+.1f} sigma)")
+    if est.road is not None:
+        text += f"  [road {est.road['pitch_deg']:.2f} deg, cues {est.road['disagreement_sigma']:.1f} sigma apart]"
+    print(f"  {label:24s} {text}")
+
+
+def mounting(obs, size, k, body, road):
+    from pedenv.calibration.vehicle import estimate_mounting
+    from pedenv.errors import InputError
+
+    try:
+        return estimate_mounting(obs, size, focal=float(k[0, 0]), centre=(float(k[0, 2]), float(k[1, 2])),
+                                 body=body, road=road)
+    except InputError as exc:
+        return exc
+
+
+def _kv(path: Path) -> dict[str, np.ndarray]:
+    out = {}
+    for line in path.read_text().splitlines():
+        key, _, value = line.partition(":")
+        try:
+            out[key] = np.array([float(v) for v in value.split()])
+        except ValueError:
+            continue
+    return out
+
+
+def _rx(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _ry(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+
+
+def _grey(path: Path) -> np.ndarray:
+    import cv2
+
+    from pedenv.images import read_image_rgb
+
+    return cv2.cvtColor(read_image_rgb(path), cv2.COLOR_RGB2GRAY)
+
+
+def _steps(images: list[np.ndarray], k: np.ndarray) -> list[np.ndarray]:
+    """Each consecutive pair's travel direction (camera axes), the odometry's ``estimate_step``."""
+    from pedenv.calibration.road import NOMINAL_MOUNTING, travel_direction
+    from pedenv.odometry.motion import estimate_step
+
+    out = []
+    for a, b in zip(images[:-1], images[1:]):
+        step = estimate_step(a, b, k, NOMINAL_MOUNTING)
+        out.append(travel_direction(step.rotation, step.direction) if step.moved else np.full(3, np.nan))
+    return out
+
+
+def orbslam_directions(poses: np.ndarray, frames: list[int] | None = None) -> np.ndarray:
+    """(S, 3) travel directions, camera axes, between consecutive ``frames`` of cam0 -> world ``poses``."""
+    idx = list(range(len(poses))) if frames is None else frames
+    moves = []
+    for a, b in zip(idx[:-1], idx[1:]):
+        d = poses[a, :3, :3].T @ (poses[b, :3, 3] - poses[a, :3, 3])
+        moves.append(d / np.linalg.norm(d) if np.linalg.norm(d) >= MIN_STEP_M * (b - a) else np.full(3, np.nan))
+    return np.array(moves).reshape(-1, 3)
+
+
+def road_real(samples: Path) -> None:
+    from pedenv.calibration.road import elevations, road_cue
+    from pedenv.datasets import kitti_files
+    from pedenv.odometry.reference import read_oxts
+
+    raw = samples / "kitti" / "raw_2011_09_26_drive_0002"
+    cc, vc, iv = (_kv(raw / f"calib_{n}.txt") for n in ("cam_to_cam", "velo_to_cam", "imu_to_velo"))
+    k = cc["P_rect_02"].reshape(3, 4)[:, :3]
+    imu_to_cam = cc["R_rect_00"].reshape(3, 3) @ vc["R"].reshape(3, 3) @ iv["R"].reshape(3, 3)
+    oxts = read_oxts(sorted((raw / "2011_09_26_drive_0002_sync" / "oxts" / "data").glob("*.txt")))
+    truth = np.array([imu_to_cam @ (_ry(o[4]) @ _rx(o[3])).T @ o[8:11] for o in oxts])  # velocity, camera axes
+    truth = 0.5 * (truth[1:] + truth[:-1])
+    images = [_grey(p) for p in sorted((raw / "2011_09_26_drive_0002_sync" / "image_02" / "data").glob("*.png"))]
+    found = np.array(_steps(images, k))
+    e, t = np.degrees(elevations(found)), np.degrees(elevations(truth))
+    cue = road_cue(found)
+    assert cue is not None
+    imu_axis = float(np.degrees(elevations(imu_to_cam @ np.array([1.0, 0.0, 0.0]))[0]))
+    print("road cue, real images (monocular visual odometry's travel direction; pitch > 0: the camera looks down)")
+    print(f"  raw 2011_09_26_drive_0002, {len(found)} steps: per step images - GPS/IMU travel "
+          f"{np.array2string(e - t, precision=2, separator=' ')} deg (RMS {np.sqrt(np.mean((e - t) ** 2)):.2f})")
+    print(f"    pooled pitch {np.degrees(cue.pitch):+.2f} +- {np.degrees(cue.std):.2f} deg; GPS/IMU travel "
+          f"{np.mean(t):+.2f} (error {np.degrees(cue.pitch) - np.mean(t):+.2f}); the IMU's forward axis "
+          f"{imu_axis:+.2f} (error {np.degrees(cue.pitch) - imu_axis:+.2f})")
+    road_height(raw, k, images, oxts)
+    for folder, name, frames in ((samples / "kitti" / "tracking_sequences" / "training", "0001", [0, 1]),
+                                 (samples / "kitti" / "tracking_mini" / "training", "0001", [10, 15, 20])):
+        seq_k = kitti_files.read_calib(folder / "calib" / f"{name}.txt").K
+        poses = kitti_files.read_camera_trajectory(folder / "ego_poses_orbslam3" / name / "CameraTrajectory.txt")
+        imgs = [_grey(folder / "image_02" / name / f"{f:06d}.png") for f in frames]
+        try:
+            found = np.array(_steps(imgs, seq_k))
+        except Exception as exc:  # noqa: BLE001 - the odometry's refusal is a result here
+            print(f"  {folder.parent.name} {name} frames {frames}: odometry refused: {exc}")
+            continue
+        ref = orbslam_directions(poses, frames)
+        _, tilt, _ = label_plane(kitti_files.read_labels(folder / "label_02" / f"{name}.txt"))
+        cue = road_cue(found[np.isfinite(found).all(axis=1)])
+        pitch = "no moving step" if cue is None else f"{np.degrees(cue.pitch):+.2f} +- {np.degrees(cue.std):.2f}"
+        print(f"  {folder.parent.name} {name} frames {frames}: per step images "
+              f"{np.array2string(np.degrees(elevations(found)), precision=2)} vs ORB-SLAM3 "
+              f"{np.array2string(np.degrees(elevations(ref)), precision=2)} deg; pooled {pitch} deg; "
+              f"labelled ground plane {np.degrees(tilt):+.2f}")
+
+
+def road_height(raw: Path, k: np.ndarray, images: list[np.ndarray], oxts: np.ndarray) -> None:
+    """Not a cue pedenv uses: the camera's height the road would give where the step lengths are known
+    (ego poses): the odometry's road plane with a nominal 1.5 m camera, scaled by GPS/IMU's distance."""
+    from pedenv.calibration.road import NOMINAL_MOUNTING
+    from pedenv.odometry.estimator import VisualOdometry
+    from pedenv.odometry.reference import integrated_distance
+
+    sync = raw / "2011_09_26_drive_0002_sync"
+    stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02/timestamps.txt").read_text().split("\n")
+                       if t.strip()][: len(images)])
+    times = (stamps - stamps[0]) / np.timedelta64(1, "s")
+    odometry = VisualOdometry(k, NOMINAL_MOUNTING)
+    for i, image in enumerate(images):
+        odometry.update(image, float(times[i]), where=f"frame {i}")
+    travelled = float(np.nansum(odometry.lengths()))
+    gps = integrated_distance(oxts, times)
+    print(f"    the road plane's scale with GPS/IMU's distance ({gps:.2f} m) would put the camera "
+          f"{NOMINAL_MOUNTING[2, 3] * gps / travelled:.2f} m above the road (KITTI: 1.65 m); not used")
+
+
+def onnx_far():
+    from pedenv.detection import backend_options, create_detector
+
+    return create_detector("onnx", **backend_options("onnx", detection="far"))
+
+
+def observe(images, backend):
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+
+    linker, parts = BoxLinker(), []
+    for index, image in enumerate(images):
+        det = backend.detect(image)
+        parts.append(observations_of(det, index, linker(det.boxes)))
+    return Observations.concat(parts)
+
+
+def real(samples: Path) -> None:
+    from pedenv.calibration.fit import NETWORK_BODY
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.calibration.road import road_cue
+    from pedenv.datasets import kitti_files, nuscenes_cameras
+    from pedenv.images import read_image_rgb
+    from pedenv.records import Camera
+
+    backend = onnx_far()
+    print("real samples, real network (onnx far), intrinsics given; truth: the labelled boxes' ground plane "
+          "(KITTI), the calibrated mounting (nuScenes)")
+    training = samples / "kitti" / "tracking_mini" / "training"
+    for name in ("0016", "0001"):
+        seq = kitti_files.read_tracking_sequence(training, name)
+        h, tilt, _ = label_plane(seq.labels)
+        rgb = [read_image_rgb(seq.image_path(n)) for n in seq.frames]
+        obs = observe(rgb, backend)
+        steps = np.array(_steps([_grey(seq.image_path(n)) for n in seq.frames], seq.calib.K))
+        road = road_cue(steps[np.isfinite(steps).all(axis=1)])
+        size = (rgb[0].shape[1], rgb[0].shape[0])
+        print(f"  tracking_mini {name} frames {list(seq.frames)}: {len(obs)} person-images; "
+              f"road: {'none (parked)' if road is None else f'{road.steps} steps'}")
+        people = mounting(obs, size, seq.calib.K, NETWORK_BODY, None)
+        show("people", people, (h, tilt))
+        if not isinstance(people, Exception):
+            from pedenv.datasets import open_dataset
+
+            data = open_dataset("kitti", samples / "kitti" / "tracking_mini")
+            compare_positions(lambda scene=name, kitti=data: kitti.frames(scene), onnx_far, people)
+        if road is not None:
+            show("people and road", mounting(obs, size, seq.calib.K, NETWORK_BODY, road), (h, tilt))
+    objects = samples / "kitti" / "object_samples" / "training"
+    for path in sorted((objects / "image_2").glob("*.png")):
+        calib = kitti_files.read_calib(objects / "calib" / f"{path.stem}.txt")
+        image = read_image_rgb(path)
+        show(f"object {path.stem}", mounting(observe([image], backend), (image.shape[1], image.shape[0]), calib.K,
+                                             NETWORK_BODY, None), None)
+    for cam in nuscenes_cameras.read_cameras(samples / "nuscenes-0061"):
+        level = np.linalg.inv(cam.ego_to_global) @ cam.cam_to_global
+        mount = np.eye(4)
+        mount[:3, :3], mount[2, 3] = level[:3, :3], level[2, 3]
+        image = read_image_rgb(cam.image_path)
+        _, h, tilt, _ = parameters_of(Camera(cam.K, image.shape[1], image.shape[0], mount))
+        show(f"nuScenes {cam.camera}", mounting(observe([image], backend), (image.shape[1], image.shape[0]), cam.K,
+                                                NETWORK_BODY, None), (h, tilt))
+
+
+def rendered_people(labels, k: np.ndarray, rng: np.random.Generator):
+    """Each labelled pedestrian's ankle and eye points rendered from its 3D box (anatomical shares of
+    the box height) with 2 px noise, as :class:`~pedenv.calibration.observations.Observations`."""
+    from pedenv.body import ANKLE, EYE
+    from pedenv.calibration.observations import Observations
+
+    people = labels.of_type("Pedestrian")
+    bottom, tall = people.locations, people.dimensions[:, 0]
+    feet, heads = (np.c_[bottom[:, 0], bottom[:, 1] - share * tall, bottom[:, 2]] @ k.T for share in (ANKLE, EYE))
+    feet, heads = feet[:, :2] / feet[:, 2:], heads[:, :2] / heads[:, 2:]
+    feet, heads = feet + rng.normal(0, 2.0, feet.shape), heads + rng.normal(0, 2.0, heads.shape)
+    seen = (bottom[:, 2] > 1.0) & (feet[:, 1] - heads[:, 1] > 24) & (people.occluded <= 1)
+    obs = Observations(feet[seen], heads[seen], np.full(int(seen.sum()), EYE), people.track_id[seen],
+                       people.frame[seen])
+    return obs, float(np.mean(tall[seen])) if seen.any() else float("nan")
+
+
+def noisy(directions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``directions`` (S, 3) turned by :data:`STEP_NOISE_DEG` of Gaussian noise in elevation and yaw."""
+    d = directions[np.isfinite(directions).all(axis=1)]
+    e = np.arctan2(-d[:, 1], np.hypot(d[:, 0], d[:, 2])) + rng.normal(0, np.radians(STEP_NOISE_DEG), len(d))
+    y = np.arctan2(d[:, 0], d[:, 2]) + rng.normal(0, np.radians(STEP_NOISE_DEG), len(d))
+    return np.c_[np.cos(e) * np.sin(y), -np.sin(e), np.cos(e) * np.cos(y)]
+
+
+def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None:
+    from pedenv.calibration.road import road_cue
+    from pedenv.calibration.vehicle import estimate_mounting
+    from pedenv.datasets import kitti_files
+    from pedenv.errors import InputError
+
+    training = samples / "kitti" / "tracking_sequences" / "training"
+    print(f"KITTI tracking_sequences: people rendered from the labels (real geometry, modelled perception); road "
+          f"from ORB-SLAM3's stereo poses + {STEP_NOISE_DEG} deg noise per step (real motion, modelled odometry); "
+          "truth: the labelled boxes' ground plane")
+    for name in names or sorted(p.stem for p in (training / "label_02").glob("*.txt")):
+        rng = np.random.default_rng(0)
+        calib = kitti_files.read_calib(training / "calib" / f"{name}.txt")
+        labels = kitti_files.read_labels(training / "label_02" / f"{name}.txt")
+        poses = kitti_files.read_camera_trajectory(training / "ego_poses_orbslam3" / name / "CameraTrajectory.txt")
+        k = calib.K
+        obs, tall = rendered_people(labels, k, rng)
+        h, tilt, _ = label_plane(labels)
+        travel = orbslam_directions(poses)
+        road = road_cue(noisy(travel, rng))
+        size = (int(round(2 * k[0, 2])), int(round(2 * k[1, 2])))
+        print(f"  seq {name}: {len(np.unique(obs.tracks))} people (mean labelled height {tall:.2f} m), "
+              f"{0 if road is None else road.steps} steps of travel"
+              + ("" if road is None else f" (road alone: pitch {np.degrees(road.pitch):.2f} +- "
+                                         f"{np.degrees(road.std):.2f} deg, vs plane {deg(road.pitch - tilt)})"))
+        kw = {"focal": float(k[0, 0]), "centre": (float(k[0, 2]), float(k[1, 2]))}
+        ests = {}
+        for label, cue in (("people", None), ("people and road", road)):
+            if label == "people and road" and road is None:
+                continue
+            try:
+                ests[label] = estimate_mounting(obs, size, road=cue, **kw)
+            except InputError as exc:
+                ests[label] = exc
+            show(label, ests[label], (h, tilt))
+        best = ests.get("people and road", ests.get("people"))
+        if with_positions and not isinstance(best, Exception) and best is not None:
+            positions(samples, name, best)
+
+
+def positions(samples: Path, name: str, est) -> None:
+    """The fused method on drive ``name`` (its ego poses) with KITTI's mounting and with ``est``'s."""
+    from pedenv.datasets import open_dataset
+
+    data = open_dataset("kitti-tracking", samples / "kitti" / "tracking_sequences")
+    compare_positions(lambda: data.frames(name), data.default_pose_backend, est)
+
+
+def compare_positions(frames, spec, est) -> None:
+    """The fused method over ``frames()`` (skeletons from backend ``spec``: a name, or a function that
+    makes the backend) with their own camera and with ``est``'s mounting: mean relative error (to the
+    ego) and the share within 1 and 2 sigma."""
+    from pedenv.calibration.spread import widen_state
+    from pedenv.config import Config
+    from pedenv.detection import create_detector
+    from pedenv.evaluation.matching import match_to_ground_truth
+    from pedenv.model import PedestrianEnvironmentModel
+
+    for label in ("true mounting", "estimated", "estimated, spread"):
+        cfg = Config() if label == "true mounting" else Config().replace(fused=est.fused_spreads(Config().fused))
+        model, backend = PedestrianEnvironmentModel(cfg), create_detector(spec) if isinstance(spec, str) else spec()
+        rel, d2 = [], []
+        for frame in frames():
+            if label != "true mounting":
+                frame = dataclasses.replace(frame, camera=est.camera("vehicle"))
+            frame = dataclasses.replace(frame, detections=backend(frame))
+            state = model.update(frame)
+            if label == "estimated, spread":
+                state = widen_state(state, est, frame.ego)
+            p, gt = state.pedestrians, frame.ground_truth
+            match = match_to_ground_truth(p.boxes, p.positions[:, :2], gt.boxes, gt.positions[:, :2])
+            for i in np.flatnonzero(match >= 0):
+                local = gt.positions[match[i], :2] - frame.ego.translation[:2]
+                err = p.positions[i, :2] - gt.positions[match[i], :2]
+                rel.append(np.linalg.norm(err) / np.linalg.norm(local))
+                d2.append(float(err @ np.linalg.solve(p.covariances[i], err)))
+        d2a = np.array(d2)
+        print(f"    positions, {label:17s}: rel error {100 * np.mean(rel):5.2f} %  within 1/2 sigma "
+              f"{100 * np.mean(d2a <= 1):.1f} / {100 * np.mean(d2a <= 4):.1f} %  ({len(d2)} pairs)")
+
+
+def synthetic() -> None:
+    """The built-in vehicle scenes (exact truth: a camera 1.5 m up, level): people from the detector
+    model, linked by box overlap; the road from the scene's ego poses with :data:`STEP_NOISE_DEG`."""
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.calibration.road import road_cue
+    from pedenv.detection import create_detector
+    from pedenv.synthetic import generate_scenes
+
+    spec = "detector-model:yolo11n-pose-far"
+    print(f"synthetic vehicle scenes (seed 0; exact truth), people from the detector model ({spec}), road from the "
+          f"ego poses + {STEP_NOISE_DEG} deg noise per step")
+    for scene in generate_scenes(0):
+        camera = scene.frames[0].camera
+        if camera.static:
+            continue
+        _, h, tilt, _ = parameters_of(camera)
+        backend, linker, parts, moves = create_detector(spec), BoxLinker(), [], []
+        to_camera = camera.cam_to_vehicle[:3, :3].T
+        for a, b in zip(scene.frames[:-1], scene.frames[1:]):
+            step = a.ego.rotation.T @ (b.ego.translation - a.ego.translation)  # vehicle axes of frame a
+            moves.append(to_camera @ step / np.linalg.norm(step) if np.linalg.norm(step) >= MIN_STEP_M
+                         else np.full(3, np.nan))
+        for frame in scene.frames:
+            det = backend(frame)
+            parts.append(observations_of(det, frame.index, linker(det.boxes)))
+        obs = Observations.concat(parts)
+        moving = np.array(moves)
+        road = road_cue(noisy(moving, np.random.default_rng(0))) if np.isfinite(moving).all(axis=1).any() else None
+        print(f"  {scene.name}: {obs.people} people, {0 if road is None else road.steps} steps of travel")
+        best = None
+        for label, cue in (("people", None), ("people and road", road)):
+            if label == "people and road" and road is None:
+                continue
+            best = mounting(obs, (camera.width, camera.height), camera.intrinsics, None, cue)
+            show(label, best, (h, tilt))
+        if best is not None and not isinstance(best, Exception):
+            compare_positions(lambda frames=scene.frames: frames, spec, best)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
+    parser.add_argument("--only", choices=("road", "real", "drives", "synthetic"))
+    parser.add_argument("--drives", help="comma-separated drives (default: all of tracking_sequences)")
+    parser.add_argument("--no-positions", action="store_true", help="drives: the mounting only")
+    args = parser.parse_args(argv)
+    if args.only in (None, "road"):
+        road_real(args.samples)
+    if args.only in (None, "real"):
+        real(args.samples)
+    if args.only in (None, "synthetic"):
+        synthetic()
+    if args.only in (None, "drives"):
+        drives(args.samples, args.drives.split(",") if args.drives else None, not args.no_positions)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,153 @@
+"""A vehicle camera's mounting from its direction of travel (the road) and the people: the cue, the
+combination by uncertainties, the refusal, and the cue on real KITTI frames against GPS/IMU."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from pedenv.calibration.estimate import CameraEstimate
+from pedenv.calibration.geometry import camera_rotation
+from pedenv.calibration.observations import Observations
+from pedenv.calibration.refusals import CalibrationRefused
+from pedenv.calibration.road import TRAVEL_GROUND_STD_DEG, RoadCue, TravelWatcher, road_cue, travel_direction
+from pedenv.calibration.vehicle import PEOPLE_GROUND_TILT_STD_DEG, combine, estimate_mounting, widen_people
+
+from shared_paths import REAL_SAMPLES
+
+RAW = REAL_SAMPLES / "kitti" / "raw_2011_09_26_drive_0002"
+
+
+def _travel(tilt_deg: float, roll_deg: float, yaws_deg: np.ndarray, noise_deg: float, seed: int = 0) -> np.ndarray:
+    """(N, 3) level travel directions (world) seen in the axes of a camera of ``tilt_deg``, ``roll_deg``."""
+    rng = np.random.default_rng(seed)
+    elevation = np.radians(rng.normal(0.0, noise_deg, len(yaws_deg)))
+    yaw = np.radians(yaws_deg)
+    world = np.c_[np.cos(elevation) * np.cos(yaw), np.cos(elevation) * np.sin(yaw), np.sin(elevation)]
+    return world @ camera_rotation(np.radians(tilt_deg), np.radians(roll_deg))  # rows: R^T w
+
+
+@pytest.mark.parametrize(("tilt_deg", "roll_deg"), [(2.0, 0.0), (-0.5, 1.5), (6.0, -2.0)])
+def test_the_pooled_direction_of_travel_gives_the_pitch(tilt_deg: float, roll_deg: float) -> None:
+    directions = _travel(tilt_deg, roll_deg, np.linspace(-8.0, 8.0, 200), noise_deg=0.4)
+    directions[:5] = [0.0, -0.3, 0.95]  # five bad steps, far above the rest: left out
+    cue = road_cue(directions)
+    assert cue is not None and cue.steps == 195 and cue.dropped == 5
+    assert np.degrees(cue.misfit(np.radians(tilt_deg), np.radians(roll_deg))) == pytest.approx(0.0, abs=0.1)
+    assert np.degrees(cue.pitch) == pytest.approx(tilt_deg, abs=0.15)
+    # the steps' scatter averages out; the direction of travel against the people's ground does not
+    assert np.degrees(cue.std) == pytest.approx(np.hypot(0.4 / np.sqrt(195), TRAVEL_GROUND_STD_DEG), abs=0.01)
+
+
+def test_a_step_seen_backwards_still_points_forward() -> None:
+    rotation = np.eye(3)
+    assert travel_direction(rotation, np.array([0.0, 0.0, -1.0]))[2] == pytest.approx(1.0)
+    assert travel_direction(rotation, np.array([0.0, 0.0, 1.0]))[2] == pytest.approx(1.0)
+    assert road_cue(np.zeros((0, 3))) is None
+
+
+def _people(height: float, tilt_deg: float, std: tuple[float, float], correlation: float) -> CameraEstimate:
+    sh, st = std[0], np.radians(std[1])
+    cov = np.zeros((4, 4))
+    cov[1:3, 1:3] = [[sh ** 2, correlation * sh * st], [correlation * sh * st, st ** 2]]
+    cov[3, 3] = np.radians(0.2) ** 2
+    return CameraEstimate(721.5, height, np.radians(tilt_deg), 0.0, cov, (1242, 375), (609.6, 172.9), 10, 200, 2.0,
+                          True)
+
+
+def test_the_road_moves_the_pitch_and_through_the_people_the_height() -> None:
+    # the people put the camera 0.8 deg too far down and, correlated with it, 0.1 m too high
+    people = widen_people(_people(1.75, 1.8, (0.03, 0.1), 0.9))
+    road = RoadCue(_travel(1.0, 0.0, np.zeros(1), 0.0)[0], np.radians(0.2), 100)
+    both = combine(people, road)
+    s_people, s_both = people.std, both.std
+    assert s_people[2] == pytest.approx(np.radians(np.hypot(0.1, PEOPLE_GROUND_TILT_STD_DEG)), rel=0.01)
+    assert np.degrees(both.tilt) == pytest.approx(1.0 + 0.8 * 0.2 ** 2 / (0.2 ** 2 + np.degrees(s_people[2]) ** 2),
+                                                  abs=0.02)
+    assert both.height < people.height - 0.05  # the height follows the pitch down
+    assert s_both[2] < min(s_people[2], road.std) and s_both[1] < s_people[1]
+    assert both.road is not None and both.road["disagreement_sigma"] == pytest.approx(
+        0.8 / np.hypot(0.2, np.degrees(s_people[2])), rel=0.02)
+
+
+def test_a_parked_car_keeps_the_people_estimate_and_few_people_are_refused_naming_the_road() -> None:
+    from pedenv.calibration.geometry import ground_points, intrinsics, project
+
+    k = intrinsics(721.5, (609.6, 172.9))
+    r = camera_rotation(np.radians(1.0), 0.0)
+    rng = np.random.default_rng(3)
+    feet_w = np.c_[rng.uniform(6, 30, 40), rng.uniform(-6, 6, 40), np.zeros(40)]
+    feet = project(feet_w + [0, 0, 0.1], k, r, 1.65)
+    heads = project(feet_w + [0, 0, 1.6], k, r, 1.65)
+    assert np.isfinite(ground_points(feet, k, r, 1.65)).all()
+    obs = Observations(feet, heads, np.full(40, 0.936), np.arange(40) % 8, np.arange(40) // 8)
+    parked = estimate_mounting(obs, (1242, 375), focal=721.5, centre=(609.6, 172.9))
+    assert parked.road is None and parked.height == pytest.approx(1.65, rel=0.1)
+    few = obs.subset(obs.tracks < 3)
+    road = RoadCue(np.array([0.0, -np.sin(np.radians(1.0)), np.cos(np.radians(1.0))]), np.radians(0.2), 50)
+    with pytest.raises(CalibrationRefused, match=r"height cannot be estimated: too few .* road alone gave only the "
+                                                 r"pitch \(1\.00 \+- 0\.20 deg from 50 steps"):
+        estimate_mounting(few, (1242, 375), focal=721.5, centre=(609.6, 172.9), road=road)
+
+
+def test_real_kitti_frames_give_the_pitch_of_travel_of_the_gps_imu() -> None:
+    from pedenv.images import read_image_rgb
+
+    line = next(t for t in (RAW / "calib_cam_to_cam.txt").read_text().splitlines() if t.startswith("P_rect_02:"))
+    k = np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3]
+    watcher = TravelWatcher(k)
+    frames = ((i, read_image_rgb(RAW / f"2011_09_26_drive_0002_sync/image_02/data/{i:010d}.png")) for i in range(5))
+    assert [i for i, _ in watcher.watch(frames)] == [0, 1, 2, 3, 4]
+    cue = watcher.cue()
+    # GPS/IMU: the velocity's elevation in the camera's axes (calibrated chain), frames 0-4: -0.23 deg;
+    # the IMU's forward axis -0.48 deg (benchmarks/vehicle_mounting.py --only road)
+    assert cue is not None and cue.steps == 4 and watcher.refused == 0
+    assert np.degrees(cue.pitch) == pytest.approx(-0.23, abs=0.5)
+    assert np.degrees(cue.std) == pytest.approx(np.hypot(0.4 / 2, TRAVEL_GROUND_STD_DEG), abs=0.01)
+
+
+def test_a_blank_recording_gives_no_road() -> None:
+    watcher = TravelWatcher(np.array([[500.0, 0, 320], [0, 500.0, 240], [0, 0, 1]]))
+    for i in range(4):
+        watcher.add(i, np.full((480, 640), 90, np.uint8))
+    # frame 1 is refused against frame 0, frame 2 starts afresh, frame 3 is refused against it
+    assert watcher.cue() is None and watcher.refused == 2
+
+
+def test_the_roll_is_held_level_by_the_mounting_prior() -> None:
+    from pedenv.calibration.vehicle import MOUNT_ROLL_STD_DEG, PEOPLE_GROUND_ROLL_STD_DEG, level_roll
+
+    people = widen_people(dataclasses.replace(_people(1.65, 1.0, (0.05, 0.1), 0.0), roll=np.radians(2.0)))
+    spread = np.degrees(people.std[3])
+    assert spread == pytest.approx(np.hypot(0.2, PEOPLE_GROUND_ROLL_STD_DEG), rel=0.01)
+    level = level_roll(people)
+    shrink = MOUNT_ROLL_STD_DEG ** 2 / (MOUNT_ROLL_STD_DEG ** 2 + spread ** 2)
+    assert np.degrees(level.roll) == pytest.approx(2.0 * shrink, abs=0.01)
+    assert np.degrees(level.std[3]) == pytest.approx(spread * np.sqrt(shrink), rel=0.01)
+    assert level.height == pytest.approx(1.65) and level.tilt == pytest.approx(people.tilt)  # not correlated here
+
+
+class _NoPeople:
+    """A pose backend that finds nobody (the raw drive holds no pedestrians)."""
+
+    name = "detector-model"
+
+    def detect(self, _image: np.ndarray):
+        from pedenv.records import Detections
+
+        return Detections.empty()
+
+
+def test_calibrate_a_vehicle_camera_without_people_names_the_road_pitch(tmp_path) -> None:
+    from pedenv.apps.calibrate import calibrate
+
+    intrinsics = tmp_path / "k.yaml"
+    intrinsics.write_text("width: 1242\nheight: 375\nintrinsics: [[721.5377, 0, 609.5593], [0, 721.5377, 172.854], "
+                          "[0, 0, 1]]\n")
+    with pytest.raises(CalibrationRefused, match=r"the road alone gave only the pitch \(-0\.\d\d \+- 0\.\d\d deg from "
+                                                 r"3 steps of travel\).*give cam_to_vehicle"):
+        calibrate(output=tmp_path / "out", images=RAW / "2011_09_26_drive_0002_sync/image_02/data", backend=_NoPeople(),
+                  calibration=intrinsics, static=False, frames=4)
+    assert not (tmp_path / "out").exists()
