@@ -115,3 +115,15 @@ def test_the_reported_covariance_holds_the_per_person_part():
     cov = states[-1].pedestrians.covariances[0]
     ray = ground[0, :2] / np.linalg.norm(ground[0, :2])
     assert np.sqrt(ray @ cov @ ray) > 0.5 * 30.0 * 0.09 / 1.72  # at least half the height prior's spread
+
+
+def test_the_ground_cue_corrects_a_tall_persons_height_prior_nearby():
+    # 1.95 m against the 1.72 m prior: the height cue puts them 11.7 % too near at 8 m; the ground
+    # cue (a flat road, exact ankles) pulls the fused position back (0.96 of the height cue's
+    # error while the road's curvature spread was 0.008 per m)
+    ground = np.array([[8.0, 2.0, 0.0]])
+    exact = FUSED.replace(fused={"ankle_keypoint_offset_m": 0.0})  # the rendered ankles sit at the anatomical height
+    peds = run([make_frame(ground, [1.95], index=i, timestamp=0.1 * i) for i in range(10)], exact)[-1].pedestrians
+    assert peds.sources[0].startswith("ground+height")
+    rel = np.linalg.norm(peds.positions[0, :2] - ground[0, :2]) / np.linalg.norm(ground[0, :2])
+    assert rel < 0.75 * (1.0 - 1.72 / 1.95)
