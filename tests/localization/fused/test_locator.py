@@ -127,3 +127,15 @@ def test_the_ground_cue_corrects_a_tall_persons_height_prior_nearby():
     assert peds.sources[0].startswith("ground+height")
     rel = np.linalg.norm(peds.positions[0, :2] - ground[0, :2]) / np.linalg.norm(ground[0, :2])
     assert rel < 0.75 * (1.0 - 1.72 / 1.95)
+
+
+def test_the_locator_keeps_the_last_frames_cues_row_for_row():
+    ground = np.array([[8.0, 1.5, 0.0], [30.0, -4.0, 0.0]])
+    model = PedestrianEnvironmentModel(FUSED)
+    for i in range(3):
+        peds = model.update(make_frame(ground, index=i, timestamp=0.1 * i)).pedestrians
+    cues = {q.name: q for q in model.locator.last_cues}
+    assert sorted(cues) == ["ground", "height", "triangulation"]
+    assert cues["ground"].valid.tolist() == [True, False]  # the second stands beyond 20 m
+    assert cues["height"].valid.all() and not cues["triangulation"].valid.any()  # a standing ego
+    np.testing.assert_allclose(cues["height"].positions, peds.positions[:, :2], rtol=0.05)
