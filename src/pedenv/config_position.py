@@ -194,7 +194,7 @@ class FusedConfig:
     RETIRED: ClassVar[dict[str, object]] = {
         "ankle_height_std_m": 0.04,
         "road_height_std_m": 0.08,
-        "road_curvature_std_per_m": 0.008,
+        "road_curvature_std_per_m": 0.001,
         "static_ground_max_relative_std": 0.2,
         "stance_std_m": 0.14,
         "lateral_std_m": 0.05,

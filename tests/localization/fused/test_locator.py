@@ -100,7 +100,8 @@ def test_the_3d_skeleton_is_triangulated_over_the_history():
     # a distinctive pose: a cut at the person's range would put the wrists ~0.45 m too far
     ground = np.array([[14.0, 5.0, 0.0]])
     frames, truth = pointing_person_frames(ground)
-    peds = run(frames)[-1].pedestrians
+    exact = FUSED.replace(fused={"ankle_keypoint_offset_m": 0.0})  # the rendered ankles sit at the anatomical height
+    peds = run(frames, exact)[-1].pedestrians
     error = np.linalg.norm(peds.keypoints_3d[0] - truth, axis=1)
     assert error.max() < 0.05  # metres, every keypoint, wrists included (exact detections)
     first = run(frames[:1])[-1].pedestrians  # no history yet: cut at the range along each ray
@@ -114,3 +115,27 @@ def test_the_reported_covariance_holds_the_per_person_part():
     cov = states[-1].pedestrians.covariances[0]
     ray = ground[0, :2] / np.linalg.norm(ground[0, :2])
     assert np.sqrt(ray @ cov @ ray) > 0.5 * 30.0 * 0.09 / 1.72  # at least half the height prior's spread
+
+
+def test_the_ground_cue_corrects_a_tall_persons_height_prior_nearby():
+    # 1.95 m against the 1.72 m prior: the height cue puts them 11.7 % too near at 8 m; the ground
+    # cue (a flat road, exact ankles) pulls the fused position back (0.96 of the height cue's
+    # error while the road's curvature spread was 0.008 per m)
+    ground = np.array([[8.0, 2.0, 0.0]])
+    exact = FUSED.replace(fused={"ankle_keypoint_offset_m": 0.0})  # the rendered ankles sit at the anatomical height
+    peds = run([make_frame(ground, [1.95], index=i, timestamp=0.1 * i) for i in range(10)], exact)[-1].pedestrians
+    assert peds.sources[0].startswith("ground+height")
+    rel = np.linalg.norm(peds.positions[0, :2] - ground[0, :2]) / np.linalg.norm(ground[0, :2])
+    assert rel < 0.75 * (1.0 - 1.72 / 1.95)
+
+
+def test_the_locator_keeps_the_last_frames_cues_row_for_row():
+    ground = np.array([[8.0, 1.5, 0.0], [30.0, -4.0, 0.0]])
+    model = PedestrianEnvironmentModel(FUSED)
+    for i in range(3):
+        peds = model.update(make_frame(ground, index=i, timestamp=0.1 * i)).pedestrians
+    cues = {q.name: q for q in model.locator.last_cues}
+    assert sorted(cues) == ["ground", "height", "triangulation"]
+    assert cues["ground"].valid.tolist() == [True, False]  # the second stands beyond 20 m
+    assert cues["height"].valid.all() and not cues["triangulation"].valid.any()  # a standing ego
+    np.testing.assert_allclose(cues["height"].positions, peds.positions[:, :2], rtol=0.05)

@@ -115,13 +115,16 @@ def skeleton_3d(tri: Triangulated, rays: np.ndarray, origin: np.ndarray, xy: np.
 class FusedLocator:
     """The ``fused`` position method (``Config.fused``), one :class:`Measurement` per frame.
 
-    Its per-track memory (``columns``) is the :class:`TrackHistory`.
+    Its per-track memory (``columns``) is the :class:`TrackHistory`. ``last_cues``: the last
+    frame's cue estimates, one row per pedestrian of its measurement (what
+    ``benchmarks/kitti_position_breakdown.py`` scores each cue by); read-only.
     """
 
     def __init__(self, config: Config) -> None:
         self.config = config
         self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = self.history = TrackHistory(config.fused.history_length)
+        self.last_cues: list[CueEstimate] = []
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
         cfg, frame, det = self.config.fused, geo.frame, geo.detections
@@ -151,6 +154,7 @@ class FusedLocator:
             cues.append(triangulation_cue(tri, skel))
         fused = fuse_cues(cues, GATE_PROBABILITY, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
         sources = CueSources.of(cues, fused, ~fused.valid).spell()
+        self.last_cues = cues
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
         if not fused.valid.all():
