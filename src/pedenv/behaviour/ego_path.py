@@ -31,6 +31,26 @@ MAX_EGO_ACCELERATION_MPS2 = 4.0
 EGO_TREND_S = 1.0
 #: The fitted jerk is clipped to this (m/s^3): set, not tuned; the built-in start's jerk peaks at 1.1.
 MAX_EGO_JERK_MPS3 = 2.0
+#: Poses that jitter along the track by more than this (m, 1 sigma: the rms of their third differences
+#: over the latest :data:`EGO_JITTER_POSES` poses, / sqrt(20), white noise's ratio) cannot carry the
+#: quadratic's acceleration and jerk: the acceleration is then the slope of a line through the speeds
+#: of the last :data:`EGO_ACCELERATION_WINDOW_S` and the jerk 0. The built-in scenes' exact poses
+#: jitter by at most 0.14 mm (a start's or a turn's own third differences), ORB-SLAM3's at 10 Hz on
+#: the moving KITTI drives by 2-10 mm; there the quadratic's path was 4.0-5.7 m off its real end at 2 s
+#: (rms) on the tuning drives and 2.5 m on the kept-aside 0015, the line's 1.2-1.8 and 1.4 m.
+EGO_JITTER_M = 0.001
+#: About 2 s of poses at 10 Hz: set, not tuned.
+EGO_JITTER_POSES = 20
+#: Seconds of speeds behind the line's acceleration (and the standing test): of lines over 1, 1.5 and
+#: 2 s, 1 s put the path's length at 2 s closest to the real one on each tuning drive (1.1-1.5 m rms).
+EGO_ACCELERATION_WINDOW_S = 1.0
+#: An ego whose mean speed over the last :data:`EGO_ACCELERATION_WINDOW_S` is below this (m/s) stands:
+#: no speed, acceleration or jerk. A parked car's smooth pose drift (ORB-SLAM3, KITTI 0016 / 0017)
+#: otherwise reads as a start (jerk up to the clip), its path at 2 s 0.8 m long on 0016 (median; 3.4 m
+#: at the 95th percentile; 0017: 0.3 and 1.3 m) and its corridor over people in front of it; 0.01 to
+#: 0.05 m/s left the same flags there.
+#: A start at the built-in scenes' jerk (1.1 m/s^3) passes 0.01 m/s 0.4 s in.
+EGO_STANDING_MPS = 0.01
 #: Spread (1 sigma) of the ego's speed (m/s) and yaw rate (rad/s) over the horizon: the driver may
 #: brake or steer. Set for the built-in scenes' drivers, not tuned.
 EGO_SPEED_STD_MPS = 0.5
@@ -80,9 +100,11 @@ class EgoHistory:
     def __init__(self) -> None:
         self.poses: list[tuple[float, float, float, float]] = []
         self.pairs: list[tuple[float, float, float]] = []
+        self.trend: list[tuple[float, float, float]] = []  # (mid time, speed, gap) over EGO_ACCELERATION_WINDOW_S
+        self.jitter: list[float] = []  # squared third differences of the along-track positions (m^2)
 
     def reset(self) -> None:
-        self.poses, self.pairs = [], []
+        self.poses, self.pairs, self.trend, self.jitter = [], [], [], []
 
     def add(self, timestamp: float, ego: EgoPose) -> None:
         timestamp = float(timestamp)
@@ -93,7 +115,14 @@ class EgoHistory:
         pose = (timestamp, x, y, math.atan2(sin_yaw, cos_yaw))  # ``EgoPose.yaw``, on Python floats
         if self.poses:
             last = self.poses[-1]
-            self.pairs.append((0.5 * (last[0] + timestamp), _speed(last, pose), _turn(last, pose)))
+            speed, gap = _speed(last, pose), timestamp - last[0]
+            self.pairs.append((0.5 * (last[0] + timestamp), speed, _turn(last, pose)))
+            self.trend.append((self.pairs[-1][0], speed, gap))
+            if len(self.trend) >= 3:  # the along-track steps' second difference: the positions' third
+                a, b, c = (p[1] * p[2] for p in self.trend[-3:])
+                self.jitter = [*self.jitter[-(EGO_JITTER_POSES - 4):], (c - 2.0 * b + a) ** 2]
+            while timestamp - self.trend[0][0] > EGO_ACCELERATION_WINDOW_S:
+                self.trend.pop(0)
         self.poses.append(pose)
         while len(self.poses) > 2 and timestamp - self.poses[1][0] >= EGO_WINDOW_S:
             self.poses.pop(0)
@@ -102,9 +131,12 @@ class EgoHistory:
     def motion(self) -> EgoMotion:
         """Speed, acceleration and jerk, and the yaw rate now, from the window's poses: quadratic
         fits (least squares, in time) of the speeds and yaw rates between consecutive poses,
-        evaluated now (a line with 3 poses, the mean with 2). The acceleration is clipped to
-        :data:`MAX_EGO_ACCELERATION_MPS2`, the jerk to :data:`MAX_EGO_JERK_MPS3`; a yaw rate beyond
-        :data:`MAX_YAW_RATE_RADPS` (a spike) is clipped and its spread widened by the excess."""
+        evaluated now (a line with 3 poses, the mean with 2). Poses that jitter more than
+        :data:`EGO_JITTER_M` give the acceleration of a line over :data:`EGO_ACCELERATION_WINDOW_S`
+        and no jerk; an ego slower than :data:`EGO_STANDING_MPS` over that while stands. The
+        acceleration is clipped to :data:`MAX_EGO_ACCELERATION_MPS2`, the jerk to
+        :data:`MAX_EGO_JERK_MPS3`; a yaw rate beyond :data:`MAX_YAW_RATE_RADPS` (a spike) is clipped
+        and its spread widened by the excess."""
         poses = self.poses
         if len(poses) < 2 or poses[-1][0] - poses[0][0] <= 1e-6:
             return EgoMotion(0.0, 0.0, UNKNOWN_MOTION_FACTOR * EGO_SPEED_STD_MPS,
@@ -113,10 +145,26 @@ class EgoHistory:
         value, slope, bend = _fit_rows(tuple([round(p[0] - now, 6) for p in self.pairs]))
         speeds, rates = [p[1] for p in self.pairs], [p[2] for p in self.pairs]
         speed, rate = _dot(value, speeds), _dot(value, rates)  # a handful of pairs: plain Python, not numpy
-        acceleration = _clip(_dot(slope, speeds), MAX_EGO_ACCELERATION_MPS2)
+        acceleration, jerk = _dot(slope, speeds), 2.0 * _dot(bend, speeds)
+        trend = self.trend
+        covered = sum([p[1] * p[2] for p in trend])
+        if abs(covered) < EGO_STANDING_MPS * sum([p[2] for p in trend]):  # standing (EGO_STANDING_MPS)
+            speed, acceleration, jerk = 0.0, 0.0, 0.0
+        elif self.jitter and sum(self.jitter) > 20.0 * len(self.jitter) * EGO_JITTER_M**2:  # EGO_JITTER_M
+            acceleration, jerk = _slope(trend), 0.0
         clipped = _clip(rate, MAX_YAW_RATE_RADPS)
         return EgoMotion(speed, clipped, EGO_SPEED_STD_MPS, EGO_YAW_RATE_STD_RADPS + abs(rate - clipped),
-                         True, acceleration, _clip(2.0 * _dot(bend, speeds), MAX_EGO_JERK_MPS3))
+                         True, _clip(acceleration, MAX_EGO_ACCELERATION_MPS2), _clip(jerk, MAX_EGO_JERK_MPS3))
+
+
+def _slope(points: list[tuple[float, float, float]]) -> float:
+    """The least-squares slope of the speeds over time of ``(t, v, gap)`` points (0 with fewer than two)."""
+    if len(points) < 2:
+        return 0.0
+    mt = sum([p[0] for p in points]) / len(points)
+    mv = sum([p[1] for p in points]) / len(points)
+    den = sum([(p[0] - mt) ** 2 for p in points])
+    return sum([(p[0] - mt) * (p[1] - mv) for p in points]) / den if den > 1e-12 else 0.0
 
 
 def _clip(value: float, limit: float) -> float:

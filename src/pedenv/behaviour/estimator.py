@@ -15,7 +15,7 @@ import numpy as np
 
 from pedenv.behaviour import facing, heading_filter, motion_state
 from pedenv.behaviour.config import BehaviourConfig
-from pedenv.behaviour.conflict import conflict_of
+from pedenv.behaviour.conflict import CORRIDOR_ACCELERATION_STD_MPS2, conflict_of
 from pedenv.behaviour.ego_path import EGO_TREND_S, MAX_EGO_ACCELERATION_MPS2, EgoHistory, EgoPath, predict_ego_path
 from pedenv.behaviour.motion_state import VelocityStats, velocity_stats
 from pedenv.behaviour.orientation import CUE_KEYPOINTS, cue_from_rays, cue_likelihood, keypoint_rays, walking_likelihood
@@ -99,7 +99,7 @@ class BehaviourEstimator:
         k = int(round(config.conflict_horizon_s / CONFLICT_STEP_S))
         self.conflict_times = np.linspace(0.0, k * CONFLICT_STEP_S, k + 1)
         self.predictor = JointPredictor(PathPredictor(self.horizons, acceleration_std),  # the path reported
-                                        PathPredictor(self.conflict_times, acceleration_std))  # the corridor's steps
+                                        PathPredictor(self.conflict_times, CORRIDOR_ACCELERATION_STD_MPS2))  # corridor
         self.elapsed_s, self.frames = 0.0, 0  # wall time spent here, for ``benchmarks/behaviour.py``
         self._intrinsics: tuple[bytes, np.ndarray] = (b"", np.eye(3))  # the last camera's and their inverse
 
