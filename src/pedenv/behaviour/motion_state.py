@@ -28,11 +28,14 @@ MOTION_STATE_NAMES = ("standing", "walking", "running")
 #: filter noise does not turn the heading.
 SPEED_SIGMAS = 1.5
 
-#: The true speeds (m/s) of the posterior's grid: 0 to 5 m/s every 0.1 m/s (finer grids, 0.05 m/s
-#: and 36 directions, gave the same motion states on the KITTI drives within 0.5 points).
+#: The true speeds (m/s) of the posterior's grid: 0 to 5 m/s every 0.1 m/s (a grid of 0.05 m/s gave
+#: the same motion states on the KITTI drives within 0.5 points).
 SPEED_GRID_MPS = np.linspace(0.0, 5.0, 51)
-#: Directions of the posterior's grid (16, every 22.5 degrees; see :data:`SPEED_GRID_MPS`).
-DIRECTIONS = 16
+#: Directions of the posterior's grid, degrees from the filter's velocity either way (the grid is
+#: turned per track): dense where a posterior gathers, coarse behind. The mean velocities on the
+#: KITTI drives are within 1 % (mean error at 2 s) of a grid of 72 directions and 0.05 m/s.
+DIRECTION_OFFSETS_DEG = (0.0, 5.0, 11.0, 18.0, 27.0, 39.0, 55.0, 76.0, 104.0, 140.0, 180.0)
+DIRECTIONS = 2 * len(DIRECTION_OFFSETS_DEG) - 2
 #: The population prior on the true speed, a mixture: standing (a half-normal of 0.12 m/s: sway and
 #: steps on the spot), walking (a normal of 1.35 m/s, spread 0.4 m/s: adults' comfortable walking
 #: speed, about 1.3-1.4 m/s, Bohannon 1997, with room for the slow and the hurried) and running
@@ -55,10 +58,15 @@ def _grid() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
              ((0.0, PRIOR_STANDING_STD_MPS), (PRIOR_WALKING_MPS, PRIOR_WALKING_STD_MPS),
               (PRIOR_RUNNING_MPS, PRIOR_RUNNING_STD_MPS))]
     prior = sum(share * part / part.sum() for share, part in zip(PRIOR_SHARES, parts))
-    angle = np.arange(DIRECTIONS) * (2.0 * np.pi / DIRECTIONS)
+    half = np.radians(DIRECTION_OFFSETS_DEG)
+    angle = np.concatenate([-half[:0:-1], half[:-1]])  # (-180, 180) degrees, increasing
+    around = np.concatenate([angle[-1:] - 2.0 * np.pi, angle, angle[:1] + 2.0 * np.pi])
+    width = 0.5 * (around[2:] - around[:-2])  # each direction's share of the circle (a uniform prior)
+    cos = np.cos(angle)
+    width *= 1.0 - cos * ((width @ cos) / (width @ (cos * cos)))  # its mean direction exactly none (sums to 0)
     vx, vy = np.outer(np.cos(angle), s).ravel(), np.outer(np.sin(angle), s).ravel()
     return (np.stack([vx, vy]), np.stack([0.5 * vx * vx, vx * vy, 0.5 * vy * vy]),
-            np.tile(np.log(np.maximum(prior, 1e-300)), DIRECTIONS))
+            (np.log(width / (2.0 * np.pi))[:, None] + np.log(np.maximum(prior, 1e-300))[None, :]).ravel())
 
 
 _VELOCITIES, _QUADRATIC, _LOG_PRIOR = _grid()
@@ -121,7 +129,7 @@ def speed_posterior(velocities: np.ndarray, velocity_covariances: np.ndarray) ->
     The filter's Gaussian, its new-track prior divided out, is the likelihood of the true velocity v
     in information form, ``h.v - v'Jv / 2`` with ``J = C^-1 - I / s0^2`` (its negative part, where
     the process noise widened the filter beyond that prior, set to 0: no information) and
-    ``h = C^-1 m``: two matrix products over the grid.
+    ``h = C^-1 m``: two matrix products over the grid, turned per track to the filter's direction.
     """
     n = len(velocities)
     if n == 0:
@@ -136,6 +144,16 @@ def speed_posterior(velocities: np.ndarray, velocity_covariances: np.ndarray) ->
     negative = mid - half < 0.0  # rare (a track the process noise widened): its eigenvalues clipped at 0
     if negative.any():
         info[negative] = _clip_negative(info[negative])
+    # the grid turned per track so that its direction 0 is the filter's velocity's (the prior is the same
+    # in every direction): a well-measured direction is kept, not rounded to the grid's
+    speed = np.hypot(velocities[:, 0], velocities[:, 1])
+    c = np.where(speed > 1e-9, velocities[:, 0] / np.maximum(speed, 1e-9), 1.0)
+    s = np.where(speed > 1e-9, velocities[:, 1] / np.maximum(speed, 1e-9), 0.0)
+    h = np.stack([c * h[:, 0] + s * h[:, 1], c * h[:, 1] - s * h[:, 0]], axis=1)
+    cs, cc, ss = c * s, c * c, s * s
+    info = np.stack([cc * info[:, 0] + 2.0 * cs * info[:, 1] + ss * info[:, 2],
+                     cs * (info[:, 2] - info[:, 0]) + (cc - ss) * info[:, 1],
+                     ss * info[:, 0] - 2.0 * cs * info[:, 1] + cc * info[:, 2]], axis=1)
     p = h @ _VELOCITIES
     p -= info @ _QUADRATIC
     p += _LOG_PRIOR
@@ -144,7 +162,8 @@ def speed_posterior(velocities: np.ndarray, velocity_covariances: np.ndarray) ->
     cdf = np.cumsum(p.reshape(n, DIRECTIONS, len(SPEED_GRID_MPS)).sum(axis=1), axis=1)  # the speed's, unnormalised
     total = cdf[:, -1:]
     median = SPEED_GRID_MPS[np.minimum((cdf < 0.5 * total).sum(axis=1), len(SPEED_GRID_MPS) - 1)]
-    return median, (p @ _VELOCITIES.T) / total
+    turned = (p @ _VELOCITIES.T) / total
+    return median, np.stack([c * turned[:, 0] - s * turned[:, 1], s * turned[:, 0] + c * turned[:, 1]], axis=1)
 
 
 def _clip_negative(info: np.ndarray) -> np.ndarray:
