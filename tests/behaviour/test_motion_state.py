@@ -65,8 +65,10 @@ def test_an_uncertain_speed_is_drawn_toward_a_walkers():
 def test_an_empty_frame_and_a_degenerate_covariance():
     median, mean = speed_posterior(np.zeros((0, 2)), np.zeros((0, 2, 2)))
     assert median.shape == (0,) and mean.shape == (0, 2)
-    median, mean = speed_posterior(np.array([[1.0, 0.0]]), np.zeros((1, 2, 2)))  # exact: a 1e-12 floor
-    assert np.isfinite(median).all() and np.isfinite(mean).all()
+    # an exact velocity (zero covariance, or a singular one) is taken as measured
+    cov = np.array([np.zeros((2, 2)), [[1e-4, 1e-4], [1e-4, 1e-4]]])
+    median, mean = speed_posterior(np.array([[1.0, 0.0], [0.0, 1.3]]), cov)
+    assert median == pytest.approx([1.0, 1.3]) and mean == pytest.approx(np.array([[1.0, 0.0], [0.0, 1.3]]), abs=0.01)
 
 
 def test_speed_and_std_at_standstill_uses_the_widest_axis():

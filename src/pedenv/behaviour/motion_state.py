@@ -44,6 +44,9 @@ DIRECTIONS = 2 * len(DIRECTION_OFFSETS_DEG) - 2
 #: and 0.7 standing; the built-in scenes' people stand 18 % of the time. With 0.5 the moving drives
 #: agree 79.8 % instead of 85.4 % (docs/kitti_tracking.md).
 PRIOR_SHARES = (0.3, 0.65, 0.05)
+#: Added to the velocity's variance each way ((m/s)^2, a 1 mm/s spread), so that an exact or
+#: degenerate covariance is still inverted: far below any filter's.
+VELOCITY_VARIANCE_FLOOR = 1e-6
 PRIOR_STANDING_STD_MPS = 0.12
 PRIOR_WALKING_MPS, PRIOR_WALKING_STD_MPS = 1.35, 0.4
 PRIOR_RUNNING_MPS, PRIOR_RUNNING_STD_MPS = 3.2, 0.7
@@ -135,7 +138,8 @@ def speed_posterior(velocities: np.ndarray, velocity_covariances: np.ndarray) ->
     if n == 0:
         return np.zeros(0), np.zeros((0, 2))
     a, b, d = velocity_covariances[:, 0, 0], velocity_covariances[:, 0, 1], velocity_covariances[:, 1, 1]
-    det = np.maximum(a * d - b * b, 1e-12)
+    a, d = a + VELOCITY_VARIANCE_FLOOR, d + VELOCITY_VARIANCE_FLOOR
+    det = np.maximum(a * d - b * b, VELOCITY_VARIANCE_FLOOR**2)
     inv = np.stack([d / det, -b / det, a / det], axis=1)  # C^-1: xx, xy, yy
     h = np.stack([inv[:, 0] * velocities[:, 0] + inv[:, 1] * velocities[:, 1],
                   inv[:, 1] * velocities[:, 0] + inv[:, 2] * velocities[:, 1]], axis=1)
