@@ -6,7 +6,7 @@ divides that prior out and puts a population prior on the true speed in its plac
 stand or walk at about 1.35 m/s, few run), on a grid of speeds and directions: the posterior's
 median speed decides the motion state (:func:`next_state`), its mean velocity is the predicted
 path's (:mod:`pedenv.behaviour.estimator`). A young track, whose filter knows little yet, is
-called what the population mostly does (walking, at the prior's median of 1.15 m/s) instead of
+called what the population mostly does (walking, at the prior's median of about 1.1 m/s) instead of
 standing until its speed is significant; a far track's implausible speed (3-5 m/s from a range
 that jumps) is drawn toward a walker's.
 """
@@ -42,27 +42,27 @@ DIRECTIONS = 2 * len(DIRECTION_OFFSETS_DEG) - 2
 #: (3.2 m/s, spread 0.7 m/s: jogging). Shares 0.3 / 0.65 / 0.05: chosen on the KITTI tuning drives
 #: (whose labelled pairs stand 9 % of the time overall, 27 % on 0013, 45 % on 0011) among 0.3, 0.5
 #: and 0.7 standing; the built-in scenes' people stand 18 % of the time. With 0.5 the moving drives
-#: agree 79.8 % instead of 85.4 % (docs/kitti_tracking.md).
+#: agree 79.8 % instead of 85.1 % (docs/kitti_tracking.md).
 PRIOR_SHARES = (0.3, 0.65, 0.05)
-#: Added to the velocity's variance each way ((m/s)^2, a 1 mm/s spread), so that an exact or
-#: degenerate covariance is still inverted: far below any filter's.
-VELOCITY_VARIANCE_FLOOR = 1e-6
 PRIOR_STANDING_STD_MPS = 0.12
 PRIOR_WALKING_MPS, PRIOR_WALKING_STD_MPS = 1.35, 0.4
 PRIOR_RUNNING_MPS, PRIOR_RUNNING_STD_MPS = 3.2, 0.7
+#: Added to the velocity's variance each way ((m/s)^2, a 1 mm/s spread), so that an exact or
+#: degenerate covariance is still inverted: far below any filter's.
+VELOCITY_VARIANCE_FLOOR = 1e-6
 
 
 def _grid() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The grid's velocities (2, G) m/s (G = directions x speeds, direction major), their quadratic
-    terms (3, G) (vx^2 / 2, vx vy, vy^2 / 2) and the log prior (G,) (each speed's prior shared
-    equally by its directions)."""
+    terms (3, G) (vx^2 / 2, vx vy, vy^2 / 2) and the log prior (G,) (each speed's prior shared by
+    its directions as their widths share the circle)."""
     s = SPEED_GRID_MPS
     parts = [np.exp(-0.5 * ((s - mean) / std) ** 2) for mean, std in
              ((0.0, PRIOR_STANDING_STD_MPS), (PRIOR_WALKING_MPS, PRIOR_WALKING_STD_MPS),
               (PRIOR_RUNNING_MPS, PRIOR_RUNNING_STD_MPS))]
     prior = sum(share * part / part.sum() for share, part in zip(PRIOR_SHARES, parts))
     half = np.radians(DIRECTION_OFFSETS_DEG)
-    angle = np.concatenate([-half[:0:-1], half[:-1]])  # (-180, 180) degrees, increasing
+    angle = np.concatenate([-half[:0:-1], half[:-1]])  # [-180, 180) degrees, increasing
     around = np.concatenate([angle[-1:] - 2.0 * np.pi, angle, angle[:1] + 2.0 * np.pi])
     width = 0.5 * (around[2:] - around[:-2])  # each direction's share of the circle (a uniform prior)
     cos = np.cos(angle)
