@@ -176,7 +176,7 @@ def test_a_real_slice_of_a_parked_drive(tmp_path):
 #: Measured (fused, detector-model:yolo11n-pose-far-kitti, seed 0). With the ``far`` profile's 0.31 false
 #: positives a frame placed anywhere (MOT17's rate, inside people too) it was 32.0 %: the paper's matching
 #: (box overlap) pairs a near person with such a ghost, which the height cue places 30-100 m away.
-REAL_SLICE = {"count": 239, "rel_error_pct": 9.34, "idf1": 0.718, "agreement": 0.866}
+REAL_SLICE = {"count": 239, "rel_error_pct": 9.34, "idf1": 0.718, "agreement": 0.939}
 
 
 def test_a_person_crossing_close_ahead_enters_the_real_corridor(tmp_path):

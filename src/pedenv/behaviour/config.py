@@ -49,11 +49,12 @@ class BehaviourConfig:
         Raising it reports an orientation sooner, with more spread.
     facing_half_angle_deg: the body (head) faces the ego when it is turned within this angle of
         the direction to the camera. Raising it counts more people as facing.
-    walk_enter_mps, walk_exit_mps: a standing pedestrian becomes walking when the filtered speed
-        exceeds ``walk_enter_mps`` by :data:`pedenv.behaviour.motion_state.SPEED_SIGMAS` standard
-        deviations, and a walking one stands again below ``walk_exit_mps`` (hysteresis). Raising
-        them calls fewer people walking. The defaults, 0.45 and 0.3 m/s, put the exit at the
-        labelled standing bound of the KITTI drives' evaluation (0.3 m/s, docs/kitti_tracking.md).
+    walk_enter_mps, walk_exit_mps: a standing pedestrian becomes walking when the median of its
+        true speed's posterior (the filtered velocity under a population prior on the speed,
+        :func:`pedenv.behaviour.motion_state.speed_posterior`) exceeds ``walk_enter_mps``, and a
+        walking one stands again below ``walk_exit_mps`` (hysteresis). Raising them calls fewer
+        people walking. The defaults, 0.45 and 0.3 m/s, put the exit at the labelled standing
+        bound of the KITTI drives' evaluation (0.3 m/s, docs/kitti_tracking.md).
     run_enter_mps, run_exit_mps: the same for running.
     horizons_s: the predicted path's times ahead, seconds, increasing (at most 8, each <= 10 s).
         More or farther horizons report more of the path, with wider spreads.

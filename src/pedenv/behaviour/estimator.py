@@ -153,9 +153,12 @@ class BehaviourEstimator:
             self.oriented_at = t
         held = store.held[:, rows]
         speed, speed_std = motion_state.speed_from(velocity)
-        state = motion_state.next_state(store.state[rows], speed, speed_std, cfg)
+        median, mean = motion_state.speed_posterior(velocity.velocities, velocity.covariances)
+        state = motion_state.next_state(store.state[rows], median, cfg)
         store.state[rows] = state
         ahead, ahead_cov, steps, steps_cov = self.predictor(x, P)
+        # the reported path moves at the posterior's mean velocity (the corridor's steps at the filter's)
+        ahead = self.predictor.reported(np.column_stack([x[:, 0], mean[:, 0], x[:, 2], mean[:, 1]]))
         if speed.max() > MAX_PEDESTRIAN_SPEED_MPS:  # the corridor's positions at most that fast
             scale = np.minimum(MAX_PEDESTRIAN_SPEED_MPS / np.maximum(speed, 1e-9), 1.0)
             capped = x.copy()

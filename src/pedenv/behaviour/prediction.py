@@ -1,4 +1,6 @@
-"""The predicted path: positions ahead with covariances, from each track's constant-velocity filter."""
+"""The predicted path: positions ahead with covariances, from each track's constant-velocity filter
+(the estimator moves the reported path at the motion state's posterior mean velocity,
+:func:`pedenv.behaviour.motion_state.speed_posterior`)."""
 
 from __future__ import annotations
 
@@ -67,6 +69,11 @@ class JointPredictor:
         self.covariance_map = np.concatenate([reported.covariance_map, stacked.component_maps[1]], axis=1)
         self.noise = np.concatenate([reported.noise, stacked.component_maps[2]])
         self.step_map = stacked.component_maps[0]
+
+    def reported(self, x: np.ndarray) -> np.ndarray:
+        """The reported path's positions (N, H, 2) alone (:meth:`PathPredictor.__call__`), of the states x (N, 4)."""
+        h = self.sizes[0]
+        return (x @ self.position_map[:, :2 * h]).reshape(len(x), h, 2)
 
     def steps(self, x: np.ndarray) -> np.ndarray:
         """The corridor's positions (N, 2, K) alone (:meth:`PathPredictor.stacked`), of the states x (N, 4)."""
