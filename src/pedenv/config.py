@@ -43,8 +43,8 @@ DEFAULT_METHOD = "fused"
 #: switches with them, 200 without).
 METHOD_PRESETS: dict[str, dict[str, dict]] = {
     "paper": {},
-    "fused": {"tracking": {"max_misses": 5, "max_height_ratio": 1.5, "predict_motion": True,
-                           "low_score_threshold": 0.1, "ground_gate": 4.0, "memory_s": 2.0},
+    "fused": {"tracking": {"max_height_ratio": 1.5, "predict_motion": True, "low_score_threshold": 0.1,
+                           "ground_gate": 4.0, "memory_s": 2.0},
               "kalman": {"restart_gate": 25.0}, "redetect": {"enabled": True}, "behaviour": {"enabled": True}},
 }
 

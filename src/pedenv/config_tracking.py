@@ -30,10 +30,7 @@ class TrackingConfig:
         detection (the paper: 3). Raising it keeps tracks alive through occlusions: a
         missed track stays in the association in the image, where a person walking beside
         the one it lost cannot take its place unopposed (with ``memory_s`` a track past it is
-        only remembered, and recalled by detections no live track took). The ``fused`` preset
-        uses 5 (0.5 s at KITTI's 10 Hz; on the golden ``terrain2/fused/detector-model`` case
-        67 identity switches and IDF1 0.629 with 5, 76 and 0.621 with 3; on KITTI 0016 IDF1
-        0.740 with 5, 0.662 with 3, the moving tuning drives the same). At most
+        only remembered, and recalled by detections no live track took). At most
         :data:`MAX_MISSES` (300, 10 s at 30 Hz; ``memory_s`` bridges longer occlusions): every
         missed track stays in the association, so the cap bounds the tracks a run holds.
     yaw_compensation: shift the tracks' pixels by the ego's yaw change before

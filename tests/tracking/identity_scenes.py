@@ -1,5 +1,5 @@
 """Identity figures of the tracker on the synthetic scenes: before and after the changes
-beyond the paper (two-stage association, projected Kalman gate, memory of lost tracks, 5 misses).
+beyond the paper (two-stage association, projected Kalman gate, memory of lost tracks).
 
 Run it to print the table (seeded, detector-model backend, rolling terrain):
 
@@ -19,7 +19,7 @@ from pedenv.model import PedestrianEnvironmentModel
 from pedenv.synthetic import SCENARIOS, generate_scenes
 
 #: The tracking fields the identity changes add; "before" sets them back to the paper's.
-IDENTITY_FIELDS = {"low_score_threshold": 0.0, "ground_gate": 0.0, "memory_s": 0.0, "max_misses": 3}
+IDENTITY_FIELDS = {"low_score_threshold": 0.0, "ground_gate": 0.0, "memory_s": 0.0}
 
 
 def fused_configs() -> dict[str, Config]:
