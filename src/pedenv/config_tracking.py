@@ -27,7 +27,10 @@ class TrackingConfig:
         this (in [-1, 1)). The authors' public code uses -0.3. Raising it makes the
         tracker start new tracks more readily; lowering it lets distant boxes be joined.
     max_misses: a track is dropped after this many consecutive frames without a
-        detection (the paper: 3). Raising it keeps tracks alive through occlusions. At most
+        detection (the paper: 3). Raising it keeps tracks alive through occlusions: a
+        missed track stays in the association in the image, where a person walking beside
+        the one it lost cannot take its place unopposed (with ``memory_s`` a track past it is
+        only remembered, and recalled by detections no live track took). At most
         :data:`MAX_MISSES` (300, 10 s at 30 Hz; ``memory_s`` bridges longer occlusions): every
         missed track stays in the association, so the cap bounds the tracks a run holds.
     yaw_compensation: shift the tracks' pixels by the ego's yaw change before

@@ -20,7 +20,7 @@ import numpy as np
 
 from pedenv.config import TrackingConfig
 from pedenv.tracking.association import associate
-from pedenv.tracking.prediction import predict_boxes
+from pedenv.tracking.prediction import box_displacement, predict_boxes
 from pedenv.tracking.projection import CameraView
 from pedenv.tracking.recall import camera_disagrees, ground_terms, recall_remembered, split_by_score
 from pedenv.tracking.table import TrackTable
@@ -134,7 +134,7 @@ class Tracker:
         n_match, n_kept, n_new = len(matches), len(kept), len(fresh)
         motion = None
         if cfg.predict_motion:  # the matched tracks' displacement since the last frame's box (none after a loss)
-            previous_box = tr.boxes[matches[:, 1]] - tr.velocities[matches[:, 1]]
+            previous_box = tr.boxes[matches[:, 1]] - box_displacement(tr.velocities[matches[:, 1]])
             motion = np.where(tr.lost[matches[:, 1]][:, None], 0.0, boxes[matches[:, 0]] - previous_box)
 
         previous_rows = np.concatenate([matches[:, 1], kept, np.full(n_new, -1, np.int64)])
