@@ -63,7 +63,7 @@ def detect_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
     points = cv2.FastFeatureDetector.create(threshold=FAST_THRESHOLD, nonmaxSuppression=True).detect(gray, mask)
     if not points:
         return np.empty((0, 2), np.float32)
-    xy = cv2.KeyPoint_convert(points).reshape(-1, 2)
+    xy = np.asarray(cv2.KeyPoint.convert(points), np.float32).reshape(-1, 2)
     strength = np.fromiter((p.response for p in points), np.float64, len(points))
     rows, cols = GRID_CELLS
     cell = (np.minimum(xy[:, 1] * rows // gray.shape[0], rows - 1) * cols
@@ -143,6 +143,6 @@ def match_features(gray0: np.ndarray, gray1: np.ndarray, mask: np.ndarray) -> tu
     if not pairs:
         return np.empty((0, 2)), np.empty((0, 2))
     i0, i1 = np.array(pairs).T
-    xy0, xy1 = cv2.KeyPoint_convert(k0).reshape(-1, 2), cv2.KeyPoint_convert(k1).reshape(-1, 2)
+    xy0, xy1 = (np.asarray(cv2.KeyPoint.convert(k), np.float64).reshape(-1, 2) for k in (k0, k1))
     p0, p1, _ = track(gray0, gray1, xy0[i0], levels=MATCH_REFINE_LEVELS, guess=xy1[i1])
     return p0, p1
