@@ -19,7 +19,9 @@ from pedenv.errors import InputError
 from pedenv.odometry.features import detect_corners, track
 
 #: Frames between the two frames of a pair: 5 (0.5 s at 10 Hz, 0.2 s at 25 fps) lets a car at walking
-#: pace move its view by pixels.
+#: pace move its view by pixels (a shorter recording: its first and last frames). Measured on the real
+#: MOT17 samples (first to last frame, 4-8 frames at 14-30 fps): the fixed cameras of MOT17-02, -04
+#: and -09 at most 0.47 px, the walking and bus cameras of MOT17-05, -10, -11 and -13 at least 13.8 px.
 PAIR_GAP_FRAMES = 5
 #: Pairs compared, spread evenly over the recording (over a video's first :data:`VIDEO_FRAMES`).
 PAIRS = 8
@@ -36,20 +38,26 @@ MOVED_SHARE = 0.5
 MIN_PAIR_TRACKS = 40
 
 
+def pair_gap(frames: int) -> int:
+    """Frames between a pair's two among ``frames`` frames: :data:`PAIR_GAP_FRAMES`, or fewer in a short recording."""
+    return max(min(PAIR_GAP_FRAMES, frames - 1), 0)
+
+
 def pair_starts(frames: int) -> list[int]:
-    """The first frames of the pairs compared among ``frames`` frames (none with :data:`PAIR_GAP_FRAMES` or fewer)."""
-    if frames <= PAIR_GAP_FRAMES:
+    """The first frames of the pairs compared among ``frames`` frames (none with fewer than two)."""
+    gap = pair_gap(frames)
+    if gap == 0:
         return []
-    return [int(i) for i in np.unique(np.linspace(0, frames - 1 - PAIR_GAP_FRAMES, PAIRS).round())]
+    return [int(i) for i in np.unique(np.linspace(0, frames - 1 - gap, PAIRS).round())]
 
 
 def pair_flows(read: Callable[[int], np.ndarray | None], frames: int) -> list[tuple[int, float]]:
     """(first frame of the pair, median flow in pixels) of up to :data:`PAIRS` pairs of grey frames
     :data:`PAIR_GAP_FRAMES` apart spread over ``frames`` frames, ``read(index)`` giving frame ``index``
     (H, W) uint8; pairs with fewer than :data:`MIN_PAIR_TRACKS` tracks are left out."""
-    flows = []
+    flows, gap = [], pair_gap(frames)
     for start in pair_starts(frames):
-        first, second = read(start), read(start + PAIR_GAP_FRAMES)
+        first, second = read(start), read(start + gap)
         if first is None or second is None:  # a video shorter than its header said
             continue
         p0, p1, _ = track(first, second, detect_corners(first, np.full(first.shape[:2], 255, np.uint8)))
@@ -68,8 +76,8 @@ def check_static(*, images: str | Path | None = None, video: str | Path | None =
         start, flow = max(moved, key=lambda m: m[1])
         raise InputError(
             f"{name}: declared --static, but the camera moves: its background moved a median {flow:.1f} px "
-            f"from frame {start} to frame {start + PAIR_GAP_FRAMES} ({len(moved)} of {len(flows)} frame pairs "
-            f"moved {MOVED_PX:g} px or more); give the vehicle's --ego-poses, or drop --static to have them "
+            f"from frame {start} to frame {start + pair_gap(frames)} ({len(moved)} of {len(flows)} frame pairs "
+            f"moved {MOVED_PX:g} px or more); give the camera's ego poses (--ego-poses), or drop --static to have them "
             f"estimated from the images (with a --calibration holding cam_to_vehicle)")
     return flows
 
@@ -92,7 +100,7 @@ def _reader(images: str | Path | None, video: str | Path | None) -> tuple[Callab
     grey: dict[int, np.ndarray] = {}  # only the frames of the pairs are kept
     with video_capture(video) as cap:
         frames = min(int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) or VIDEO_FRAMES, VIDEO_FRAMES)
-        wanted = {i + gap for i in pair_starts(frames) for gap in (0, PAIR_GAP_FRAMES)}
+        wanted = {i + gap for i in pair_starts(frames) for gap in (0, pair_gap(frames))}
         for index in range(max(wanted, default=-1) + 1):
             ok, bgr = cap.read()
             if not ok:
