@@ -1,4 +1,4 @@
-"""Visual odometry on real KITTI raw frames (2011_09_26_drive_0002) against their GPS/IMU, and made too dark or blurred."""
+"""Visual odometry on real KITTI raw frames (drive 0002) against their GPS/IMU, and made too dark or blurred."""
 
 from __future__ import annotations
 
