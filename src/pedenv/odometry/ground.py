@@ -62,9 +62,9 @@ ROAD_MASK_STEP_PX = 4
 
 def road_mask(shape: tuple[int, int], intrinsics: np.ndarray, cam_to_vehicle: np.ndarray) -> np.ndarray:
     """(H, W) uint8 mask of ``shape``, 255 where the pixel sees the road patch (:func:`on_road`); the
-    same camera's mask is made once (the last one is kept: a recording has one camera)."""
+    same camera's mask is made once (the last two cameras' are kept) and copied out."""
     return _road_mask((int(shape[0]), int(shape[1])), np.asarray(intrinsics, np.float64).tobytes(),
-                      np.asarray(cam_to_vehicle, np.float64).tobytes())
+                      np.asarray(cam_to_vehicle, np.float64).tobytes()).copy()
 
 
 @functools.lru_cache(maxsize=2)
