@@ -81,15 +81,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    check_before_prepasses(source, output, config)  # before the warm-up and the odometry spend their time
-    source, estimated = estimate_for_source(source, pose, backend)  # a static camera without one: its warm-up
+    source, estimated = estimate_for_source(check_before_prepasses(source, output, config), pose, backend)
     cfg = estimated.widen(cfg) if estimated is not None else cfg
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     rec, backend, folder, poses = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
     frames = Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update the model
-    summary, stats = _start_summary(rec, cfg, folder, estimated), PipelineStats()
-    _note_poses(summary, poses, folder)
+    summary, stats = {**_start_summary(rec, cfg, folder, estimated), **_poses_note(poses, folder)}, PipelineStats()
     extra = in_work_folder(output.extra or ExtraOutputs(), folder)
     writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
@@ -144,9 +142,10 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     return rec, backend, folder, poses
 
 
-def check_before_prepasses(source: RecordingSource, output: OutputOptions, config: Config | str | Path | None) -> None:
-    """What refuses a run checked before any pre-pass reads the recording (the static camera's warm-up,
-    the visual odometry): no output on an input, an output folder that would be refused
+def check_before_prepasses(source: RecordingSource, output: OutputOptions,
+                           config: Config | str | Path | None) -> RecordingSource:
+    """``source``, once what refuses a run is checked before any pre-pass reads the recording (the static
+    camera's warm-up, the visual odometry): no output on an input, an output folder that would be refused
     (:func:`refuse_output_folder`), then a camera declared ``--static`` whose view moves
     (:func:`pedenv.odometry.static_check.check_static`)."""
     check_run_paths(source, output, config)
@@ -155,6 +154,7 @@ def check_before_prepasses(source: RecordingSource, output: OutputOptions, confi
         from pedenv.odometry.static_check import check_static
 
         check_static(images=source.images, video=source.video)
+    return source
 
 
 def refuse_output_folder(folder: Path, overwrite: bool) -> None:
@@ -178,14 +178,14 @@ def refuse_output_folder(folder: Path, overwrite: bool) -> None:
                          f"--overwrite only replaces pedenv's own output folders: empty it or choose another folder")
 
 
-def _note_poses(summary: dict, poses: dict | None, folder: RunFolder) -> None:
+def _poses_note(poses: dict | None, folder: RunFolder) -> dict[str, Any]:
     """``run.json``'s ``ego_poses``: where the poses came from (given, a static camera, or estimated from the
-    images, with the estimate's file where it will be and the frames it could not measure)."""
+    images, with the estimate's file where it will be and the frames it could not measure); none for a bag."""
     if poses is None:
-        return
+        return {}
     if poses.get("file") == ESTIMATED_SOURCE:
         poses = {**poses, "file": str(folder.final / ESTIMATED_SOURCE)}
-    summary["ego_poses"] = poses
+    return {"ego_poses": poses}
 
 
 #: ``pipeline.nice`` of ``pedenv run`` when none is given and its writer is lighter than the network.
