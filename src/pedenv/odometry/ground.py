@@ -164,6 +164,8 @@ def guided_road_length(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndar
     box = (int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1)
     down = camera_down(cam_to_vehicle)
     along = direction - (direction @ down) * down
+    if not np.linalg.norm(along) > 1e-6:  # straight up or down: no motion along the road to align
+        return float("nan")
     along = along / np.linalg.norm(along)
     inverse_k = np.linalg.inv(k)
     gray1 = gray1.astype(np.float32)
