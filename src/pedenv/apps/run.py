@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.calibrate import SelfCalibration, estimate_for_source
+from pedenv.apps.calibrate import SelfCalibration, estimate_for_source, needs_estimate
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
@@ -145,12 +145,16 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
 def check_before_prepasses(source: RecordingSource, output: OutputOptions,
                            config: Config | str | Path | None) -> RecordingSource:
     """``source``, once what refuses a run is checked before any pre-pass reads the recording (the static
-    camera's warm-up, the visual odometry): no output on an input, an output folder that would be refused
-    (:func:`refuse_output_folder`), then a camera declared ``--static`` whose view moves
-    (:func:`pedenv.odometry.static_check.check_static`)."""
+    camera's warm-up, the visual odometry, the check of a ``--static`` camera): no output on an input, an
+    output folder that would be refused (:func:`refuse_output_folder`), then a camera declared ``--static``
+    whose view moves (:func:`pedenv.odometry.static_check.check_static`). A run without a pre-pass checks
+    its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
     check_run_paths(source, output, config)
+    if source.bag is not None or not (source.static or source.ego_poses is None or needs_estimate(
+            source.images, source.video, source.calibration, source.static)):
+        return source
     refuse_output_folder(Path(output.folder), output.overwrite)
-    if source.static and source.bag is None and (source.images is not None or source.video is not None):
+    if source.static and (source.images is not None or source.video is not None):
         from pedenv.odometry.static_check import check_static
 
         check_static(images=source.images, video=source.video)
