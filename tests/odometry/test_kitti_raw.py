@@ -1,12 +1,15 @@
-"""Visual odometry on three real KITTI raw frames (2011_09_26_drive_0002) against their GPS/IMU."""
+"""Visual odometry on real KITTI raw frames (drive 0002) against their GPS/IMU, and made too dark or blurred."""
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
+from pedenv.errors import InputError
 from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
+from pedenv.odometry.motion import estimate_step
 from pedenv.odometry.reference import mercator_positions, read_oxts, travelled
 
 from shared_paths import REAL_SAMPLES
@@ -28,3 +31,24 @@ def test_three_real_frames_travel_the_gps_distance():
     truth = travelled(mercator_positions(oxts))
     assert truth == pytest.approx(1.83, abs=0.02)  # about 9.1 m/s over 0.2 s (GPS)
     assert travelled(odometry.poses()[:, :3, 3]) == pytest.approx(truth, rel=0.05)
+
+
+@pytest.mark.parametrize("spoil, works", [
+    (lambda image: (image * 0.1).astype(np.uint8), True),  # a tenth of the light: measured +1 % on this step
+    (lambda image: (image * 0.05).astype(np.uint8), False),
+    (lambda image: cv2.GaussianBlur(image, (0, 0), 4.0), True),  # measured -2.7 %
+    (lambda image: cv2.GaussianBlur(image, (0, 0), 8.0), False),
+])
+def test_real_frames_too_dark_or_blurred_are_one_line_not_wrong_poses(spoil, works):
+    line = next(t for t in (DRIVE / "calib_cam_to_cam.txt").read_text().splitlines() if t.startswith("P_rect_02:"))
+    k = np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3]
+    mount = np.eye(4)
+    mount[:3, :3] = [[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]]
+    mount[2, 3] = 1.65
+    first, second = (spoil(cv2.imread(str(SYNC / f"image_02/data/{i:010d}.png"), cv2.IMREAD_GRAYSCALE)) for i in (0, 1))
+    if works:
+        assert estimate_step(first, second, k, mount).length == pytest.approx(0.97, rel=0.05)  # the clear frames' step
+    else:
+        with pytest.raises(InputError, match=r"^0000000000\.png: too dark, blurred or covered for visual odometry: "
+                                             r"\d+ tracks to the next frame, 40 needed; give the ego poses"):
+            estimate_step(first, second, k, mount, where="0000000000.png")

@@ -118,3 +118,15 @@ def test_a_long_drive_pools_the_pitch_and_lets_the_road_tracks_go(monkeypatch):
     assert [len(s.road[0]) for s in odometry.steps[:2]] == [0, 0] and len(odometry.steps[2].road[0]) > 15
     np.testing.assert_allclose(odometry.lengths(), 1.0, rtol=0.03)
     assert all(len(s.road[0]) == 0 for s in odometry.steps)
+
+
+def test_the_road_alignment_finds_a_long_rendered_step():
+    # 4 m between two rendered frames: the road's own alignment (frames far apart) against the exact truth
+    from pedenv.odometry.ground import guided_road_length
+
+    mount, tex = cam_to_vehicle(), texture()
+    first, second = (render(tex, vehicle_pose(x, 0.0, 0.0), mount) for x in (0.0, 4.0))
+    forward, up = (mount[:3, :3].T @ axis for axis in np.eye(3)[[0, 2]])  # the vehicle's x and z, camera frame
+    distance = guided_road_length(first, second, K, np.eye(3), -forward, mount)  # camera points move back
+    assert mount[2, 3] / distance == pytest.approx(4.0, rel=0.05)
+    assert np.isnan(guided_road_length(first, second, K, np.eye(3), up, mount))  # no motion along the road

@@ -47,6 +47,10 @@ def test_run_without_ego_poses_writes_the_estimated_ones(tmp_path):
     summary = run_recording(RecordingSource(images=images, calibration=calib, fps=10.0), OutputOptions(out),
                             backend=NoPeople())
     assert summary["frames_done"] == 4
+    assert summary["ego_poses"]["source"] == "estimated" and summary["ego_poses"]["frames"] == 4
+    assert summary["ego_poses"]["file"] == str(out / "ego_poses_estimated.csv")
+    assert summary["ego_poses"]["keyframes"] == 4 and summary["ego_poses"]["frames_without_road_scale"] == []
+    assert summary["ego_poses"]["frames_from_matched_descriptors"] == []
     poses = load_ego_poses(out / "ego_poses_estimated.csv")  # the --ego-poses format
     np.testing.assert_allclose(poses.timestamps, [0.0, 0.1, 0.2, 0.3])
     np.testing.assert_allclose(poses.translations[:, 0], [0.0, 0.9, 1.8, 2.7], atol=0.054)  # 2 % of the drive
@@ -57,9 +61,10 @@ def test_given_ego_poses_win_and_nothing_is_estimated(tmp_path):
     images, calib = _recording(tmp_path / "rec")
     poses = tmp_path / "poses.csv"
     poses.write_text("timestamp,x,y,yaw\n0.0,0,0,0\n1.0,9,0,0\n")
-    run_recording(RecordingSource(images=images, calibration=calib, ego_poses=poses, fps=10.0),
-                  OutputOptions(tmp_path / "out"), backend=NoPeople())
+    summary = run_recording(RecordingSource(images=images, calibration=calib, ego_poses=poses, fps=10.0),
+                            OutputOptions(tmp_path / "out"), backend=NoPeople())
     assert not (tmp_path / "out" / "ego_poses_estimated.csv").exists()
+    assert summary["ego_poses"] == {"source": "given", "file": str(poses)}
 
 
 def test_a_calibration_without_the_mounting_is_refused_in_one_line(tmp_path):

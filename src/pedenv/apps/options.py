@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from pedenv.config import Config
 from pedenv.errors import InputError
@@ -48,21 +48,30 @@ class RecordingSource:
 
     def load(self) -> Recording | BagRecording:
         """The recording (:func:`pedenv.recordings.footage.load_recording`, or the bag's)."""
+        return self.load_with_poses_note()[0]
+
+    def load_with_poses_note(self) -> tuple[Recording | BagRecording, dict[str, Any] | None]:
+        """The recording and what ``run.json`` says of its ego poses (``ego_poses``): given (their file),
+        a static camera's (none), or estimated from the images
+        (:func:`pedenv.odometry.recording.load_with_odometry_report`); None for a bag."""
         if self.bag is not None:
             from pedenv.recordings.bag import load_bag_recording
 
-            return load_bag_recording(self.bag, self.bag_options)
+            return load_bag_recording(self.bag, self.bag_options), None
         from pedenv.recordings.footage import load_recording
 
         if self.calibration is None:
             raise InputError("a recording needs its calibration (--calibration)")
         if self.ego_poses is None and not self.static:  # a vehicle without poses: visual odometry (pedenv.odometry)
-            from pedenv.odometry.recording import load_with_odometry
+            from pedenv.odometry.recording import load_with_odometry_report
 
-            return load_with_odometry(calibration=self.calibration, images=self.images, video=self.video,
-                                      fps=self.fps, start_time=self.start_time)
-        return load_recording(calibration=self.calibration, ego_poses=self.ego_poses, images=self.images,
-                              video=self.video, fps=self.fps, start_time=self.start_time, static=self.static)
+            rec, note = load_with_odometry_report(calibration=self.calibration, images=self.images, video=self.video,
+                                                  fps=self.fps, start_time=self.start_time)
+            return rec, note or {"source": "static camera (the calibration's mount: static)"}
+        rec = load_recording(calibration=self.calibration, ego_poses=self.ego_poses, images=self.images,
+                             video=self.video, fps=self.fps, start_time=self.start_time, static=self.static)
+        given = {"source": "given", "file": str(self.ego_poses)} if self.ego_poses is not None else None
+        return rec, given or {"source": "static camera"}
 
     def check_realtime(self, realtime: bool) -> None:
         """``--realtime`` on an image folder needs the frames' times: its timestamps.csv or ``fps``."""

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.calibrate import SelfCalibration, estimate_for_source
+from pedenv.apps.calibrate import SelfCalibration, estimate_for_source, needs_estimate
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
@@ -81,13 +81,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    source, estimated = estimate_for_source(source, pose, backend)  # a static camera without one: its warm-up
+    source, estimated = estimate_for_source(check_before_prepasses(source, output, config), pose, backend)
     cfg = estimated.widen(cfg) if estimated is not None else cfg
     pipe = _pipeline(pipeline or PipelineConfig(), output)
-    rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
+    rec, backend, folder, poses = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
     frames = Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update the model
-    summary, stats = _start_summary(rec, cfg, folder, estimated), PipelineStats()
+    summary, stats = {**_start_summary(rec, cfg, folder, estimated), **_poses_note(poses, folder)}, PipelineStats()
     extra = in_work_folder(output.extra or ExtraOutputs(), folder)
     writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
     outputs = _Outputs(out, rec, output, summary, progress)
@@ -121,15 +121,16 @@ def _start_summary(rec: Recording | BagRecording, cfg: Config, folder: RunFolder
 
 
 def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions, cfg: Config,
-              pipe: PipelineConfig, backend: PoseBackend | None,
-              config: Config | str | Path | None) -> tuple[Recording | BagRecording, PoseBackend, RunFolder]:
+              pipe: PipelineConfig, backend: PoseBackend | None, config: Config | str | Path | None
+              ) -> tuple[Recording | BagRecording, PoseBackend, RunFolder, dict | None]:
     """Everything checked before the output folder is touched (the extra outputs, ``--realtime``'s
     timestamps, the recording, no output on an input, every frame of a folder or video), then the
-    folder prepared and ``config.json`` saved: (recording, pose backend, output folder)."""
+    folder prepared and ``config.json`` saved: (recording, pose backend, output folder, what ``run.json``
+    says of the ego poses: :meth:`~pedenv.apps.options.RecordingSource.load_with_poses_note`)."""
     (output.extra or ExtraOutputs()).check()
     source.check_realtime(pipe.realtime)
     check_run_paths(source, output, config)
-    rec = source.load()
+    rec, poses = source.load_with_poses_note()  # a vehicle without ego poses: visual odometry's pre-pass
     backend = backend or _make_backend(pose, cfg, rec)
     if hasattr(rec, "check") and holds_files(Path(output.folder)):  # an earlier run there: every frame's size
         rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
@@ -138,7 +139,57 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     cfg.save(folder.work / "config.json")
     if isinstance(rec, Recording) and rec.trajectory is not None and rec.trajectory.source == ESTIMATED_SOURCE:
         write_ego_poses(folder.work / ESTIMATED_SOURCE, rec.trajectory)  # visual odometry's poses (pedenv.odometry)
-    return rec, backend, folder
+    return rec, backend, folder, poses
+
+
+def check_before_prepasses(source: RecordingSource, output: OutputOptions,
+                           config: Config | str | Path | None) -> RecordingSource:
+    """``source``, once what refuses a run is checked before any pre-pass reads the recording (the static
+    camera's warm-up, the visual odometry, the check of a ``--static`` camera): no output on an input, an
+    output folder that would be refused (:func:`refuse_output_folder`), then a camera declared ``--static``
+    whose view moves (:func:`pedenv.odometry.static_check.check_static`). A run without a pre-pass checks
+    its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
+    check_run_paths(source, output, config)
+    if source.bag is not None or not (source.static or source.ego_poses is None or needs_estimate(
+            source.images, source.video, source.calibration, source.static)):
+        return source
+    refuse_output_folder(Path(output.folder), output.overwrite)
+    if source.static and (source.images is not None or source.video is not None):
+        from pedenv.odometry.static_check import check_static
+
+        check_static(images=source.images, video=source.video)
+    return source
+
+
+def refuse_output_folder(folder: Path, overwrite: bool) -> None:
+    """The refusals of :func:`~pedenv.apps.output_safety.open_run_folder`, without touching the folder: a
+    file, a folder under a file, a folder with something in it without ``overwrite``, or one pedenv did not
+    write (InputError, the same lines)."""
+    from pedenv.paths import MARKER
+
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"output folder {folder} is an existing file; choose a folder")
+    blocking = next((p for p in folder.parents if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise InputError(f"output folder {folder} lies under {blocking}, which is a file")
+    if not holds_files(folder):
+        return
+    if not overwrite:
+        raise InputError(f"output folder {folder} is not empty; pass --overwrite to replace what an earlier run "
+                         f"wrote there, or choose another folder")
+    if not (folder / MARKER).is_file():
+        raise InputError(f"output folder {folder} is not empty and was not written by pedenv (no {MARKER} file); "
+                         f"--overwrite only replaces pedenv's own output folders: empty it or choose another folder")
+
+
+def _poses_note(poses: dict | None, folder: RunFolder) -> dict[str, Any]:
+    """``run.json``'s ``ego_poses``: where the poses came from (given, a static camera, or estimated from the
+    images, with the estimate's file where it will be and the frames it could not measure); none for a bag."""
+    if poses is None:
+        return {}
+    if poses.get("file") == ESTIMATED_SOURCE:
+        poses = {**poses, "file": str(folder.final / ESTIMATED_SOURCE)}
+    return {"ego_poses": poses}
 
 
 #: ``pipeline.nice`` of ``pedenv run`` when none is given and its writer is lighter than the network.

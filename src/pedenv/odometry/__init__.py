@@ -20,11 +20,19 @@ Words used across the package, its settings and ``docs/visual_odometry.md``:
   homography says; the plane's distance in step lengths (and its pitch) that fits them best,
   divided into the camera's known height over the road, is the step's length
   (:mod:`pedenv.odometry.ground`).
+* **road alignment**: for frames too far apart for the road's flow (a 2 Hz video), the road plane's
+  homography that best aligns the road patch of the two images gives the step's length instead
+  (:func:`~pedenv.odometry.ground.guided_road_length`).
+* **matched descriptors**: when the flow loses the frames, ORB keypoints matched across them (and
+  refined by the flow) give the essential matrix (:func:`~pedenv.odometry.features.match_features`).
+* **static check**: a camera declared ``--static`` whose background flows between frames is refused
+  (:mod:`pedenv.odometry.static_check`).
 * **ego poses**: the steps chained into vehicle -> world poses, the world being the vehicle
   frame of the first frame (x forward, y left, z up, origin on the road under the vehicle):
   :class:`~pedenv.odometry.estimator.VisualOdometry`, written as ``ego_poses_estimated.csv`` in
   the ``--ego-poses`` format (:mod:`pedenv.odometry.poses_file`).
 
 The one error: a frame with too few trackable corners or too few tracks that agree on one
-motion (too dark, blurred, or covered) stops the estimate with an InputError naming it.
+motion, with no matched descriptors to take over (too dark, blurred, or covered), stops the
+estimate with an InputError naming it.
 """

@@ -89,7 +89,7 @@ class VisualOdometry:
     def _settle(self) -> None:
         """Give the steps not yet settled their pooled pitch's length and let their road tracks go."""
         pool = self.steps[self._settled:]
-        pitches = [s.pitch for s in pool if s.moved and np.isfinite(s.length)]
+        pitches = [s.pitch for s in pool if s.moved and np.isfinite(s.length) and np.isfinite(s.pitch)]
         pitch = float(np.median(pitches)) if pitches else None
         self.steps[self._settled:] = [
             dataclasses.replace(s, length=road_length(s, self.intrinsics, self.cam_to_vehicle, pitch),

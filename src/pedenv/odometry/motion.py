@@ -13,8 +13,8 @@ import cv2
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.odometry.features import detect_corners, detect_road_corners, person_mask, track
-from pedenv.odometry.ground import camera_down, fit_road, on_road, road_mask
+from pedenv.odometry.features import detect_corners, detect_road_corners, match_features, person_mask, track
+from pedenv.odometry.ground import camera_down, fit_road, guided_road_length, on_road, road_mask
 
 #: Fewest tracks between two frames, and fewest of them agreeing on one motion (the essential
 #: matrix's inliers): below these the frame is too dark, blurred or covered for odometry.
@@ -34,6 +34,15 @@ MIN_BASELINE_FLOW_PX = 2.0
 #: pixels, and the confidence (OpenCV's defaults).
 EPIPOLAR_TOLERANCE_PX = 1.0
 RANSAC_CONFIDENCE = 0.999
+#: Largest angle, degrees, between the motion from matched descriptors and the vehicle's forward axis:
+#: a car's camera moves along it (a few degrees off in a tight turn), while a repeated texture matched
+#: one period off agrees on a sideways motion (KITTI raw 0002 frames 6-7: 72 degrees off, 93 % inliers).
+MAX_SIDESLIP_DEG = 20.0
+#: Shortest step, metres, whose length is taken from the road's alignment
+#: (:func:`~pedenv.odometry.ground.guided_road_length`) when the road's flow gave none: the alignment
+#: needs the road to move many pixels (KITTI tracking 0001: -1.3 % over its 5.4 m steps at 2 Hz, but
+#: -23 % over a 1.2 m step at 10 Hz); a shorter step takes its neighbours' speed.
+GUIDE_MIN_STEP_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -43,7 +52,11 @@ class Step:
     the road was not seen); pitch: the road plane's pitch fitted with it, radians (NaN without);
     road: the road tracks, (M, 2) pixels in each frame; tracks, inliers: counts; parallax: median
     flow without rotation, pixels; seen: whether the motion was measurable (else the frame is no new
-    keyframe of :class:`~pedenv.odometry.estimator.VisualOdometry`)."""
+    keyframe of :class:`~pedenv.odometry.estimator.VisualOdometry`); guided: the road's flow did not
+    fit and the length is the road homography's that aligns the road best
+    (:func:`~pedenv.odometry.ground.guided_road_length`: frames far apart; kept as it is, no pitch);
+    wide: the flow lost the frames and the motion is from matched descriptors
+    (:func:`~pedenv.odometry.features.match_features`)."""
 
     rotation: np.ndarray
     direction: np.ndarray
@@ -54,6 +67,8 @@ class Step:
     pitch: float = float("nan")
     road: tuple[np.ndarray, np.ndarray] = (np.empty((0, 2)), np.empty((0, 2)))
     seen: bool = True
+    guided: bool = False
+    wide: bool = False
 
     @property
     def moved(self) -> bool:
@@ -72,6 +87,8 @@ def road_length(step: Step, intrinsics: np.ndarray, cam_to_vehicle: np.ndarray, 
     :func:`~pedenv.odometry.ground.fit_road`), or fitted when None; NaN when the road does not fit."""
     if not step.moved:
         return 0.0
+    if step.guided:
+        return step.length  # aligned with the calibrated pitch: no road tracks to refit
     distance, _ = fit_road(*step.road, intrinsics, step.rotation, step.direction, camera_down(cam_to_vehicle), pitch)
     return float(cam_to_vehicle[2][3] / distance)
 
@@ -92,27 +109,54 @@ def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, 
     road_corners = detect_road_corners(gray0, allowed & road_mask(shape, k, cam_to_vehicle))
     p0, p1, kept = track(gray0, gray1, np.vstack([corners, road_corners]))
     # the count of FAST's corners tracked says whether the images hold enough contrast (absolute)
-    _require(int(kept[:len(corners)].sum()), MIN_TRACKS, "tracks", where)
-    flow = float(np.median(np.linalg.norm(p1 - p0, axis=1)))
-    if flow < MIN_PARALLAX_PX:
-        return still(len(p0), flow)
-    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
-                                           threshold=EPIPOLAR_TOLERANCE_PX)
-    count, rotation, direction = 0, np.eye(3), np.zeros(3)
-    if essential is not None and essential.shape[0] >= 3:  # several solutions stack up: the first, the best
-        count, rotation, direction, mask = cv2.recoverPose(essential[:3], p0, p1, k, mask=mask)
-    if count < MIN_INLIERS and flow < MIN_BASELINE_FLOW_PX:
-        return still(len(p0), flow)  # too little baseline yet: the keyframe waits for more
-    _require(int(count), MIN_INLIERS, "tracks agreeing on one motion", where)
-    inlier = mask.ravel() > 0
+    tracked, wide = int(kept[:len(corners)].sum()), False
+    count, rotation, direction, inlier = 0, np.eye(3), np.zeros(3), np.zeros(len(p0), bool)
+    if tracked >= MIN_TRACKS:
+        flow = float(np.median(np.linalg.norm(p1 - p0, axis=1)))
+        if flow < MIN_PARALLAX_PX:
+            return still(len(p0), flow)
+        count, rotation, direction, inlier = _essential(p0, p1, k)
+        if count < MIN_INLIERS and flow < MIN_BASELINE_FLOW_PX:
+            return still(len(p0), flow)  # too little baseline yet: the keyframe waits for more
+    if count < MIN_INLIERS:  # the flow lost the frames (far apart, or too dark): descriptors matched instead
+        q0, q1 = match_features(gray0, gray1, allowed)
+        found = _essential(q0, q1, k) if len(q0) >= MIN_INLIERS else (0, rotation, direction, inlier)
+        if found[0] < MIN_INLIERS or not _along_vehicle(found[2], cam_to_vehicle):
+            _require(tracked, MIN_TRACKS, "tracks", where)
+            _require(count, MIN_INLIERS, "tracks agreeing on one motion", where)
+        (count, rotation, direction, inlier), p0, p1, wide = found, q0, q1, True
     parallax = _parallax(p0[inlier], p1[inlier], k, rotation)
     if parallax < MIN_PARALLAX_PX:
-        return Step(rotation, np.zeros(3), 0.0, len(p0), int(count), parallax)  # turning on the spot
-    direction = direction.ravel()
-    road = inlier & on_road(p0, k, cam_to_vehicle)
+        return Step(rotation, np.zeros(3), 0.0, len(p0), int(count), parallax, wide=wide)  # turning on the spot
+    road = inlier & on_road(p0, k, cam_to_vehicle) & (not wide)  # asphalt gives descriptors few matches
     distance, pitch = fit_road(p0[road], p1[road], k, rotation, direction, camera_down(cam_to_vehicle))
+    if not np.isfinite(distance):  # frames too far apart for the road's flow: the road's homography aligned
+        distance = guided_road_length(gray0, gray1, k, rotation, direction, cam_to_vehicle)
+        if not cam_to_vehicle[2][3] / distance >= GUIDE_MIN_STEP_M:
+            distance = float("nan")  # a short step: its neighbours' speed is the better guess
+        return Step(rotation, direction, float(cam_to_vehicle[2][3] / distance), len(p0), int(count), parallax,
+                    guided=bool(np.isfinite(distance)), wide=wide)
     return Step(rotation, direction, float(cam_to_vehicle[2][3] / distance), len(p0), int(count), parallax, pitch,
-                (p0[road], p1[road]))
+                (p0[road], p1[road]), wide=wide)
+
+
+def _along_vehicle(direction: np.ndarray, cam_to_vehicle: np.ndarray) -> bool:
+    """Whether the camera's ``direction`` of travel (3,), camera frame, lies within :data:`MAX_SIDESLIP_DEG`
+    of the vehicle's forward or backward axis (a car does not move sideways)."""
+    forward = np.asarray(cam_to_vehicle, dtype=np.float64)[:3, :3].T @ np.array([1.0, 0.0, 0.0])
+    return bool(abs(direction @ forward) >= np.cos(np.radians(MAX_SIDESLIP_DEG)) * np.linalg.norm(direction))
+
+
+def _essential(p0: np.ndarray, p1: np.ndarray, k: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """(inliers, rotation (3, 3), unit direction (3,), which tracks are inliers (N,) bool) of the essential
+    matrix between the tracks ``p0`` -> ``p1`` (N, 2) pixels (USAC, then ``recoverPose``); 0 inliers when none."""
+    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
+                                           threshold=EPIPOLAR_TOLERANCE_PX)
+    if essential is None or essential.shape[0] < 3:
+        return 0, np.eye(3), np.zeros(3), np.zeros(len(p0), bool)
+    # several solutions stack up: the first, the best
+    count, rotation, direction, mask = cv2.recoverPose(essential[:3], p0, p1, k, mask=mask)
+    return int(count), rotation, direction.ravel(), mask.ravel() > 0
 
 
 def _parallax(p0: np.ndarray, p1: np.ndarray, k: np.ndarray, rotation: np.ndarray) -> float:
