@@ -137,7 +137,7 @@ def synthetic() -> None:
         for frame in scene.frames:
             det: Detections = backend(frame)
             parts.append(observations_of(det, frame.index, linker(det.boxes)))
-        est = fit(Observations.concat(parts), (truth_camera.width, truth_camera.height))
+        est = fit(Observations.concat(parts), (truth_camera.width, truth_camera.height), walking=True)
         row(label, est, truth)
         if isinstance(est, Exception):
             continue

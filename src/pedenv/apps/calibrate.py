@@ -108,13 +108,16 @@ def body_of(backend_name: str) -> BodyModel:
     return NETWORK_BODY if backend_name in NETWORK_BACKENDS else BodyModel()
 
 
-def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None) -> CameraEstimate:
+def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None,
+                  static: bool = False) -> CameraEstimate:
     """The camera fitted to the warm-up's people (``intrinsics`` (3, 3) pixels fix focal length
-    and principal point when given)."""
+    and principal point when given; ``static``: a fixed camera, whose tracks' ground points give
+    each walker's direction of travel, :func:`~pedenv.calibration.fit.estimate_camera` ``walking``)."""
     size = (warmup.image.shape[1], warmup.image.shape[0])
     focal = None if intrinsics is None else float(intrinsics[0, 0])
     centre = None if intrinsics is None else (float(intrinsics[0, 2]), float(intrinsics[1, 2]))
-    return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name))
+    return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
+                           walking=static)
 
 
 def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backend_name: str,
@@ -162,7 +165,7 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
     if calibration is not None and (warmup.image.shape[1], warmup.image.shape[0]) != (width, height):
         raise InputError(f"{calibration}: the calibration is {width}x{height} pixels, the frames "
                          f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
-    estimate = estimate_from(warmup, backend.name, k)
+    estimate = estimate_from(warmup, backend.name, k, static)
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
     return write_estimate(folder, estimate, warmup, backend.name, "static" if static else "vehicle")
 
@@ -232,7 +235,7 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
     warmup = observe(warmup_frames(images, video), backend)
-    estimate = estimate_from(warmup, backend_name, k)
+    estimate = estimate_from(warmup, backend_name, k, mount == "static")
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
                if key not in ("estimated", "uncertainty")}
     path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"
