@@ -4,7 +4,8 @@ The warm-up reads the first :data:`WARMUP_SECONDS` of a video (or the first
 :data:`WARMUP_MAX_FRAMES` images of a folder, whichever is fewer), finds the people with the
 pose backend, links them from frame to frame and fits the camera
 (:func:`pedenv.calibration.fit.estimate_camera`). ``pedenv run`` without ``--calibration`` runs
-the same warm-up before its frames.
+the same warm-up before its frames, then refines a static camera's estimate as it runs
+(:class:`Refinement`).
 """
 
 from __future__ import annotations
@@ -180,6 +181,11 @@ class SelfCalibration:
     path: Path
     backend_name: str
     mount: str = "static"
+    intrinsics: np.ndarray | None = None  # (3, 3) pixels when the calibration gave them
+
+    def refinement(self) -> Refinement | None:
+        """A static camera's :class:`Refinement` over the run, None on a vehicle."""
+        return Refinement(self) if self.mount == "static" else None
 
     def widen(self, cfg: Config) -> Config:
         """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
@@ -234,7 +240,7 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
         from pedenv.detection import backend_options, create_detector
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
-    warmup = observe(warmup_frames(images, video), backend)
+    warmup = observe(warmup_frames(images, video, WARMUP_MAX_FRAMES), backend)
     estimate = estimate_from(warmup, backend_name, k, mount == "static")
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
                if key not in ("estimated", "uncertainty")}
@@ -242,7 +248,7 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
     import yaml
 
     path.write_text(yaml.safe_dump(mapping, sort_keys=False), encoding="utf-8")
-    return SelfCalibration(estimate, warmup, path, backend_name, mount)
+    return SelfCalibration(estimate, warmup, path, backend_name, mount, k)
 
 
 def estimate_for_source(source: RecordingSource, pose: PoseOptions,
@@ -256,3 +262,101 @@ def estimate_for_source(source: RecordingSource, pose: PoseOptions,
     found = self_calibrate(source.images, source.video, source.calibration, backend, pose.backend or "onnx",
                            pose.device, "static" if source.static else "vehicle")
     return dataclasses.replace(source, calibration=found.path), found
+
+
+#: After the warm-up, ``pedenv run`` (a static camera it estimated) keeps the upright people of
+#: every frame it runs and fits the camera again, to all of them, each time this many new frames
+#: have passed: 300 frames are 10 s of a 30 Hz video; the fit of a few thousand person-images
+#: takes about a second on a CPU, a few ms per frame spread over the interval.
+REFINE_EVERY_FRAMES = 300
+#: The refits stop once this many person-images are kept (the estimate then stays): the fit's
+#: time grows with them, and its uncertainty no longer shrinks much (it is held by the crowd's
+#: mean height, ``CROWD_MEAN_STD_M``, and by each person's repeated images).
+REFINE_MAX_OBSERVATIONS = 20000
+
+
+class Refinement:
+    """The camera of ``pedenv run``'s static self-calibration refined as more people are seen.
+
+    ``step`` wraps the pipeline's model step: each frame after the warm-up is given the camera
+    in force (the latest estimate), its people are kept, and every :data:`REFINE_EVERY_FRAMES`
+    frames the camera is fitted to all people kept so far. A new estimate applies from the next
+    frame on; a frame already run is never run or written again. A refit the people do not fix
+    (:class:`~pedenv.calibration.refusals.CalibrationRefused`) leaves the estimate as it was
+    and is noted in :attr:`history`. ``widened`` gives each written state the covariance of
+    the estimate its frame ran with.
+    """
+
+    def __init__(self, found: SelfCalibration) -> None:
+        self.found = found
+        self.estimate = found.estimate
+        self.camera = found.estimate.camera(found.mount)
+        self.kept = [found.warmup.people]
+        self.count = len(found.warmup.people)
+        self.linker, self.offset = BoxLinker(), int(found.warmup.people.tracks.max(initial=-1)) + 1
+        self.frames, self.since = found.warmup.frames, 0
+        self.used: dict[int, CameraEstimate] = {}
+        self.history: list[dict] = [{"from_frame": 0, **found.estimate.summary()}]
+
+    def step(self, process: Callable[[Frame], tuple[EnvironmentState, Frame]]
+             ) -> Callable[[Frame], tuple[EnvironmentState, Frame]]:
+        """``process`` with the camera in force given to each frame after the warm-up, its people kept."""
+
+        def refined(frame: Frame) -> tuple[EnvironmentState, Frame]:
+            after = frame.index >= self.found.warmup.frames
+            if after:
+                frame = dataclasses.replace(frame, camera=self.camera)
+            state, frame = process(frame)
+            self.used[frame.index] = self.estimate
+            if after and frame.detections is not None:
+                self._keep(frame)
+            return state, frame
+
+        return refined
+
+    def _keep(self, frame: Frame) -> None:
+        assert frame.detections is not None
+        self.since += 1
+        if self.count >= REFINE_MAX_OBSERVATIONS:
+            return
+        people = observations_of(frame.detections, frame.index, self.linker(frame.detections.boxes) + self.offset)
+        self.kept.append(people)
+        self.count, self.frames = self.count + len(people), self.frames + 1
+        if self.since >= REFINE_EVERY_FRAMES:
+            self.since = 0
+            self._refit(frame.index + 1)
+
+    def _refit(self, start: int) -> None:
+        from pedenv.calibration.refusals import CalibrationRefused
+
+        people = Observations.concat(self.kept)
+        self.kept = [people]
+        seen = WarmUp(people, self.frames, self.found.warmup.image)
+        try:
+            estimate = estimate_from(seen, self.found.backend_name, self.found.intrinsics, static=True)
+        except CalibrationRefused as exc:
+            self.history.append({"from_frame": start, "refused": str(exc), "observations": len(people)})
+            return
+        self.estimate, self.camera = estimate, estimate.camera(self.found.mount)
+        self.history.append({"from_frame": start, **estimate.summary()})
+
+    def widened(self, write: Callable[[tuple[EnvironmentState, Frame]], None]
+                ) -> Callable[[tuple[EnvironmentState, Frame]], None]:
+        """``write`` given each state widened by the estimate its frame ran with."""
+        from pedenv.calibration.spread import widen_state
+
+        def widened_write(result: tuple[EnvironmentState, Frame]) -> None:
+            estimate = self.used.pop(result[1].index, self.estimate)
+            write((widen_state(result[0], estimate, result[1].ego), result[1]))
+
+        return widened_write
+
+    def finish(self, folder: Path, summary: dict) -> None:
+        """The last estimate's files into the run's ``folder`` (over the warm-up's) and into
+        ``summary`` (``run.json``'s ``calibration``, with ``refinements``: each estimate and the
+        frame it applied from)."""
+        seen = WarmUp(Observations.concat(self.kept), self.frames, self.found.warmup.image)
+        final = write_estimate(folder, self.estimate, seen, self.found.backend_name, self.found.mount)
+        final["refinements"] = self.history
+        (folder / "calibration.json").write_text(json.dumps(final, indent=2, allow_nan=False) + "\n")
+        summary["calibration"] = final

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.calibrate import SelfCalibration, estimate_for_source
+from pedenv.apps.calibrate import Refinement, SelfCalibration, estimate_for_source
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
@@ -96,8 +96,10 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         sinks = live_address(extra.open(), summary)
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
-            write = estimated.widened(outputs.write) if estimated is not None else outputs.write
-            run_frames(rec.frames(), frames.process, write, config=pipe, done=outputs.done, stats=stats)
+            step, write, refined = _calibration_stages(estimated, frames.process, outputs.write)
+            run_frames(rec.frames(), step, write, config=pipe, done=outputs.done, stats=stats)
+        if refined is not None:
+            refined.finish(out, summary)
         _check_ended_early(rec, stats, summary)
         finished = True
     finally:
@@ -106,6 +108,19 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         _finish_summary(summary, out, frames, stats, pipe, outputs, sinks)
         finish_run(folder, summary, sinks, finished=finished)
     return summary
+
+
+def _calibration_stages(estimated: SelfCalibration | None, step: Callable[[Frame], Any],
+                        write: Callable[[Any], None]) -> tuple[Callable, Callable, Refinement | None]:
+    """The model step and the writer of a run: as they are with a calibration; a camera estimated
+    in the warm-up widens every written covariance by its uncertainty, and a static one is refined
+    as the run goes (:class:`~pedenv.apps.calibrate.Refinement`: newer estimates for later frames)."""
+    if estimated is None:
+        return step, write, None
+    refined = estimated.refinement()
+    if refined is None:
+        return step, estimated.widened(write), None
+    return refined.step(step), refined.widened(write), refined
 
 
 def _start_summary(rec: Recording | BagRecording, cfg: Config, folder: RunFolder,
