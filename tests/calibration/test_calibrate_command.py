@@ -97,3 +97,15 @@ def test_a_recording_without_people_is_one_line_and_writes_nothing(monkeypatch: 
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert err.startswith("error: too few upright people to estimate the camera: 0 person-images")
     assert "give --calibration" in err and not (tmp_path / "out").exists()
+
+
+def test_a_warm_up_whose_people_do_not_fix_the_camera_goes_on(plaza: tuple[Path, tuple[Frame, ...]], tmp_path: Path,
+                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    import pedenv.calibration.refusals as refusals
+    from pedenv.apps.calibrate import calibrate
+
+    folder, frames = plaza
+    monkeypatch.setattr(refusals, "MAX_FOCAL_RELATIVE_STD", 0.05)  # 3 or 6 frames' people leave 5-6 %
+    summary = calibrate(output=tmp_path / "cal", images=folder, backend=SceneBackend(frames), frames=3)
+    assert summary["warmup_frames"] == 9 and summary["std"]["focal_px"] <= 0.05 * summary["focal_px"]
+    assert summary["focal_px"] == pytest.approx(parameters_of(frames[0].camera)[0], rel=0.1)

@@ -16,6 +16,7 @@ import math
 import shutil
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +38,11 @@ WARMUP_SECONDS = 20.0
 #: the built-in static scene (10 Hz, about 45 people) fix its focal length within 3 %; on a CPU
 #: the network takes about a second a frame, so the warm-up stays a few minutes.
 WARMUP_MAX_FRAMES = 200
+#: When the people of a warm-up do not fix the camera (too few, or a focal length or height too
+#: uncertain) it goes on, a warm-up's length at a time, up to this many seconds of a video and
+#: frames: vtest.avi (10 Hz, a camera about 7 m up) fixes its focal length only over its whole
+#: 795 frames (1-sigma 8 %; 200, 400 and 600 frames leave it at 11 % or more).
+WARMUP_LONGEST_SECONDS, WARMUP_LONGEST_FRAMES = 120.0, 1200
 #: Pose backends that run a real network (whose keypoints sit as :data:`NETWORK_BODY` says).
 NETWORK_BACKENDS = ("onnx", "ultralytics")
 
@@ -51,9 +57,9 @@ class WarmUp:
 
 
 def warmup_frames(images: str | Path | None, video: str | Path | None,
-                  limit: int = WARMUP_MAX_FRAMES) -> Iterator[tuple[int, np.ndarray]]:
+                  limit: int = WARMUP_MAX_FRAMES, seconds: float = WARMUP_SECONDS) -> Iterator[tuple[int, np.ndarray]]:
     """(index, (H, W, 3) uint8 RGB) of the warm-up's frames: a folder's first ``limit`` images
-    (sorted by name) or a video's first :data:`WARMUP_SECONDS`, at most ``limit`` frames."""
+    (sorted by name) or a video's first ``seconds``, at most ``limit`` frames."""
     from pedenv.images import read_image_rgb
     from pedenv.recordings.footage import IMAGE_SUFFIXES
 
@@ -64,7 +70,7 @@ def warmup_frames(images: str | Path | None, video: str | Path | None,
 
         with video_capture(video) as cap:
             rate = cap.get(cv2.CAP_PROP_FPS)
-            count = min(limit, math.ceil(WARMUP_SECONDS * rate)) if rate and rate > 0 else limit
+            count = min(limit, math.ceil(seconds * rate)) if rate and rate > 0 else limit
             for index in range(count):
                 ok, bgr = cap.read()
                 if not ok:
@@ -102,6 +108,51 @@ def observe(frames: Iterator[tuple[int, np.ndarray]], backend: PoseBackend) -> W
     if last is None:
         raise InputError("the recording holds no readable frame to estimate the camera from")
     return WarmUp(Observations.concat(parts), count, last)
+
+
+def block_frames(video: str | Path | None, limit: int = WARMUP_MAX_FRAMES) -> int:
+    """Frames of one warm-up: ``limit``, and for a video at most its first :data:`WARMUP_SECONDS`."""
+    if video is None:
+        return limit
+    import cv2
+
+    from pedenv.video_files import video_capture
+
+    with video_capture(video) as cap:
+        rate = cap.get(cv2.CAP_PROP_FPS)
+    return min(limit, math.ceil(WARMUP_SECONDS * rate)) if rate and rate > 0 else limit
+
+
+def warm_up(images: str | Path | None, video: str | Path | None, backend: PoseBackend,
+            fit: Callable[[WarmUp], CameraEstimate], block: int) -> tuple[WarmUp, CameraEstimate]:
+    """The people of the recording's first frames and the camera ``fit`` to them, tried after every
+    ``block`` frames until it stands, up to :data:`WARMUP_LONGEST_SECONDS` and
+    :data:`WARMUP_LONGEST_FRAMES` (at least one block); the last refusal is raised (one line) when
+    none stood, or at once when a whole block showed nobody."""
+    from pedenv.calibration.refusals import CalibrationRefused
+
+    linker, parts, last, count = BoxLinker(), [], None, 0
+    frames = warmup_frames(images, video, max(block, WARMUP_LONGEST_FRAMES), max(WARMUP_LONGEST_SECONDS,
+                                                                                  WARMUP_SECONDS))
+    refused: CalibrationRefused | None = None
+    for index, image in frames:
+        det = _detect(backend, index, image)
+        parts.append(observations_of(det, index, linker(det.boxes)))
+        last, count = image, count + 1
+        if count % block == 0:
+            seen = WarmUp(Observations.concat(parts), count, last)
+            try:
+                return seen, fit(seen)
+            except CalibrationRefused as exc:
+                if not len(seen.people):
+                    raise
+                refused = exc
+    if last is None:
+        raise InputError("the recording holds no readable frame to estimate the camera from")
+    seen = WarmUp(Observations.concat(parts), count, last)
+    if count % block or refused is None:
+        return seen, fit(seen)
+    raise refused
 
 
 def body_of(backend_name: str) -> BodyModel:
@@ -159,14 +210,18 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if video is not None and not Path(video).is_file():
         raise InputError(f"{video}: video file not found")
-    k = None
+    k, size = None, None
     if calibration is not None:
         width, height, k = load_intrinsics(calibration)
-    warmup = observe(warmup_frames(images, video, frames), backend)
-    if calibration is not None and (warmup.image.shape[1], warmup.image.shape[0]) != (width, height):
-        raise InputError(f"{calibration}: the calibration is {width}x{height} pixels, the frames "
-                         f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
-    estimate = estimate_from(warmup, backend.name, k, static)
+        size = (width, height)
+
+    def fit(warmup: WarmUp) -> CameraEstimate:
+        if size is not None and (warmup.image.shape[1], warmup.image.shape[0]) != size:
+            raise InputError(f"{calibration}: the calibration is {size[0]}x{size[1]} pixels, the frames "
+                             f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
+        return estimate_from(warmup, backend.name, k, static)
+
+    warmup, estimate = warm_up(images, video, backend, fit, block_frames(video, frames))
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
     return write_estimate(folder, estimate, warmup, backend.name, "static" if static else "vehicle")
 
@@ -240,8 +295,9 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
         from pedenv.detection import backend_options, create_detector
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
-    warmup = observe(warmup_frames(images, video, WARMUP_MAX_FRAMES), backend)
-    estimate = estimate_from(warmup, backend_name, k, mount == "static")
+    warmup, estimate = warm_up(images, video, backend, partial(estimate_from, backend_name=backend_name,
+                                                               intrinsics=k, static=mount == "static"),
+                               block_frames(video, WARMUP_MAX_FRAMES))
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
                if key not in ("estimated", "uncertainty")}
     path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"

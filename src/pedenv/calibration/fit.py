@@ -196,6 +196,7 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     start = closed_form(obs, centre, span_world, body.ankle_m(), focal)
     f0 = start.focal if start.focal is not None else float(size[0])  # about a 53 deg field of view
     x0 = np.array([start.height if np.isfinite(start.height) else 5.0, start.tilt, 0.0] + ([] if focal else [f0]))
+    walking = walking and _travels(x0, obs, body, centre, focal)
     fit = _solve(x0, obs, body, centre, focal, walking=walking)
     inliers = np.abs(fit.fun[: 2 * len(obs)].reshape(-1, 2)).max(axis=1) <= OUTLIER_SIGMA
     kept = obs.subset(inliers)
@@ -211,6 +212,15 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
                               len(kept), rms, focal is not None)
     check_result(estimate, start)
     return estimate
+
+
+def _travels(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+             focal: float | None) -> bool:
+    """Whether any track moves on the ground under the camera ``x`` (H, tilt, roll[, f]): else a
+    walker's forward offset has nothing to fix it and is left out."""
+    f = focal if focal is not None else x[3]
+    ground = ground_points(obs.feet, intrinsics(f, centre), camera_rotation(x[1], x[2]), x[0], body.ankle_m())
+    return bool(np.any(travel_directions(ground, obs) != 0.0))
 
 
 def _inverse(information: np.ndarray) -> np.ndarray:
