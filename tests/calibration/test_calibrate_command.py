@@ -84,9 +84,9 @@ def test_which_runs_estimate_their_camera(tmp_path: Path, calibration: str | Non
 def test_a_recording_without_people_is_one_line_and_writes_nothing(monkeypatch: pytest.MonkeyPatch,
                                                                    capsys: pytest.CaptureFixture, tmp_path: Path,
                                                                    command: str) -> None:
-    from cli_in_process import pedenv
-
     from pedenv.images import write_image
+
+    from cli_in_process import pedenv
 
     folder = tmp_path / "empty"
     folder.mkdir()

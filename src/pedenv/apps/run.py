@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import cv2
 import numpy as np
 
-from pedenv.apps.calibrate import Refinement, SelfCalibration, estimate_for_source
+from pedenv.apps.calibrate import SelfCalibration, estimate_for_source
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
 from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
@@ -81,8 +81,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    source, estimated = estimate_for_source(source, pose, backend)  # a static camera without one: its warm-up
-    cfg = estimated.widen(cfg) if estimated is not None else cfg
+    source, estimated, cfg = _self_calibrated(source, pose, backend, cfg)  # a camera without a placement: its warm-up
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     rec, backend, folder = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
@@ -96,10 +95,9 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         sinks = live_address(extra.open(), summary)
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
-            step, write, refined = _calibration_stages(estimated, frames.process, outputs.write)
+            step, write, finish = _calibration_stages(estimated, frames.process, outputs.write)
             run_frames(rec.frames(), step, write, config=pipe, done=outputs.done, stats=stats)
-        if refined is not None:
-            refined.finish(out, summary)
+        finish(out, summary)
         _check_ended_early(rec, stats, summary)
         finished = True
     finally:
@@ -110,17 +108,25 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     return summary
 
 
+def _self_calibrated(source: RecordingSource, pose: PoseOptions, backend: PoseBackend | None,
+                     cfg: Config) -> tuple[RecordingSource, SelfCalibration | None, Config]:
+    """The recording with its camera (estimated in a warm-up where it has no placement,
+    :func:`~pedenv.apps.calibrate.estimate_for_source`) and ``cfg`` widened by the estimate's uncertainty."""
+    source, estimated = estimate_for_source(source, pose, backend)
+    return source, estimated, estimated.widen(cfg) if estimated is not None else cfg
+
+
 def _calibration_stages(estimated: SelfCalibration | None, step: Callable[[Frame], Any],
-                        write: Callable[[Any], None]) -> tuple[Callable, Callable, Refinement | None]:
-    """The model step and the writer of a run: as they are with a calibration; a camera estimated
-    in the warm-up widens every written covariance by its uncertainty, and a static one is refined
-    as the run goes (:class:`~pedenv.apps.calibrate.Refinement`: newer estimates for later frames)."""
-    if estimated is None:
-        return step, write, None
-    refined = estimated.refinement()
-    if refined is None:
-        return step, estimated.widened(write), None
-    return refined.step(step), refined.widened(write), refined
+                        write: Callable[[Any], None]) -> tuple[Callable, Callable, Callable[[Path, dict], None]]:
+    """The model step, the writer and what ends a run (``finish(folder, summary)``): as they are
+    with a calibration; a camera estimated in the warm-up widens every written covariance by its
+    uncertainty, and a static one is refined as the run goes
+    (:class:`~pedenv.apps.calibrate.Refinement`: newer estimates for later frames, the last one
+    written at the end)."""
+    refined = estimated.refinement() if estimated is not None else None
+    if refined is not None:
+        return refined.step(step), refined.widened(write), refined.finish
+    return step, estimated.widened(write) if estimated is not None else write, lambda *_: None
 
 
 def _start_summary(rec: Recording | BagRecording, cfg: Config, folder: RunFolder,
