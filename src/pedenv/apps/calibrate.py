@@ -346,7 +346,7 @@ class Refinement:
     def __init__(self, found: SelfCalibration) -> None:
         self.found = found
         self.estimate = found.estimate
-        self.camera = found.estimate.camera(found.mount)
+        self.camera: Camera | None = None  # None until a refit: the calibration file's camera as read
         self.kept = [found.warmup.people]
         self.count = len(found.warmup.people)
         self.linker, self.offset = BoxLinker(), int(found.warmup.people.tracks.max(initial=-1)) + 1
@@ -360,7 +360,7 @@ class Refinement:
 
         def refined(frame: Frame) -> tuple[EnvironmentState, Frame]:
             after = frame.index >= self.found.warmup.frames
-            if after:
+            if after and self.camera is not None:
                 frame = dataclasses.replace(frame, camera=self.camera)
             state, frame = process(frame)
             self.used[frame.index] = self.estimate
