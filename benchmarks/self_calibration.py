@@ -1,21 +1,24 @@
 """Self-calibration: the camera estimated from the people it sees, against the truth or a reference.
 
     PYTHONPATH=src python benchmarks/self_calibration.py [--samples ../shared/samples/real]
-        [--only synthetic|mot17|vtest|vehicle] [--video vtest.avi] [--frames 200]
+        [--only synthetic|mot17|vtest|vehicle] [--video vtest.avi] [--frames 800]
 
 - synthetic: the built-in ``static-plaza`` scene (seed 0, 150 frames, a camera 6 m up, 20 deg
   down, 64.5 deg field of view), skeletons from the detector model (``yolo11n-pose-far``
   profile) and exact skeletons: the estimate against the truth, then the positions of the fused
   method with the true and with the estimated camera (the estimate's spreads widening the static
   camera's ``fused.static_camera_*`` as ``pedenv run`` does) side by side.
+- refinement: the estimate as ``pedenv run`` refines it on a 60 s synthetic scene (first 200
+  frames, then more), against the truth, and the true ground points cut with it again.
 - mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
   6 images each), the estimate against UCMCTrack's camera (``ucmctrack_cam_para/``, itself an
   estimate), with the focal length free and with it taken from UCMCTrack; where the estimate
   stands, the fused method's positions with either camera against the box bottoms cut with
   UCMCTrack's ground.
 - vtest: the real network on the first ``--frames`` frames of a street video (Debian's
-  ``opencv-doc`` ``examples/data/vtest.avi``): the estimate of each half and of all frames
-  (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
+  ``opencv-doc`` ``examples/data/vtest.avi``, all 795 by default, 30 min of a 2-core CPU): the
+  estimate of each half, of the first 200, 400, 600 frames (the warm-up going on) and of all
+  frames (stable over time?), and the people's heights the fit gives (1.5-1.9 m?).
 - sequences: the eight KITTI tracking drives of ``kitti/tracking_sequences/`` (labels only),
   skeletons' ankle and eye points rendered from the pedestrians' 3D boxes with 2 px noise:
   height and tilt with the intrinsics known, against the plane of the boxes' bottoms.
@@ -137,7 +140,7 @@ def synthetic() -> None:
         for frame in scene.frames:
             det: Detections = backend(frame)
             parts.append(observations_of(det, frame.index, linker(det.boxes)))
-        est = fit(Observations.concat(parts), (truth_camera.width, truth_camera.height))
+        est = fit(Observations.concat(parts), (truth_camera.width, truth_camera.height), walking=True)
         row(label, est, truth)
         if isinstance(est, Exception):
             continue
@@ -150,6 +153,40 @@ def synthetic() -> None:
             m = coverage(scene.frames, camera, spec, fused, spread)
             print(f"  {'':34s} positions, {name:17s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
                   f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")
+
+
+def refinement() -> None:
+    """The estimate as ``pedenv run`` refines it: a 60 s ``static-plaza`` scene (seed 0), the detector
+    model's skeletons, the camera fitted to the first 200 frames (the warm-up) and to every 150
+    more; each against the truth, and the scene's true ground points seen by the true camera cut
+    with it again (the calibration's own share of the positions' error)."""
+    from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics, parameters_of, project
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.detection import create_detector
+    from pedenv.synthetic import generate_scenes
+
+    scene = generate_scenes(0, ["static-plaza"], duration_s=60.0)[0]
+    camera = scene.frames[0].camera
+    truth, size = parameters_of(camera), (camera.width, camera.height)
+    backend, linker, parts = create_detector("detector-model:yolo11n-pose-far"), BoxLinker(), []
+    for frame in scene.frames:
+        det = backend(frame)
+        parts.append(observations_of(det, frame.index, linker(det.boxes)))
+    obs = Observations.concat(parts)
+    xy = np.concatenate([f.ground_truth.positions[:, :2] for f in scene.frames])
+    pixels = project(np.c_[xy, np.zeros(len(xy))], camera.intrinsics, camera.cam_to_vehicle[:3, :3], truth[1])
+    inside = np.isfinite(pixels).all(axis=1) & (pixels >= 0).all(axis=1) & (pixels < size).all(axis=1)
+    print("refinement: static-plaza 60 s (seed 0), detector model, the camera after n frames")
+    for n in (200, 350, 500, 600):
+        est = fit(obs.subset(obs.frames < n), size, walking=True)
+        row(f"first {n} frames", est, truth)
+        if isinstance(est, Exception):
+            continue
+        cut = ground_points(pixels[inside], intrinsics(est.focal, est.centre), camera_rotation(est.tilt, est.roll),
+                            est.height)[:, :2]
+        err = np.linalg.norm(cut - xy[inside], axis=1) / np.linalg.norm(xy[inside], axis=1)
+        print(f"  {'':34s} true ground points cut again: mean relative error {100 * np.nanmean(err):.2f} %")
 
 
 def mot17(samples: Path) -> None:
@@ -168,8 +205,8 @@ def mot17(samples: Path) -> None:
         truth = parameters_of(ref)
         obs = observe_frames([read_image_rgb(seq.image_path(n)) for n in seq.frames], backend)
         size = (seq.info.width, seq.info.height)
-        row(f"{name} ({len(seq.frames)} images)", fit(obs, size, body=NETWORK_BODY), truth)
-        given = fit(obs, size, body=NETWORK_BODY, focal=truth[0])
+        row(f"{name} ({len(seq.frames)} images)", fit(obs, size, body=NETWORK_BODY, walking=True), truth)
+        given = fit(obs, size, body=NETWORK_BODY, focal=truth[0], walking=True)
         row("  focal from UCMCTrack", given, truth)
         if not isinstance(given, Exception):
             positions(samples / "mot17" / name, ref, given)
@@ -198,14 +235,15 @@ def vtest(video: Path, frames: int) -> None:
     if not video.is_file():
         print(f"vtest: {video} not found (apt-get install opencv-doc)")
         return
-    images = [image for _, image in warmup_frames(None, video, frames)]
+    images = [image for _, image in warmup_frames(None, video, frames, seconds=float("inf"))]
     obs = observe_frames(images, onnx_far())
     size = (images[0].shape[1], images[0].shape[0])
     half = len(images) // 2
     print(f"vtest.avi ({len(images)} frames), real network (onnx far), no truth: consistency")
-    for label, keep in ((f"frames 0-{half - 1}", obs.frames < half),
-                        (f"frames {half}-{len(images) - 1}", obs.frames >= half), ("all frames", obs.frames >= 0)):
-        est = fit(obs.subset(keep), size, body=NETWORK_BODY)
+    growing = [(f"frames 0-{n - 1}", obs.frames < n) for n in range(200, len(images), 200)]
+    for label, keep in ((f"frames 0-{half - 1}", obs.frames < half), (f"frames {half}-{len(images) - 1}",
+                        obs.frames >= half), *growing, ("all frames", obs.frames >= 0)):
+        est = fit(obs.subset(keep), size, body=NETWORK_BODY, walking=True)
         row(label, est, None)
         if not isinstance(est, Exception):
             heights = person_heights(est, obs.subset(keep))
@@ -331,12 +369,15 @@ def cost() -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--only", choices=("synthetic", "mot17", "vtest", "vehicle", "sequences", "cost"))
+    parser.add_argument("--only", choices=("synthetic", "refinement", "mot17", "vtest", "vehicle", "sequences",
+                                           "cost"))
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
-    parser.add_argument("--frames", type=int, default=200)
+    parser.add_argument("--frames", type=int, default=800, help="vtest: its first frames (all 795 by default)")
     args = parser.parse_args(argv)
     if args.only in (None, "synthetic"):
         synthetic()
+    if args.only in (None, "refinement"):
+        refinement()
     if args.only in (None, "mot17"):
         mot17(args.samples)
     if args.only in (None, "vtest"):

@@ -78,3 +78,34 @@ def test_which_runs_estimate_their_camera(tmp_path: Path, calibration: str | Non
         path = tmp_path / "c.yaml"
         path.write_text(files[calibration])
     assert needs_estimate(tmp_path, None, path, static) is expected
+
+
+@pytest.mark.parametrize("command", ["calibrate", "run"])
+def test_a_recording_without_people_is_one_line_and_writes_nothing(monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture, tmp_path: Path,
+                                                                   command: str) -> None:
+    from pedenv.images import write_image
+
+    from cli_in_process import pedenv
+
+    folder = tmp_path / "empty"
+    folder.mkdir()
+    for index in range(5):
+        write_image(folder / f"{index:06d}.jpg", np.full((120, 160, 3), 90, np.uint8))
+    extra = ["--fps", "10", "--static"] if command == "run" else []
+    code, _, err = pedenv(monkeypatch, capsys, command, "--images", folder, "--output", tmp_path / "out", *extra)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert err.startswith("error: too few upright people to estimate the camera: 0 person-images")
+    assert "give --calibration" in err and not (tmp_path / "out").exists()
+
+
+def test_a_warm_up_whose_people_do_not_fix_the_camera_goes_on(plaza: tuple[Path, tuple[Frame, ...]], tmp_path: Path,
+                                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    import pedenv.calibration.refusals as refusals
+    from pedenv.apps.calibrate import calibrate
+
+    folder, frames = plaza
+    monkeypatch.setattr(refusals, "MAX_FOCAL_RELATIVE_STD", 0.05)  # 3 or 6 frames' people leave 5-6 %
+    summary = calibrate(output=tmp_path / "cal", images=folder, backend=SceneBackend(frames), frames=3)
+    assert summary["warmup_frames"] == 9 and summary["std"]["focal_px"] <= 0.05 * summary["focal_px"]
+    assert summary["focal_px"] == pytest.approx(parameters_of(frames[0].camera)[0], rel=0.1)

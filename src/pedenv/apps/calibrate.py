@@ -4,7 +4,8 @@ The warm-up reads the first :data:`WARMUP_SECONDS` of a video (or the first
 :data:`WARMUP_MAX_FRAMES` images of a folder, whichever is fewer), finds the people with the
 pose backend, links them from frame to frame and fits the camera
 (:func:`pedenv.calibration.fit.estimate_camera`). ``pedenv run`` without ``--calibration`` runs
-the same warm-up before its frames.
+the same warm-up before its frames, then refines a static camera's estimate as it runs
+(:class:`Refinement`).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import math
 import shutil
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +40,11 @@ WARMUP_SECONDS = 20.0
 #: the built-in static scene (10 Hz, about 45 people) fix its focal length within 3 %; on a CPU
 #: the network takes about a second a frame, so the warm-up stays a few minutes.
 WARMUP_MAX_FRAMES = 200
+#: When the people of a warm-up do not fix the camera (too few, or a focal length or height too
+#: uncertain) it goes on, a warm-up's length at a time, up to this many seconds of a video and
+#: frames: vtest.avi (10 Hz, a camera about 7 m up) fixes its focal length only over its whole
+#: 795 frames (1-sigma 8 %; 200, 400 and 600 frames leave it at 11 % or more).
+WARMUP_LONGEST_SECONDS, WARMUP_LONGEST_FRAMES = 120.0, 1200
 #: Pose backends that run a real network (whose keypoints sit as :data:`NETWORK_BODY` says).
 NETWORK_BACKENDS = ("onnx", "ultralytics")
 
@@ -52,9 +59,9 @@ class WarmUp:
 
 
 def warmup_frames(images: str | Path | None, video: str | Path | None,
-                  limit: int = WARMUP_MAX_FRAMES) -> Iterator[tuple[int, np.ndarray]]:
+                  limit: int = WARMUP_MAX_FRAMES, seconds: float = WARMUP_SECONDS) -> Iterator[tuple[int, np.ndarray]]:
     """(index, (H, W, 3) uint8 RGB) of the warm-up's frames: a folder's first ``limit`` images
-    (sorted by name) or a video's first :data:`WARMUP_SECONDS`, at most ``limit`` frames."""
+    (sorted by name) or a video's first ``seconds``, at most ``limit`` frames."""
     from pedenv.images import read_image_rgb
     from pedenv.recordings.footage import IMAGE_SUFFIXES
 
@@ -65,7 +72,7 @@ def warmup_frames(images: str | Path | None, video: str | Path | None,
 
         with video_capture(video) as cap:
             rate = cap.get(cv2.CAP_PROP_FPS)
-            count = min(limit, math.ceil(WARMUP_SECONDS * rate)) if rate and rate > 0 else limit
+            count = min(limit, math.ceil(seconds * rate)) if rate and rate > 0 else limit
             for index in range(count):
                 ok, bgr = cap.read()
                 if not ok:
@@ -93,16 +100,52 @@ def _detect(backend: PoseBackend, index: int, image: np.ndarray) -> Detections:
     return backend(Frame(index, float(index), camera, EgoPose(np.zeros(3), np.eye(3)), image=image))
 
 
-def observe(frames: Iterator[tuple[int, np.ndarray]], backend: PoseBackend) -> WarmUp:
-    """The upright people of ``frames``, linked into tracks (:class:`~pedenv.calibration.linking.BoxLinker`)."""
+def block_frames(video: str | Path | None, limit: int = WARMUP_MAX_FRAMES) -> int:
+    """Frames of one warm-up: ``limit``, and for a video at most its first :data:`WARMUP_SECONDS`."""
+    if video is None:
+        return limit
+    import cv2
+
+    from pedenv.video_files import video_capture
+
+    with video_capture(video) as cap:
+        rate = cap.get(cv2.CAP_PROP_FPS)
+    return min(limit, math.ceil(WARMUP_SECONDS * rate)) if rate and rate > 0 else limit
+
+
+def warm_up(images: str | Path | None, video: str | Path | None, backend: PoseBackend,
+            fit: Callable[[WarmUp], CameraEstimate], block: int,
+            road: TravelWatcher | None = None) -> tuple[WarmUp, CameraEstimate]:
+    """The people of the recording's first frames and the camera ``fit`` to them, tried after every
+    ``block`` frames until it stands, up to :data:`WARMUP_LONGEST_SECONDS` and
+    :data:`WARMUP_LONGEST_FRAMES` (at least one block); the last refusal is raised (one line) when
+    none stood, or at once when a whole block showed nobody. ``road`` (or None) watches the frames on
+    the way (a vehicle camera's direction of travel, :class:`~pedenv.calibration.road.TravelWatcher`)."""
+    from pedenv.calibration.refusals import CalibrationRefused
+
     linker, parts, last, count = BoxLinker(), [], None, 0
+    frames = warmup_frames(images, video, max(block, WARMUP_LONGEST_FRAMES), max(WARMUP_LONGEST_SECONDS,
+                                                                                  WARMUP_SECONDS))
+    frames = road.watch(frames) if road is not None else frames
+    refused: CalibrationRefused | None = None
     for index, image in frames:
         det = _detect(backend, index, image)
         parts.append(observations_of(det, index, linker(det.boxes)))
         last, count = image, count + 1
+        if count % block == 0:
+            seen = WarmUp(Observations.concat(parts), count, last)
+            try:
+                return seen, fit(seen)
+            except CalibrationRefused as exc:
+                if not len(seen.people):
+                    raise
+                refused = exc
     if last is None:
         raise InputError("the recording holds no readable frame to estimate the camera from")
-    return WarmUp(Observations.concat(parts), count, last)
+    seen = WarmUp(Observations.concat(parts), count, last)
+    if count % block or refused is None:
+        return seen, fit(seen)
+    raise refused
 
 
 def body_of(backend_name: str) -> BodyModel:
@@ -111,30 +154,26 @@ def body_of(backend_name: str) -> BodyModel:
 
 
 def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None,
-                  road: TravelWatcher | None = None) -> CameraEstimate:
+                  road: TravelWatcher | None = None, static: bool = False) -> CameraEstimate:
     """The camera fitted to the warm-up's people (``intrinsics`` (3, 3) pixels fix focal length
     and principal point when given); ``road``: a vehicle camera's travel directions seen during the
-    warm-up, combined with the people (:func:`pedenv.calibration.vehicle.estimate_mounting`)."""
+    warm-up, combined with the people (:func:`pedenv.calibration.vehicle.estimate_mounting`);
+    ``static``: a fixed camera, whose tracks' ground points give each walker's direction of travel
+    (:func:`~pedenv.calibration.fit.estimate_camera` ``walking``)."""
     size = (warmup.image.shape[1], warmup.image.shape[0])
     focal = None if intrinsics is None else float(intrinsics[0, 0])
     centre = None if intrinsics is None else (float(intrinsics[0, 2]), float(intrinsics[1, 2]))
     if road is not None and focal is not None:
         return estimate_mounting(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
                                  road=road.cue())
-    return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name))
+    return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
+                           walking=static)
 
 
 def road_watcher(intrinsics: np.ndarray | None, mount: str) -> TravelWatcher | None:
     """A vehicle camera with its intrinsics: a watcher of its direction of travel during the warm-up
     (:class:`~pedenv.calibration.road.TravelWatcher`); else None (a static camera has no road cue)."""
     return TravelWatcher(intrinsics) if mount == "vehicle" and intrinsics is not None else None
-
-
-def observe_warmup(images: str | Path | None, video: str | Path | None, backend: PoseBackend,
-                   road: TravelWatcher | None, limit: int = WARMUP_MAX_FRAMES) -> WarmUp:
-    """:func:`observe` over the warm-up's frames, ``road`` (or None) watching them on the way."""
-    frames = warmup_frames(images, video, limit)
-    return observe(road.watch(frames) if road is not None else frames, backend)
 
 
 def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backend_name: str,
@@ -175,15 +214,19 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if video is not None and not Path(video).is_file():
         raise InputError(f"{video}: video file not found")
-    k = None
+    k, size = None, None
     if calibration is not None:
         width, height, k = load_intrinsics(calibration)
+        size = (width, height)
     road = road_watcher(k, "static" if static else "vehicle")
-    warmup = observe_warmup(images, video, backend, road, frames)
-    if calibration is not None and (warmup.image.shape[1], warmup.image.shape[0]) != (width, height):
-        raise InputError(f"{calibration}: the calibration is {width}x{height} pixels, the frames "
-                         f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
-    estimate = estimate_from(warmup, backend.name, k, road)
+
+    def fit(warmup: WarmUp) -> CameraEstimate:
+        if size is not None and (warmup.image.shape[1], warmup.image.shape[0]) != size:
+            raise InputError(f"{calibration}: the calibration is {size[0]}x{size[1]} pixels, the frames "
+                             f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
+        return estimate_from(warmup, backend.name, k, road, static)
+
+    warmup, estimate = warm_up(images, video, backend, fit, block_frames(video, frames), road)
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
     return write_estimate(folder, estimate, warmup, backend.name, "static" if static else "vehicle")
 
@@ -198,6 +241,11 @@ class SelfCalibration:
     path: Path
     backend_name: str
     mount: str = "static"
+    intrinsics: np.ndarray | None = None  # (3, 3) pixels when the calibration gave them
+
+    def refinement(self) -> Refinement | None:
+        """A static camera's :class:`Refinement` over the run, None on a vehicle."""
+        return Refinement(self) if self.mount == "static" else None
 
     def widen(self, cfg: Config) -> Config:
         """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
@@ -253,15 +301,16 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
     road = road_watcher(k, mount)
-    warmup = observe_warmup(images, video, backend, road)
-    estimate = estimate_from(warmup, backend_name, k, road)
+    warmup, estimate = warm_up(images, video, backend, partial(estimate_from, backend_name=backend_name,
+                                                               intrinsics=k, road=road, static=mount == "static"),
+                               block_frames(video, WARMUP_MAX_FRAMES), road)
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
                if key not in ("estimated", "uncertainty")}
     path = Path(tempfile.mkdtemp(prefix="pedenv-calibration-")) / "calibration.yaml"
     import yaml
 
     path.write_text(yaml.safe_dump(mapping, sort_keys=False), encoding="utf-8")
-    return SelfCalibration(estimate, warmup, path, backend_name, mount)
+    return SelfCalibration(estimate, warmup, path, backend_name, mount, k)
 
 
 def estimate_for_source(source: RecordingSource, pose: PoseOptions,
@@ -275,3 +324,101 @@ def estimate_for_source(source: RecordingSource, pose: PoseOptions,
     found = self_calibrate(source.images, source.video, source.calibration, backend, pose.backend or "onnx",
                            pose.device, "static" if source.static else "vehicle")
     return dataclasses.replace(source, calibration=found.path), found
+
+
+#: After the warm-up, ``pedenv run`` (a static camera it estimated) keeps the upright people of
+#: every frame it runs and fits the camera again, to all of them, each time this many new frames
+#: have passed: 300 frames are 10 s of a 30 Hz video; the fit takes 0.3 s of a CPU for 1000
+#: person-images and 1.4 s for vtest.avi's 3794, a few ms per frame spread over the interval.
+REFINE_EVERY_FRAMES = 300
+#: The refits stop once this many person-images are kept (the estimate then stays): the fit's
+#: time grows with them (a few seconds here), and its uncertainty no longer shrinks much (it is
+#: held by the crowd's mean height, ``CROWD_MEAN_STD_M``, and by each person's repeated images).
+REFINE_MAX_OBSERVATIONS = 10000
+
+
+class Refinement:
+    """The camera of ``pedenv run``'s static self-calibration refined as more people are seen.
+
+    ``step`` wraps the pipeline's model step: each frame after the warm-up is given the camera
+    in force (the latest estimate), its people are kept, and every :data:`REFINE_EVERY_FRAMES`
+    frames the camera is fitted to all people kept so far. A new estimate applies from the next
+    frame on; a frame already run is never run or written again. A refit the people do not fix
+    (:class:`~pedenv.calibration.refusals.CalibrationRefused`) leaves the estimate as it was
+    and is noted in :attr:`history`. ``widened`` gives each written state the covariance of
+    the estimate its frame ran with.
+    """
+
+    def __init__(self, found: SelfCalibration) -> None:
+        self.found = found
+        self.estimate = found.estimate
+        self.camera: Camera | None = None  # None until a refit: the calibration file's camera as read
+        self.kept = [found.warmup.people]
+        self.count = len(found.warmup.people)
+        self.linker, self.offset = BoxLinker(), int(found.warmup.people.tracks.max(initial=-1)) + 1
+        self.frames, self.since = found.warmup.frames, 0
+        self.used: dict[int, CameraEstimate] = {}
+        self.history: list[dict] = [{"from_frame": 0, **found.estimate.summary()}]
+
+    def step(self, process: Callable[[Frame], tuple[EnvironmentState, Frame]]
+             ) -> Callable[[Frame], tuple[EnvironmentState, Frame]]:
+        """``process`` with the camera in force given to each frame after the warm-up, its people kept."""
+
+        def refined(frame: Frame) -> tuple[EnvironmentState, Frame]:
+            after = frame.index >= self.found.warmup.frames
+            if after and self.camera is not None:
+                frame = dataclasses.replace(frame, camera=self.camera)
+            state, frame = process(frame)
+            self.used[frame.index] = self.estimate
+            if after and frame.detections is not None:
+                self._keep(frame)
+            return state, frame
+
+        return refined
+
+    def _keep(self, frame: Frame) -> None:
+        assert frame.detections is not None
+        self.since += 1
+        if self.count >= REFINE_MAX_OBSERVATIONS:
+            return
+        people = observations_of(frame.detections, frame.index, self.linker(frame.detections.boxes) + self.offset)
+        self.kept.append(people)
+        self.count, self.frames = self.count + len(people), self.frames + 1
+        if self.since >= REFINE_EVERY_FRAMES:
+            self.since = 0
+            self._refit(frame.index + 1)
+
+    def _refit(self, start: int) -> None:
+        from pedenv.calibration.refusals import CalibrationRefused
+
+        people = Observations.concat(self.kept)
+        self.kept = [people]
+        seen = WarmUp(people, self.frames, self.found.warmup.image)
+        try:
+            estimate = estimate_from(seen, self.found.backend_name, self.found.intrinsics, static=True)
+        except CalibrationRefused as exc:
+            self.history.append({"from_frame": start, "refused": str(exc), "observations": len(people)})
+            return
+        self.estimate, self.camera = estimate, estimate.camera(self.found.mount)
+        self.history.append({"from_frame": start, **estimate.summary()})
+
+    def widened(self, write: Callable[[tuple[EnvironmentState, Frame]], None]
+                ) -> Callable[[tuple[EnvironmentState, Frame]], None]:
+        """``write`` given each state widened by the estimate its frame ran with."""
+        from pedenv.calibration.spread import widen_state
+
+        def widened_write(result: tuple[EnvironmentState, Frame]) -> None:
+            estimate = self.used.pop(result[1].index, self.estimate)
+            write((widen_state(result[0], estimate, result[1].ego), result[1]))
+
+        return widened_write
+
+    def finish(self, folder: Path, summary: dict) -> None:
+        """The last estimate's files into the run's ``folder`` (over the warm-up's) and into
+        ``summary`` (``run.json``'s ``calibration``, with ``refinements``: each estimate and the
+        frame it applied from)."""
+        seen = WarmUp(Observations.concat(self.kept), self.frames, self.found.warmup.image)
+        final = write_estimate(folder, self.estimate, seen, self.found.backend_name, self.found.mount)
+        final["refinements"] = self.history
+        (folder / "calibration.json").write_text(json.dumps(final, indent=2, allow_nan=False) + "\n")
+        summary["calibration"] = final

@@ -81,8 +81,8 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    source, estimated = estimate_for_source(check_before_prepasses(source, output, config), pose, backend)
-    cfg = estimated.widen(cfg) if estimated is not None else cfg
+    source = check_before_prepasses(source, output, config)  # the output folder and a --static camera first
+    source, estimated, cfg = _self_calibrated(source, pose, backend, cfg)  # a camera without a placement: its warm-up
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     rec, backend, folder, poses = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
@@ -96,8 +96,9 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         sinks = live_address(extra.open(), summary)
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
-            write = estimated.widened(outputs.write) if estimated is not None else outputs.write
-            run_frames(rec.frames(), frames.process, write, config=pipe, done=outputs.done, stats=stats)
+            step, write, finish = _calibration_stages(estimated, frames.process, outputs.write)
+            run_frames(rec.frames(), step, write, config=pipe, done=outputs.done, stats=stats)
+        finish(out, summary)
         _check_ended_early(rec, stats, summary)
         finished = True
     finally:
@@ -106,6 +107,27 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         _finish_summary(summary, out, frames, stats, pipe, outputs, sinks)
         finish_run(folder, summary, sinks, finished=finished)
     return summary
+
+
+def _self_calibrated(source: RecordingSource, pose: PoseOptions, backend: PoseBackend | None,
+                     cfg: Config) -> tuple[RecordingSource, SelfCalibration | None, Config]:
+    """The recording with its camera (estimated in a warm-up where it has no placement,
+    :func:`~pedenv.apps.calibrate.estimate_for_source`) and ``cfg`` widened by the estimate's uncertainty."""
+    source, estimated = estimate_for_source(source, pose, backend)
+    return source, estimated, estimated.widen(cfg) if estimated is not None else cfg
+
+
+def _calibration_stages(estimated: SelfCalibration | None, step: Callable[[Frame], Any],
+                        write: Callable[[Any], None]) -> tuple[Callable, Callable, Callable[[Path, dict], None]]:
+    """The model step, the writer and what ends a run (``finish(folder, summary)``): as they are
+    with a calibration; a camera estimated in the warm-up widens every written covariance by its
+    uncertainty, and a static one is refined as the run goes
+    (:class:`~pedenv.apps.calibrate.Refinement`: newer estimates for later frames, the last one
+    written at the end)."""
+    refined = estimated.refinement() if estimated is not None else None
+    if refined is not None:
+        return refined.step(step), refined.widened(write), refined.finish
+    return step, estimated.widened(write) if estimated is not None else write, lambda *_: None
 
 
 def _start_summary(rec: Recording | BagRecording, cfg: Config, folder: RunFolder,

@@ -19,7 +19,9 @@ Words used across the package, its settings and ``docs/any_camera.md``:
 The fit: a closed-form start from the horizon (a person's pixel span grows linearly with the
 row of the feet and vanishes on the horizon) and the vertical vanishing point (which with
 the horizon gives ``f`` and the tilt), then a robust least-squares fit of every person's head
-point given the foot point under the height prior (1.72 m, 0.09 m: the fused method's).
+point given the foot point under the height prior (1.72 m, 0.09 m: the fused method's); for a
+static camera the head is placed a fitted offset ahead of the feet along the person's direction
+of travel (the eyes sit in front of the body's axis, walkers lean forward).
 The covariance of (f, H, tilt, roll) comes from the fit's Jacobian, counted per person, not
 per image. :func:`pedenv.calibration.fit.estimate_camera` is the entry point.
 """

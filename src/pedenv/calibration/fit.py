@@ -43,6 +43,19 @@ WITHIN_PERSON_SPAN_STD = 0.03
 UNFIXED_RIDGE = 1e-12
 #: Misfit (in sigmas) above which a person-image is dropped before the final fit.
 OUTLIER_SIGMA = 3.0
+#: Bounds of the fitted forward offset of the head keypoint from the feet's vertical, along a
+#: walker's direction of travel, metres (:func:`estimate_camera` ``walking``). The eyes sit on
+#: the face, about 0.07 m in front of the body's axis (``pedenv.body.EYE_FORWARD`` of 1.72 m),
+#: and a walker leans forward a few centimetres more; the bounds leave room for a network's
+#: own placement.
+FORWARD_BOUNDS_M = (-0.3, 0.3)
+#: Least ground distance (metres) a track's feet cover between the images around one image for
+#: its direction of travel to count: a standing person's facing is unknown (its head is placed
+#: over its feet), and a walker (1-1.6 m/s) covers it in 0.2-0.3 s.
+MIN_TRAVEL_M = 0.3
+#: The direction of travel at an image spans this many of the track's images before and after
+#: it (a path's turn is followed; 10 images are 0.3 s of a 30 Hz video, 1 s at 10 Hz).
+TRAVEL_WINDOW = 5
 
 
 @dataclass(frozen=True)
@@ -72,20 +85,43 @@ class BodyModel:
 NETWORK_BODY = BodyModel(span_scale=0.928, ankle_offset_m=0.039)
 
 
-def _camera_count(focal: float | None) -> int:
-    return 3 if focal is not None else 4
+def _camera_count(focal: float | None, walking: bool = False) -> int:
+    """Camera parameters in ``x``: H, tilt, roll[, f][, the head's forward offset]."""
+    return (3 if focal is not None else 4) + int(walking)
+
+
+def travel_directions(ground: np.ndarray, obs: Observations) -> np.ndarray:
+    """(N, 2) unit ground direction of travel of each person-image: from its track's ground point
+    :data:`TRAVEL_WINDOW` images before to the one as many after (clamped at the track's ends);
+    zero where the track is unknown or moved less than :data:`MIN_TRAVEL_M` in between."""
+    slots = _slots(obs)
+    order = np.lexsort((obs.frames, slots))
+    s = slots[order]
+    start = np.searchsorted(s, s, side="left")
+    stop = np.searchsorted(s, s, side="right") - 1
+    at = np.arange(len(s))
+    before = order[np.maximum(at - TRAVEL_WINDOW, start)]
+    after = order[np.minimum(at + TRAVEL_WINDOW, stop)]
+    step = np.zeros((len(obs), 2))
+    step[order] = ground[after, :2] - ground[before, :2]
+    length = np.linalg.norm(step, axis=1)
+    moving = (slots >= 0) & np.isfinite(length) & (length >= MIN_TRAVEL_M)
+    return np.where(moving[:, None], step / np.where(moving, length, 1.0)[:, None], 0.0)
 
 
 def _predicted(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-               focal: float | None) -> np.ndarray:
-    """(N, 2) pixels: each head keypoint its person's span above the ground under the feet, for
-    ``x`` = (H, tilt, roll[, f], one height scale per track): the person's height over the mean."""
-    n_cam = _camera_count(focal)
+               focal: float | None, walking: bool = False) -> np.ndarray:
+    """(N, 2) pixels: each head keypoint its person's span above the ground under the feet (and,
+    ``walking``, ``x``'s forward offset along the track's travel), for ``x`` = (H, tilt, roll[, f]
+    [, forward m], one height scale per track): the person's height over the mean."""
+    n_cam = _camera_count(focal, walking)
     f = focal if focal is not None else x[3]
     k, r = intrinsics(f, centre), camera_rotation(x[1], x[2])
     ground = ground_points(obs.feet, k, r, x[0], body.ankle_m())
     slots = _slots(obs)
     scale = np.where(slots >= 0, x[n_cam + np.maximum(slots, 0)] if len(x) > n_cam else 1.0, 1.0)
+    if walking:
+        ground[:, :2] += x[n_cam - 1] * travel_directions(ground, obs)
     ground[:, 2] = body.ankle_m() + (body.head_m(obs.head_share) - body.ankle_m()) * scale
     return project(ground, k, r, x[0])
 
@@ -99,14 +135,14 @@ def _slots(obs: Observations) -> np.ndarray:
 
 
 def _residuals(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-               focal: float | None) -> np.ndarray:
+               focal: float | None, walking: bool = False) -> np.ndarray:
     """Whitened misfits: (u, v) per person-image, then one prior term per track's height scale."""
     span = np.maximum(obs.feet[:, 1] - obs.heads[:, 1], 1.0)
     spread = np.where(obs.tracks >= 0, WITHIN_PERSON_SPAN_STD, body.height_std_m / body.height_mean_m)
     sigma_v = np.hypot(KEYPOINT_PIXEL_STD, span * spread)
     sigma_u = np.hypot(KEYPOINT_PIXEL_STD, span * SIDEWAYS_SHARE)
-    miss = (obs.heads - _predicted(x, obs, body, centre, focal)) / np.stack([sigma_u, sigma_v], axis=1)
-    prior = (x[_camera_count(focal):] - 1.0) / (body.height_std_m / body.height_mean_m)
+    miss = (obs.heads - _predicted(x, obs, body, centre, focal, walking)) / np.stack([sigma_u, sigma_v], axis=1)
+    prior = (x[_camera_count(focal, walking):] - 1.0) / (body.height_std_m / body.height_mean_m)
     return np.concatenate([np.nan_to_num(miss, nan=1e3).ravel(), prior])
 
 
@@ -124,19 +160,23 @@ def _sparsity(obs: Observations, n_cam: int) -> lil_matrix:
 
 
 def _solve(x0: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-           focal: float | None, loss: str = "soft_l1") -> least_squares:
-    n_cam = _camera_count(focal)
+           focal: float | None, loss: str = "soft_l1", walking: bool = False) -> least_squares:
+    n_cam = _camera_count(focal, walking)
     tracks = int(_slots(obs).max()) + 1 if len(obs) else 0
-    lower = [0.2, np.radians(-30.0), np.radians(-30.0)] + ([] if focal is not None else [10.0]) + [0.5] * tracks
-    upper = [500.0, np.radians(89.0), np.radians(30.0)] + ([] if focal is not None else [1e5]) + [1.5] * tracks
-    x0 = np.concatenate([x0[:n_cam], np.ones(tracks)])
+    forward = ([FORWARD_BOUNDS_M[0]], [FORWARD_BOUNDS_M[1]]) if walking else ([], [])
+    lower = [0.2, np.radians(-30.0), np.radians(-30.0)] + ([] if focal is not None else [10.0]) + forward[0] \
+        + [0.5] * tracks
+    upper = [500.0, np.radians(89.0), np.radians(30.0)] + ([] if focal is not None else [1e5]) + forward[1] \
+        + [1.5] * tracks
+    x0 = np.concatenate([x0[:n_cam], np.zeros(n_cam - len(x0[:n_cam])), np.ones(tracks)])
     x0 = np.clip(x0, np.array(lower) + 1e-6, np.array(upper) - 1e-6)
     return least_squares(_residuals, x0, bounds=(lower, upper), loss=loss, x_scale="jac",
-                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal))
+                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal, walking))
 
 
 def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | None = None,
-                    centre: tuple[float, float] | None = None, body: BodyModel | None = None) -> CameraEstimate:
+                    centre: tuple[float, float] | None = None, body: BodyModel | None = None,
+                    walking: bool = False) -> CameraEstimate:
     """A static camera (f, H, tilt, roll) fitted to people's foot and head points.
 
     obs: the people (:func:`pedenv.calibration.observations.observations_of`). size: (width,
@@ -144,7 +184,10 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     then only H, tilt and roll are fitted. centre: the principal point (default: the image
     centre). Raises :class:`~pedenv.calibration.refusals.CalibrationRefused` with what to give
     instead when the people cannot fix the camera (too few, one row only, a level camera
-    without a focal length).
+    without a focal length). walking: the head keypoint is placed a fitted offset (metres,
+    :data:`FORWARD_BOUNDS_M`) ahead of the feet along each track's direction of travel on the
+    ground (the eyes sit in front of the body's axis, and walkers lean forward): for a static
+    camera, whose tracks' ground points are the world's; without it the head is over the feet.
     """
     body = body or BodyModel()
     centre = centre if centre is not None else (size[0] / 2.0, size[1] / 2.0)
@@ -153,21 +196,31 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     start = closed_form(obs, centre, span_world, body.ankle_m(), focal)
     f0 = start.focal if start.focal is not None else float(size[0])  # about a 53 deg field of view
     x0 = np.array([start.height if np.isfinite(start.height) else 5.0, start.tilt, 0.0] + ([] if focal else [f0]))
-    fit = _solve(x0, obs, body, centre, focal)
+    walking = walking and _travels(x0, obs, body, centre, focal)
+    fit = _solve(x0, obs, body, centre, focal, walking=walking)
     inliers = np.abs(fit.fun[: 2 * len(obs)].reshape(-1, 2)).max(axis=1) <= OUTLIER_SIGMA
     kept = obs.subset(inliers)
     check_spread(kept, size)
-    fit = _solve(fit.x, kept, body, centre, focal, loss="linear")
+    fit = _solve(fit.x, kept, body, centre, focal, loss="linear", walking=walking)
     cov = _covariance(fit, kept, focal is not None)
     h = fit.x[0]
     cov[1, 1] += (h * CROWD_MEAN_STD_M / body.height_mean_m) ** 2
     f = float(focal if focal is not None else fit.x[3])
-    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal)
+    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal, walking)
     rms = float(np.sqrt(np.nanmean(np.sum(miss ** 2, axis=1))))
     estimate = CameraEstimate(f, float(h), float(fit.x[1]), float(fit.x[2]), cov, size, centre, kept.people,
                               len(kept), rms, focal is not None)
     check_result(estimate, start)
     return estimate
+
+
+def _travels(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+             focal: float | None) -> bool:
+    """Whether any track moves on the ground under the camera ``x`` (H, tilt, roll[, f]): else a
+    walker's forward offset has nothing to fix it and is left out."""
+    f = focal if focal is not None else x[3]
+    ground = ground_points(obs.feet, intrinsics(f, centre), camera_rotation(x[1], x[2]), x[0], body.ankle_m())
+    return bool(np.any(travel_directions(ground, obs) != 0.0))
 
 
 def _inverse(information: np.ndarray) -> np.ndarray:
@@ -193,7 +246,7 @@ def _covariance(fit: least_squares, obs: Observations, focal_given: bool) -> np.
     np.add.at(scores, cluster, j * fit.fun[:, None])
     clusters = len(np.unique(cluster))
     sandwich = inverse @ (scores.T @ scores) @ inverse * clusters / max(clusters - 1, 1)
-    n_cam = _camera_count(1.0 if focal_given else None)
+    n_cam = _camera_count(1.0 if focal_given else None)  # the forward offset (after them) left out
     model, robust = inverse[:n_cam, :n_cam], sandwich[:n_cam, :n_cam]
     spread = np.sqrt(np.maximum(np.diag(model), np.diag(robust)))  # each parameter's wider 1-sigma
     scale = spread / np.sqrt(np.maximum(np.diag(model), 1e-30))

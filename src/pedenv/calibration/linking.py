@@ -1,8 +1,9 @@
 """Person boxes linked from image to image into tracks, so one person's images count as one person.
 
-A greedy overlap linker (each box joins the previous image's box it overlaps most, above
-:data:`MIN_IOU`): the fit needs only which images show the same person, not a tracker's
-motion model, and a static camera's people move little from one frame to the next.
+A greedy overlap linker (each box joins the track whose last box it overlaps most, above
+:data:`MIN_IOU`, among the tracks seen in the last :data:`MAX_GAP` images): the fit needs only
+which images show the same person, not a tracker's motion model, and a static camera's people
+move little from one frame to the next.
 """
 
 from __future__ import annotations
@@ -13,6 +14,10 @@ from pedenv.boxes import iou_matrix
 
 #: Least intersection over union for a box to continue a track of the image before.
 MIN_IOU = 0.3
+#: A track missed in up to this many images in a row (a dropped detection, a person filtered
+#: out as bending or cut off) is continued: a person split into many short tracks would count
+#: as many people, and the fit's uncertainty, clustered per track, would come out too small.
+MAX_GAP = 3
 
 
 class BoxLinker:
@@ -21,6 +26,7 @@ class BoxLinker:
     def __init__(self) -> None:
         self.previous = np.zeros((0, 4))
         self.previous_ids = np.zeros(0, int)
+        self.previous_age = np.zeros(0, int)  # images since each track's last box
         self.next_id = 0
 
     def __call__(self, boxes: np.ndarray) -> np.ndarray:
@@ -38,5 +44,8 @@ class BoxLinker:
         fresh = ids < 0
         ids[fresh] = self.next_id + np.arange(int(fresh.sum()))
         self.next_id += int(fresh.sum())
-        self.previous, self.previous_ids = boxes, ids
+        kept = ~np.isin(self.previous_ids, ids) & (self.previous_age < MAX_GAP)
+        self.previous = np.concatenate([boxes, self.previous[kept]])
+        self.previous_ids = np.concatenate([ids, self.previous_ids[kept]])
+        self.previous_age = np.concatenate([np.zeros(len(ids), int), self.previous_age[kept] + 1])
         return ids
