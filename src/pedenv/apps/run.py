@@ -81,8 +81,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    source = check_before_prepasses(source, output, config)  # the output folder and a --static camera first
-    source, estimated, cfg = _self_calibrated(source, pose, backend, cfg)  # a camera without a placement: its warm-up
+    source, estimated, cfg = _self_calibrated(check_before_prepasses(source, output, config), pose, backend, cfg)
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     rec, backend, folder, poses = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
