@@ -71,14 +71,15 @@ def test_a_broken_filter_state_gets_a_wide_defined_answer(frames, bad):
 
 
 def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames, monkeypatch):
-    # an ego driving along +x at 8 m/s; a pedestrian 12 m ahead and 14 m to its left: a filter saying
-    # 10 m/s towards the path has it cross within 1.5 s, at the 4 m/s cap it is still 6 m away at 2 s
+    # an ego driving along +x at 8 m/s; a pedestrian 12 m ahead and 11.5 m to its left: a filter saying
+    # 10 m/s towards the path; the corridor moves at the speed posterior's mean velocity, which the grid's
+    # fastest speed bounds (5 m/s: 1.5 m from the path at 2 s); at the 4 m/s cap it is still 3.5 m away
     state = PedestrianEnvironmentModel(Config()).update(frames[0])
     peds, n = dataclasses.replace(state.pedestrians, behaviour=None), len(state.pedestrians)
     t = frames[0].timestamp
     now = dataclasses.replace(frames[0], ego=EgoPose.from_xy_yaw(0.0, 0.0, 0.0))
     x = np.tile([-50.0, 0.0, 0.0, 0.0], (n, 1))  # the others stand behind the ego
-    x[0] = [12.0, 0.0, 14.0, -10.0]
+    x[0] = [12.0, 0.0, 11.5, -10.0]
     P = np.repeat(np.diag([0.01, 0.01, 0.01, 0.01])[None], n, axis=0)
     answers = []
     for cap in (15.0, 4.0):
@@ -91,9 +92,9 @@ def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames,
         # the reported path: not capped by the corridor's cap; it moves at the speed posterior's mean velocity,
         # which the grid's fastest speed bounds (5 m/s)
         top = motion_state.SPEED_GRID_MPS[-1]
-        assert np.allclose(b.predicted_positions[0, -1], [12.0, 14.0 - 3.0 * top], atol=1e-3)
+        assert np.allclose(b.predicted_positions[0, -1], [12.0, 11.5 - 3.0 * top], atol=1e-3)
     assert b.ego_speed == pytest.approx(8.0)
-    assert answers[0] > 0.8 and answers[1] < 0.05, answers  # measured 0.84 and 0.02
+    assert answers[0] > 0.4 and answers[1] < 0.05, answers  # measured 0.50 and 0.025
 
 
 def test_the_orientation_interval_holds_the_orientation_between_updates(frames):
