@@ -1,5 +1,6 @@
 """The predicted path: positions ahead with covariances, from each track's constant-velocity filter
-(the estimator moves the reported path at the motion state's posterior mean velocity,
+(the estimator moves the reported path and the conflict corridor's steps at the motion state's
+posterior mean velocity,
 :func:`pedenv.behaviour.motion_state.speed_posterior`)."""
 
 from __future__ import annotations
