@@ -31,11 +31,20 @@ FLOW_LEVELS = 4
 #: Largest forward-backward flow error, pixels: a track whose backward flow lands farther from
 #: its start is an outlier flow (an occlusion, a repeated texture, a mover's edge).
 MAX_ROUND_TRIP_PX = 1.0
+#: The forward flow's coarse levels (all but the full image's own) are followed on the half image (OpenCV's
+#: ``pyrDown``: the full image's pyramid level 1) with a looser stop, at most :data:`COARSE_CRITERIA`'s
+#: 10 iterations or a move below 0.1 px (OpenCV's default: 30 or 0.01 px): a coarse level only has to bring
+#: the track within the window of the next, and the full image's level, run to OpenCV's default stop from
+#: there, gives the track's precision. On KITTI raw 0002 this cut the forward flow from 36 to 28 ms a
+#: frame pair at the same figures (benchmarks/visual_odometry.py). (The half image with an 11 px window
+#: instead, cheaper still, took the darkened frames' step 6 % short: tests/odometry/test_kitti_raw.py.)
+COARSE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 10, 0.1)
 #: Pyramid levels of the backward flow, which starts at the track's start rather than searching the
-#: whole pyramid again: a correct track returns within a pixel, a wrong one drifts off. Two levels
-#: (0 and 1) cost two fifths of a full backward search; the KITTI and rendered-road figures stayed
-#: within their spread (benchmarks/visual_odometry.py, tests/odometry/test_motion.py).
-BACK_FLOW_LEVELS = 1
+#: whole pyramid again: a correct track returns within a pixel, a wrong one drifts off. The full image's
+#: level alone (0) costs half as much as two levels (0 and 1; a seventh of a full backward search); the
+#: KITTI and rendered-road figures stayed within their spread (benchmarks/visual_odometry.py,
+#: tests/odometry/test_motion.py, tests/odometry/test_kitti_raw.py).
+BACK_FLOW_LEVELS = 0
 #: Margin added around each person box before its corners are left out, in box widths.
 BOX_MARGIN = 0.1
 
@@ -99,7 +108,13 @@ def track(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray, levels: int 
         return np.empty((0, 2)), np.empty((0, 2)), np.zeros(0, bool)
     window = (FLOW_WINDOW_PX, FLOW_WINDOW_PX)
     p0 = points.reshape(-1, 1, 2).astype(np.float32)
-    if guess is None:
+    if guess is None and levels >= 1:  # the coarse levels on the half image, then the full image's own level
+        coarse, ok0, _ = cv2.calcOpticalFlowPyrLK(cv2.pyrDown(gray0), cv2.pyrDown(gray1), p0 / 2, np.empty(0),
+                                                  winSize=window, maxLevel=levels - 1, criteria=COARSE_CRITERIA)
+        p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, 2 * coarse, winSize=window, maxLevel=0,
+                                              flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+        ok1 &= ok0
+    elif guess is None:
         p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, np.empty(0), winSize=window, maxLevel=levels)
     else:
         p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, guess.reshape(-1, 1, 2).astype(np.float32),
