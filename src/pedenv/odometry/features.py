@@ -68,10 +68,16 @@ def person_mask(shape: tuple[int, int], boxes: np.ndarray | None) -> np.ndarray:
 
 def detect_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(N, 2) float32 pixel positions of FAST corners where ``mask`` is non-zero, at most
-    :data:`CORNERS_PER_CELL` per grid cell, the strongest first."""
+    :data:`CORNERS_PER_CELL` per grid cell: every cell's strongest first, then every cell's second, and
+    so on (:func:`ranked_corners`)."""
+    return ranked_corners(gray, mask)[0]
+
+
+def ranked_corners(gray: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`detect_corners`'s (N, 2) corners and each one's (N,) rank in its grid cell (0: the cell's strongest)."""
     points = cv2.FastFeatureDetector.create(threshold=FAST_THRESHOLD, nonmaxSuppression=True).detect(gray, mask)
     if not points:
-        return np.empty((0, 2), np.float32)
+        return np.empty((0, 2), np.float32), np.empty(0, int)
     xy = np.asarray(cv2.KeyPoint.convert(points), np.float32).reshape(-1, 2)
     strength = np.fromiter((p.response for p in points), np.float64, len(points))
     rows, cols = GRID_CELLS
@@ -79,7 +85,9 @@ def detect_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
             + np.minimum(xy[:, 0] * cols // gray.shape[1], cols - 1)).astype(int)
     order = np.lexsort((-strength, cell))
     rank = np.arange(len(order)) - np.searchsorted(cell[order], cell[order])
-    return xy[order[rank < CORNERS_PER_CELL]]
+    order, rank = order[rank < CORNERS_PER_CELL], rank[rank < CORNERS_PER_CELL]
+    by_rank = np.argsort(rank, kind="stable")
+    return xy[order[by_rank]], rank[by_rank]
 
 
 def detect_road_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
