@@ -35,15 +35,17 @@ MAX_ROUND_TRIP_PX = 1.0
 #: ``pyrDown``: the full image's pyramid level 1) with a looser stop, at most :data:`COARSE_CRITERIA`'s
 #: 10 iterations or a move below 0.1 px (OpenCV's default: 30 or 0.01 px): a coarse level only has to bring
 #: the track within the window of the next, and the full image's level, run to OpenCV's default stop from
-#: there, gives the track's precision. On KITTI raw 0002 this cut the forward flow from 36 to 28 ms a
-#: frame pair at the same figures (benchmarks/visual_odometry.py). (The half image with an 11 px window
-#: instead, cheaper still, took the darkened frames' step 6 % short: tests/odometry/test_kitti_raw.py.)
+#: there, gives the track's precision. On KITTI raw 0002 (frames 3-4, 1779 corners) this cut the forward
+#: flow from 36 to 28 ms at the same figures within their spread (benchmarks/visual_odometry.py). (The half
+#: image with an 11 px window instead, cheaper still, took the darkened frames' step 6 % short:
+#: tests/odometry/test_kitti_raw.py.)
 COARSE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 10, 0.1)
 #: Pyramid levels of the backward flow, which starts at the track's start rather than searching the
 #: whole pyramid again: a correct track returns within a pixel, a wrong one drifts off. The full image's
 #: level alone (0) costs half as much as two levels (0 and 1; a seventh of a full backward search); the
 #: KITTI and rendered-road figures stayed within their spread (benchmarks/visual_odometry.py,
-#: tests/odometry/test_motion.py, tests/odometry/test_kitti_raw.py).
+#: tests/odometry/test_motion.py, tests/odometry/test_kitti_raw.py). (A 13 px backward window instead took
+#: a rendered road blurred over 3 px 10 % short.)
 BACK_FLOW_LEVELS = 0
 #: Margin added around each person box before its corners are left out, in box widths.
 BOX_MARGIN = 0.1

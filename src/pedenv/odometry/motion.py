@@ -25,10 +25,11 @@ MIN_INLIERS = 25
 #: :data:`~pedenv.odometry.features.CORNERS_PER_CELL`) and the road's corners; only when fewer than
 #: :data:`FIRST_PASS_MIN_TRACKS` of them track (frames far apart, dark, blurred or covered) are the
 #: cells' other corners followed too. A car's camera at 10 Hz keeps most of its tracks (KITTI raw 0002:
-#: 600-800 of the first pass's 1000), and the essential matrix and the road plane found from them
-#: gave the same figures within their spread at 40 % less flow; a hard step (KITTI at 2 Hz: tens of
+#: about 730 of the first pass's 1050), and the essential matrix and the road plane found from them gave
+#: the same figures within their spread at 40 % less flow; a hard step (KITTI at 2 Hz: a few hundred
 #: tracks) keeps all its corners, whose number its motion needs (with 6 a cell everywhere the 2 Hz
-#: frames' yaw error went from 0.12 to 0.28 degrees).
+#: frames' yaw error went from 0.18 to 0.28 degrees; 4 a cell in the first pass took KITTI raw 0002's
+#: distance +4.5 % and one of its steps beyond its test's 5 %).
 FIRST_PASS_PER_CELL = 6
 FIRST_PASS_MIN_TRACKS = 500
 #: Median parallax, pixels, below which the camera did not translate measurably: the raw flow
