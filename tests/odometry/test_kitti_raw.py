@@ -34,9 +34,9 @@ def test_three_real_frames_travel_the_gps_distance():
 
 
 @pytest.mark.parametrize("spoil, works", [
-    (lambda image: (image * 0.1).astype(np.uint8), True),  # a tenth of the light: measured +1 % on this step
+    (lambda image: (image * 0.1).astype(np.uint8), True),  # a tenth of the light: measured +1.9 % on this step
     (lambda image: (image * 0.05).astype(np.uint8), False),
-    (lambda image: cv2.GaussianBlur(image, (0, 0), 4.0), True),  # measured -2.7 %
+    (lambda image: cv2.GaussianBlur(image, (0, 0), 4.0), True),  # measured -3.1 %
     (lambda image: cv2.GaussianBlur(image, (0, 0), 8.0), False),
 ])
 def test_real_frames_too_dark_or_blurred_are_one_line_not_wrong_poses(spoil, works):

@@ -39,11 +39,14 @@ def _check(odometry: VisualOdometry, truth_m: float, truth_yaw_deg: float) -> No
 def test_frames_far_apart_take_the_road_length_from_aligning_the_road():
     odometry, truth, yaw = _drive()
     assert [(s.guided, s.wide) for s in odometry.steps] == [(True, False)] * 2  # the flow kept the motion
-    _check(odometry, truth, yaw)  # measured -0.2 %, yaw +0.12 deg
+    # the first pass (6 corners a cell) keeps 133 tracks of the first step, below FIRST_PASS_MIN_TRACKS:
+    # all the corners were followed (measured 244 and 230 tracks)
+    assert min(s.tracks for s in odometry.steps) >= 200
+    _check(odometry, truth, yaw)  # measured -0.1 %, yaw +0.05 deg
 
 
 def test_when_the_flow_loses_the_frames_matched_descriptors_give_the_motion(monkeypatch):
     monkeypatch.setattr("pedenv.odometry.motion.MIN_TRACKS", 10**6)  # as if no flow track survived
     odometry, truth, yaw = _drive()
     assert [(s.guided, s.wide) for s in odometry.steps] == [(True, True)] * 2
-    _check(odometry, truth, yaw)  # measured -1.6 %, yaw +0.14 deg
+    _check(odometry, truth, yaw)  # measured -1.6 %, yaw +0.15 deg

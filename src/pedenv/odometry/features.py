@@ -31,11 +31,22 @@ FLOW_LEVELS = 4
 #: Largest forward-backward flow error, pixels: a track whose backward flow lands farther from
 #: its start is an outlier flow (an occlusion, a repeated texture, a mover's edge).
 MAX_ROUND_TRIP_PX = 1.0
+#: The forward flow's coarse levels (all but the full image's own) are followed on the half image (OpenCV's
+#: ``pyrDown``: the full image's pyramid level 1) with a looser stop, at most :data:`COARSE_CRITERIA`'s
+#: 10 iterations or a move below 0.1 px (OpenCV's default: 30 or 0.01 px): a coarse level only has to bring
+#: the track within the window of the next, and the full image's level, run to OpenCV's default stop from
+#: there, gives the track's precision. On KITTI raw 0002 (frames 3-4, 1779 corners) this cut the forward
+#: flow from 36 to 28 ms at the same figures within their spread (benchmarks/visual_odometry.py). (The half
+#: image with an 11 px window instead, cheaper still, took the darkened frames' step 6 % short:
+#: tests/odometry/test_kitti_raw.py.)
+COARSE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 10, 0.1)
 #: Pyramid levels of the backward flow, which starts at the track's start rather than searching the
-#: whole pyramid again: a correct track returns within a pixel, a wrong one drifts off. Two levels
-#: (0 and 1) cost two fifths of a full backward search; the KITTI and rendered-road figures stayed
-#: within their spread (benchmarks/visual_odometry.py, tests/odometry/test_motion.py).
-BACK_FLOW_LEVELS = 1
+#: whole pyramid again: a correct track returns within a pixel, a wrong one drifts off. The full image's
+#: level alone (0) costs half as much as two levels (0 and 1; a seventh of a full backward search); the
+#: KITTI and rendered-road figures stayed within their spread (benchmarks/visual_odometry.py,
+#: tests/odometry/test_motion.py, tests/odometry/test_kitti_raw.py). (A 13 px backward window instead took
+#: a rendered road blurred over 3 px 10 % short.)
+BACK_FLOW_LEVELS = 0
 #: Margin added around each person box before its corners are left out, in box widths.
 BOX_MARGIN = 0.1
 
@@ -59,10 +70,16 @@ def person_mask(shape: tuple[int, int], boxes: np.ndarray | None) -> np.ndarray:
 
 def detect_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(N, 2) float32 pixel positions of FAST corners where ``mask`` is non-zero, at most
-    :data:`CORNERS_PER_CELL` per grid cell, the strongest first."""
+    :data:`CORNERS_PER_CELL` per grid cell: every cell's strongest first, then every cell's second, and
+    so on (:func:`ranked_corners`)."""
+    return ranked_corners(gray, mask)[0]
+
+
+def ranked_corners(gray: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`detect_corners`'s (N, 2) corners and each one's (N,) rank in its grid cell (0: the cell's strongest)."""
     points = cv2.FastFeatureDetector.create(threshold=FAST_THRESHOLD, nonmaxSuppression=True).detect(gray, mask)
     if not points:
-        return np.empty((0, 2), np.float32)
+        return np.empty((0, 2), np.float32), np.empty(0, int)
     xy = np.asarray(cv2.KeyPoint.convert(points), np.float32).reshape(-1, 2)
     strength = np.fromiter((p.response for p in points), np.float64, len(points))
     rows, cols = GRID_CELLS
@@ -70,7 +87,9 @@ def detect_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
             + np.minimum(xy[:, 0] * cols // gray.shape[1], cols - 1)).astype(int)
     order = np.lexsort((-strength, cell))
     rank = np.arange(len(order)) - np.searchsorted(cell[order], cell[order])
-    return xy[order[rank < CORNERS_PER_CELL]]
+    order, rank = order[rank < CORNERS_PER_CELL], rank[rank < CORNERS_PER_CELL]
+    by_rank = np.argsort(rank, kind="stable")
+    return xy[order[by_rank]], rank[by_rank]
 
 
 def detect_road_corners(gray: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -99,7 +118,13 @@ def track(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray, levels: int 
         return np.empty((0, 2)), np.empty((0, 2)), np.zeros(0, bool)
     window = (FLOW_WINDOW_PX, FLOW_WINDOW_PX)
     p0 = points.reshape(-1, 1, 2).astype(np.float32)
-    if guess is None:
+    if guess is None and levels >= 1:  # the coarse levels on the half image, then the full image's own level
+        coarse, ok0, _ = cv2.calcOpticalFlowPyrLK(cv2.pyrDown(gray0), cv2.pyrDown(gray1), p0 / 2, np.empty(0),
+                                                  winSize=window, maxLevel=levels - 1, criteria=COARSE_CRITERIA)
+        p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, 2 * coarse, winSize=window, maxLevel=0,
+                                              flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+        ok1 &= ok0
+    elif guess is None:
         p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, np.empty(0), winSize=window, maxLevel=levels)
     else:
         p1, ok1, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, p0, guess.reshape(-1, 1, 2).astype(np.float32),
