@@ -139,3 +139,22 @@ def test_the_locator_keeps_the_last_frames_cues_row_for_row():
     assert cues["ground"].valid.tolist() == [True, False]  # the second stands beyond 20 m
     assert cues["height"].valid.all() and not cues["triangulation"].valid.any()  # a standing ego
     np.testing.assert_allclose(cues["height"].positions, peds.positions[:, :2], rtol=0.05)
+
+
+def test_triangulation_pairs_no_ray_across_a_gap_of_missed_frames():
+    # B is missed in frames 3-5 while the ego drives on and B walks; with max_misses 5 its
+    # track lives through the gap: its past rays stay behind, no pair spans the gap
+    config = FUSED.replace(tracking={"max_misses": 5})
+    a, b = np.array([40.0, -3.0, 0.0]), np.array([30.0, 6.0, 0.0])
+    frames = []
+    for i in range(10):
+        walked = b + [0.0, 0.03 * i, 0.0]
+        ground = np.array([a, walked]) if i < 3 or i > 5 else a[None]
+        frames.append(make_frame(ground, ego_xyz=(0.6 * i, 0.0, 0.0), index=i, timestamp=0.1 * i))
+    states = run(frames, config)
+    before, after, later = (states[i].pedestrians for i in (2, 6, 9))
+    assert after.track_ids[1] == before.track_ids[1]  # the same track came back
+    assert after.sources[1].endswith("triangulation:no-history")
+    assert "triangulation" in later.sources[1].split(";")[0].split("+")  # over the rays since the gap
+    truth = b[:2] + [0.0, 0.03 * 9]
+    assert np.linalg.norm(later.positions[1, :2] - truth) < 0.05 * np.linalg.norm(truth - [5.4, 0.0])

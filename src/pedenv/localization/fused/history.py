@@ -120,6 +120,15 @@ class TrackHistory(ColumnGroup):
         self.filled[rows, slot] = True
         self.count[rows] += 1
 
+    def forget_before_gap(self, rows: np.ndarray, since: float) -> None:
+        """Empty the rings of the tracks at ``rows`` (N,) whose newest observation is older
+        than ``since`` (seconds): their past rays lie across a gap of missed frames."""
+        filled = self.filled[rows]
+        newest = np.where(filled, self.cameras[rows, :, TIME], -np.inf).max(axis=1)
+        stale = rows[filled.any(axis=1) & (newest < since)]
+        self.filled[stale] = False
+        self.usable[stale] = False
+
     def of(self, rows: np.ndarray) -> HistoryView:
         """The histories of the tracks at ``rows`` (N,); views, not copies, when ``rows`` is
         the whole table in order (the usual case)."""
