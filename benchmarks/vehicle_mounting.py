@@ -209,14 +209,9 @@ def onnx_far():
 
 
 def observe(images, backend):
-    from pedenv.calibration.linking import BoxLinker
-    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.calibration.linking import linked_observations
 
-    linker, parts = BoxLinker(), []
-    for index, image in enumerate(images):
-        det = backend.detect(image)
-        parts.append(observations_of(det, index, linker(det.boxes)))
-    return Observations.concat(parts)
+    return linked_observations(backend.detect(image) for image in images)
 
 
 def real(samples: Path) -> None:

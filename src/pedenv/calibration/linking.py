@@ -8,9 +8,13 @@ move little from one frame to the next.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
 
 from pedenv.boxes import iou_matrix
+from pedenv.calibration.observations import Observations, observations_of
+from pedenv.records import Detections
 
 #: Least intersection over union for a box to continue a track of the image before.
 MIN_IOU = 0.3
@@ -49,3 +53,11 @@ class BoxLinker:
         self.previous_ids = np.concatenate([ids, self.previous_ids[kept]])
         self.previous_age = np.concatenate([np.zeros(len(ids), int), self.previous_age[kept] + 1])
         return ids
+
+
+def linked_observations(detections: Iterable[Detections]) -> Observations:
+    """The upright people of consecutive images' detections (image ``i`` the ``i``-th), their boxes
+    linked into tracks by one :class:`BoxLinker`."""
+    linker = BoxLinker()
+    return Observations.concat([observations_of(det, index, linker(det.boxes))
+                                for index, det in enumerate(detections)])
