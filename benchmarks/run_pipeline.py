@@ -86,7 +86,7 @@ class NetworkClock:
     and ``network_runs``: passes run side by side count once, as the group's wall time)."""
 
     def __init__(self, backend) -> None:
-        self.backend = backend if hasattr(backend, "infer") else backend.backend  # stream: its OnnxPose
+        self.backend = backend if hasattr(backend, "infer") else backend.network  # a Detector: its OnnxPose
         self.reset()
 
     def reset(self) -> None:

@@ -87,6 +87,44 @@ def test_a_batch_of_passes_gives_what_the_passes_give_one_by_one(use_pose_cache,
     assert len(decode(together[0], inputs[0][1], 0.25, 0.7, 300)) >= 4
 
 
+def test_a_gpu_input_is_padded_to_few_shapes():
+    from pedenv.pose.onnx_backend import gpu_input_shape
+
+    assert gpu_input_shape((1, 3, 384, 640)) == (1, 3, 384, 640)
+    assert gpu_input_shape((3, 3, 192, 352)) == (4, 3, 256, 384)
+    assert gpu_input_shape((5, 3, 672, 608), batch_dynamic=False) == (5, 3, 768, 640)
+    widths = {gpu_input_shape((1, 3, 192, w))[3] for w in range(128, 640 + 1, 32)}
+    assert widths == {128, 256, 384, 512, 640}
+
+
+@pytest.mark.onnx_model
+@pytest.mark.ultralytics
+def test_a_padded_input_finds_the_same_persons_at_the_same_pixels(use_pose_cache, photo):
+    from pedenv.images import read_image_rgb
+    from pedenv.pose.onnx_backend import OnnxPose, gpu_input_shape, pad_input
+    from pedenv.pose.postprocess import decode, letterbox, to_input_tensor
+
+    image = read_image_rgb(photo("bus.jpg"))  # 810x1080, 4 people
+    pose = OnnxPose(batch=False)
+    for (x0, y0, x1, y1), size in [((0, 0, 810, 1080), (640, 480)), ((0, 300, 405, 1000), (416, 288))]:
+        padded, box = letterbox(image[y0:y1, x0:x1], size)
+        tensor = to_input_tensor(padded)
+        grown = pad_input(np.concatenate([tensor, tensor]), gpu_input_shape((2, *tensor.shape[1:])))
+        assert grown.shape[0] == 2 and grown.shape[2] % 128 == 0 and grown.shape[3] % 128 == 0
+        plain, wide = (decode(pose.infer(t)[:1], box, 0.25, 0.7, 300) for t in (tensor, grown))
+        assert len(plain) >= 1 and len(wide) == len(plain)
+        order = [int(np.argmin(np.abs(wide.boxes[:, 0] - b[0]))) for b in plain.boxes]
+        heights = (plain.boxes[:, 3] - plain.boxes[:, 1])[:, None]
+        # the same boxes; a person cut by the image's right edge, where grey now follows, moves most (1 %)
+        assert (np.abs(wide.boxes[order] - plain.boxes) / heights).max() < 0.02
+    # on a GPU the first shapes run as they are, later new ones padded (the session table filled by hand here)
+    from pedenv.pose.onnx_backend import GPU_EXACT_SESSIONS
+    seen = [(1, 3, 192, 96 + 32 * k) for k in range(GPU_EXACT_SESSIONS)]
+    pose._gpu_sessions = dict.fromkeys(seen)
+    assert pose._gpu_input(np.zeros(seen[-1], np.float32)).shape == seen[-1]
+    assert pose._gpu_input(np.zeros((3, 3, 192, 352), np.float32)).shape == (4, 3, 256, 384)
+
+
 @pytest.mark.onnx_model
 @pytest.mark.ultralytics
 def test_passes_side_by_side_give_what_they_give_one_after_another(use_pose_cache, photo):

@@ -21,13 +21,49 @@ import numpy as np
 
 from pedenv.errors import InputError, require_extra
 from pedenv.pose import models
-from pedenv.pose.postprocess import DecodeSettings, decode, frame_image, letterbox, parse_input_size, to_input_tensor
+from pedenv.pose.postprocess import (
+    PAD_VALUE,
+    DecodeSettings,
+    decode,
+    frame_image,
+    letterbox,
+    parse_input_size,
+    to_input_tensor,
+)
 from pedenv.pose.providers import CPU, SessionConfig, create_session
 from pedenv.records import Detections, Frame, PredictedTracks
 
 #: At most this many sessions per backend on a GPU, one per input shape (:meth:`OnnxPose._session_for`);
 #: each holds the model's weights (11 MB) and its own workspace.
 MAX_GPU_SESSIONS = 24
+#: On a GPU the first input shapes a backend meets run as they are, each in its own session: a
+#: mode's passes over the whole frame and its bands recur every frame (far: 3 shapes, stream: up
+#: to 4). Shapes met after these run padded to one of few shapes (:func:`gpu_input_shape`):
+#: ``stream``'s crops and packed inputs in ``pedenv run`` vary from frame to frame (vtest.avi at
+#: 1600x900: 192 px high, 128-608 px wide in 32 px steps, 17 shapes in 40 frames one by one, more
+#: with the batch sizes), more than :data:`MAX_GPU_SESSIONS`, and each change of shape on a
+#: shared session redoes the convolutions' cuDNN set-up. Padding every input cost ``far`` 1.4x on
+#: its fixed bands (H200, docs/speed.md), hence the exact sessions first.
+GPU_EXACT_SESSIONS = 8
+#: The padding's step in height and width: in steps of 128 px the crops' widths take 5 values.
+GPU_SHAPE_STEP_PX = 128
+
+
+def gpu_input_shape(shape: tuple[int, ...], batch_dynamic: bool = True) -> tuple[int, ...]:
+    """The (B, 3, H, W) shape an input of ``shape`` runs at on a GPU: H and W rounded up to
+    :data:`GPU_SHAPE_STEP_PX`, B up to a power of two (kept when the model's batch axis is fixed)."""
+    b, c, h, w = shape
+    step = GPU_SHAPE_STEP_PX
+    return ((1 << (b - 1).bit_length()) if batch_dynamic else b, c, -(-h // step) * step, -(-w // step) * step)
+
+
+def pad_input(tensor: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """``tensor`` (B, 3, h, w) in a (B', 3, H', W') array of the letterbox's grey, at the top left."""
+    b, _, h, w = tensor.shape
+    out = np.full(shape, np.float32(PAD_VALUE / 255), np.float32)
+    out[:b, :, :h, :w] = tensor
+    return out
+
 
 class OnnxPose:
     """YOLO-pose on onnxruntime.
@@ -104,12 +140,26 @@ class OnnxPose:
     def infer(self, tensor: np.ndarray) -> np.ndarray:
         """The network on ``tensor`` (B, 3, h, w) float32, RGB in [0, 1] (letterboxed,
         :func:`~pedenv.pose.postprocess.to_input_tensor`); returns its raw output (B, 56, N)
-        (:mod:`pedenv.pose.postprocess`; px of the input). Counted in :attr:`network_s` and :attr:`network_runs`."""
+        (:mod:`pedenv.pose.postprocess`; px of the input). On a GPU it may run padded to one of
+        few shapes (:meth:`_gpu_input`): the same px, more (empty) output rows.
+        Counted in :attr:`network_s` and :attr:`network_runs`."""
         start = time.perf_counter()
-        out = self._session_for(tensor.shape).run(None, {self._input_name: tensor})[0]
+        n = tensor.shape[0]
+        if self.provider != CPU and self.dynamic:
+            tensor = self._gpu_input(tensor)
+        out = self._session_for(tensor.shape).run(None, {self._input_name: tensor})[0][:n]
         self.network_s += time.perf_counter() - start
         self.network_runs += 1
         return out
+
+    def _gpu_input(self, tensor: np.ndarray) -> np.ndarray:
+        """``tensor`` as it runs on a GPU: as it is while its shape has a session or fewer than
+        :data:`GPU_EXACT_SESSIONS` exist, else padded (:func:`gpu_input_shape`)."""
+        shape = tuple(tensor.shape)
+        if shape in self._gpu_sessions or len(self._gpu_sessions) < GPU_EXACT_SESSIONS:
+            return tensor
+        padded = gpu_input_shape(shape, self._batch_axis_dynamic)
+        return tensor if padded == shape else pad_input(tensor, padded)
 
     def _session_for(self, shape: tuple) -> Any:
         """The session to run an input of ``shape`` in. On a GPU one session per input shape (at
