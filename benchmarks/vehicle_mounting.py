@@ -7,7 +7,8 @@
   monocular visual odometry, and its road-plane scale against the step lengths of GPS/IMU or ORB-SLAM3):
   KITTI raw 2011_09_26_drive_0002 (10 frames, 9 m/s) against the travel direction GPS/IMU gives (the
   OXTS velocity, roll and pitch, the calibrated camera -> IMU chain) and against the IMU's forward axis;
-  ``tracking_sequences`` 0001 frames 0-1 and ``tracking_mini`` 0001 frames 10, 15, 20 against ORB-SLAM3's stereo poses and the plane of the labelled boxes' bottoms.
+  ``tracking_sequences`` 0001 frames 0-1 and ``tracking_mini`` 0001 frames 10, 15, 20 against
+  ORB-SLAM3's stereo poses and the plane of the labelled boxes' bottoms.
 - real: the real network (``onnx``, ``far``) on the real samples with their true mounting: KITTI
   ``tracking_mini`` 0016 (parked, 3 images; with the positions of the fused method, true and estimated
   mounting) and 0001 (driving, 3 images), ``object_samples`` (3
