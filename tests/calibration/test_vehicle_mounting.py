@@ -212,3 +212,30 @@ def test_calibrate_a_vehicle_camera_without_people_names_the_road_pitch(tmp_path
         calibrate(output=tmp_path / "out", images=RAW / "2011_09_26_drive_0002_sync/image_02/data", backend=_NoPeople(),
                   calibration=intrinsics, static=False, frames=4)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_run_with_ego_poses_and_no_people_places_the_camera_from_the_road(tmp_path) -> None:
+    from pedenv.apps.calibrate import ego_lengths, self_calibrate
+    from pedenv.odometry.reference import integrated_distance, read_oxts
+
+    sync = RAW / "2011_09_26_drive_0002_sync"
+    oxts = read_oxts(sorted((sync / "oxts" / "data").glob("*.txt")))
+    stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02" / "timestamps.txt").read_text().splitlines()
+                       if t.strip()])
+    times = (stamps - stamps[0]) / np.timedelta64(1, "s")
+    along = [integrated_distance(oxts[: i + 1], times[: i + 1]) for i in range(len(oxts))]
+    poses = tmp_path / "poses.csv"  # GPS/IMU's distance along a straight line, one pose per frame at 10 Hz
+    poses.write_text("timestamp,x,y,yaw\n" + "".join(f"{100 + i / 10:.1f},{x:.4f},0,0\n" for i, x in enumerate(along)))
+    intrinsics = tmp_path / "k.yaml"
+    intrinsics.write_text("width: 1242\nheight: 375\nintrinsics: [[721.5377, 0, 609.5593], [0, 721.5377, 172.854], "
+                          "[0, 0, 1]]\n")
+    lengths = ego_lengths(poses, sync / "image_02" / "data", None, fps=10.0)
+    assert lengths is not None and lengths(0, 2) == pytest.approx(along[2], abs=1e-4) and np.isnan(lengths(0, 99))
+    found = self_calibrate(sync / "image_02" / "data", None, intrinsics, _NoPeople(), "detector-model",
+                           mount="vehicle", ego_length=lengths)
+    est = found.estimate
+    # no people: the road's scale with GPS/IMU's steps (KITTI: 1.65 m) and its direction of travel
+    assert est.people == 0 and est.height == pytest.approx(1.65, rel=0.05) and abs(np.degrees(est.tilt)) < 1.0
+    (tmp_path / "out").mkdir()
+    summary = found.write(tmp_path / "out")
+    assert summary["road"]["scale"]["steps"] == 9 and (tmp_path / "out" / "calibration.png").is_file()

@@ -30,6 +30,7 @@ from pedenv.records import default_cam_to_vehicle
 
 if TYPE_CHECKING:
     from pedenv.odometry.estimator import VisualOdometry
+    from pedenv.recordings.ego_poses import EgoTrajectory
 
 #: 1-sigma of one step's travel elevation, degrees, used while too few steps give their own scatter:
 #: the monocular essential matrix's direction against GPS/IMU on KITTI raw 2011_09_26_drive_0002
@@ -143,6 +144,20 @@ def road_scale(odometry: np.ndarray, ego: np.ndarray,
     height = nominal * float(ref[keep].sum() / odo[keep].sum())
     scatter = float(np.std(logs[keep], ddof=1)) if n >= MIN_STEPS_FOR_SCATTER else STEP_SCALE_STD
     return RoadScale(height, height * float(np.hypot(scatter / np.sqrt(n), ROAD_SCALE_STD)), n, len(odo) - n, scatter)
+
+
+def ego_length(trajectory: EgoTrajectory, timestamps: np.ndarray) -> Callable[[int, int], float]:
+    """The metres the car moved between two frames (their indices into ``timestamps`` (N,) seconds) by
+    ``trajectory``, its poses interpolated (the chord, as the odometry's step is); NaN outside it."""
+    stamps = np.asarray(timestamps, float)
+
+    def length(first: int, last: int) -> float:
+        if not 0 <= first < len(stamps) or not 0 <= last < len(stamps):
+            return float("nan")
+        a, b = trajectory.at(float(stamps[first])), trajectory.at(float(stamps[last]))
+        return float("nan") if a is None or b is None else float(np.linalg.norm(b.translation - a.translation))
+
+    return length
 
 
 def travel_direction(rotation: np.ndarray, direction: np.ndarray) -> np.ndarray:
