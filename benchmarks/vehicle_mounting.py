@@ -88,13 +88,13 @@ def show(label: str, est, truth: tuple[float, float] | None) -> None:
     print(f"  {label:24s} {text}")
 
 
-def mounting(obs, size, k, body, road):
+def mounting(obs, size, k, body, road, scale=None):
     from pedenv.calibration.vehicle import estimate_mounting
     from pedenv.errors import InputError
 
     try:
         return estimate_mounting(obs, size, focal=float(k[0, 0]), centre=(float(k[0, 2]), float(k[1, 2])),
-                                 body=body, road=road)
+                                 body=body, road=road, scale=scale)
     except InputError as exc:
         return exc
 
@@ -229,7 +229,7 @@ def road_height(raw: Path, k: np.ndarray, images: list[np.ndarray], oxts: np.nda
           f"{100 * (scale.height / 1.65 - 1):+.1f} %")
 
 
-def tracking_scale(folder: Path, name: str, frames: list[int], k: np.ndarray, poses: np.ndarray) -> None:
+def tracking_scale(folder: Path, name: str, frames: list[int], k: np.ndarray, poses: np.ndarray):
     """The road's scale on a tracking drive's real frames with ORB-SLAM3's (stereo, metric) step lengths."""
     from pedenv.calibration.road import road_scale
     from pedenv.datasets import kitti_files
@@ -243,6 +243,7 @@ def tracking_scale(folder: Path, name: str, frames: list[int], k: np.ndarray, po
                                             f"(labelled ground {h:.3f} m: {100 * (scale.height / h - 1):+.1f} %; "
                                             f"KITTI 1.65 m: {100 * (scale.height / 1.65 - 1):+.1f} %)")
     print(f"    road scale with ORB-SLAM3's step lengths ({ego.sum():.2f} m): {text}")
+    return scale
 
 
 def onnx_far():
@@ -288,6 +289,9 @@ def real(samples: Path) -> None:
             compare_positions(lambda scene=name, kitti=data: kitti.frames(scene), onnx_far, people)
         if road is not None:
             show("people and road", mounting(obs, size, seq.calib.K, NETWORK_BODY, road), (h, tilt))
+            poses = kitti_files.read_camera_trajectory(training / "ego_poses_orbslam3" / name / "CameraTrajectory.txt")
+            scale = tracking_scale(training, name, list(seq.frames), seq.calib.K, poses)
+            show("people, road, scale", mounting(obs, size, seq.calib.K, NETWORK_BODY, road, scale), (h, tilt))
     objects = samples / "kitti" / "object_samples" / "training"
     for path in sorted((objects / "image_2").glob("*.png")):
         calib = kitti_files.read_calib(objects / "calib" / f"{path.stem}.txt")
