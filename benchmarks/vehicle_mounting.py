@@ -14,7 +14,8 @@
   mounting) and 0001 (driving, 3 images), ``object_samples`` (3
   single images), nuScenes 0061 (one image per camera): people, road and both combined.
 - synthetic: the built-in vehicle scenes (exact truth: a camera 1.5 m up, level), people from the
-  detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step; the
+  detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step (its scale
+  with :data:`STEP_SCALE_NOISE`); the
   positions of the fused method with the true and the estimated mounting.
 - drives: the whole KITTI drives of ``tracking_sequences`` (labels only): skeletons' ankle and eye
   points rendered from the pedestrians' 3D boxes with 2 px noise (modelled perception), the road cue
@@ -333,13 +334,13 @@ def noisy(directions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.c_[np.cos(e) * np.sin(y), -np.sin(e), np.cos(e) * np.cos(y)]
 
 
-def modelled_lengths(poses: np.ndarray, height: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """(odometry, ego) step lengths, metres, between consecutive frames of cam0 -> world ``poses``: the ego's
-    from the poses, the odometry's as the nominal camera would measure them over a road ``height`` metres
-    under the camera, with :data:`STEP_SCALE_NOISE` of log-normal noise per step."""
+def modelled_lengths(positions: np.ndarray, height: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """(odometry, ego) step lengths, metres, between consecutive frames of ``positions`` (N, 3) of the ego:
+    the ego's from the poses, the odometry's as the nominal camera would measure them over a road ``height``
+    metres under the camera, with :data:`STEP_SCALE_NOISE` of log-normal noise per step."""
     from pedenv.calibration.road import NOMINAL_MOUNTING
 
-    ego = np.linalg.norm(np.diff(poses[:, :3, 3], axis=0), axis=1)
+    ego = np.linalg.norm(np.diff(positions, axis=0), axis=1)
     ego = ego[ego >= MIN_STEP_M]
     odometry = ego * NOMINAL_MOUNTING[2, 3] / height * np.exp(rng.normal(0.0, STEP_SCALE_NOISE, len(ego)))
     return odometry, ego
@@ -370,7 +371,7 @@ def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None
               f"{0 if road is None else road.steps} steps of travel"
               + ("" if road is None else f" (road alone: pitch {np.degrees(road.pitch):.2f} +- "
                                          f"{np.degrees(road.std):.2f} deg, vs plane {deg(road.pitch - tilt)})"))
-        scale = road_scale(*modelled_lengths(poses, h, rng))
+        scale = road_scale(*modelled_lengths(poses[:, :3, 3], h, rng))
         if scale is not None:
             print(f"    road scale alone (ORB-SLAM3's step lengths): H {scale.height:.3f} +- {scale.std:.3f} m from "
                   f"{scale.steps} steps ({100 * (scale.height / h - 1):+.1f} %)")
@@ -437,7 +438,7 @@ def synthetic() -> None:
     from pedenv.calibration.geometry import parameters_of
     from pedenv.calibration.linking import BoxLinker
     from pedenv.calibration.observations import Observations, observations_of
-    from pedenv.calibration.road import road_cue
+    from pedenv.calibration.road import road_cue, road_scale
     from pedenv.detection import create_detector
     from pedenv.synthetic import generate_scenes
 
@@ -459,14 +460,16 @@ def synthetic() -> None:
             det = backend(frame)
             parts.append(observations_of(det, frame.index, linker(det.boxes)))
         obs = Observations.concat(parts)
-        moving = np.array(moves)
-        road = road_cue(noisy(moving, np.random.default_rng(0))) if np.isfinite(moving).all(axis=1).any() else None
+        moving, rng = np.array(moves), np.random.default_rng(0)
+        road = road_cue(noisy(moving, rng)) if np.isfinite(moving).all(axis=1).any() else None
+        scale = road_scale(*modelled_lengths(np.array([f.ego.translation for f in scene.frames]), h, rng))
         print(f"  {scene.name}: {obs.people} people, {0 if road is None else road.steps} steps of travel")
         best = None
-        for label, cue in (("people", None), ("people and road", road)):
-            if label == "people and road" and road is None:
+        for label, cue, sc in (("people", None, None), ("people and road", road, None),
+                               ("people, road, scale", road, scale)):
+            if (label != "people" and road is None) or (label == "people, road, scale" and scale is None):
                 continue
-            best = mounting(obs, (camera.width, camera.height), camera.intrinsics, None, cue)
+            best = mounting(obs, (camera.width, camera.height), camera.intrinsics, None, cue, sc)
             show(label, best, (h, tilt))
         if best is not None and not isinstance(best, Exception):
             compare_positions(lambda frames=scene.frames: frames, spec, best)
