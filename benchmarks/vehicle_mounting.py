@@ -3,23 +3,28 @@
     PYTHONPATH=src python benchmarks/vehicle_mounting.py [--samples ../shared/samples/real]
         [--only road|real|synthetic|drives] [--drives 0015,0004] [--no-positions]
 
-- road: the road cue alone on real images (``pedenv.calibration.road``: the travel direction of the
-  monocular visual odometry): KITTI raw 2011_09_26_drive_0002 (10 frames, 9 m/s) against the travel
-  direction GPS/IMU gives (the OXTS velocity, roll and pitch, the calibrated camera -> IMU chain) and
-  against the IMU's forward axis; ``tracking_sequences`` 0001 frames 0-1 and ``tracking_mini`` 0001
-  frames 10, 15, 20 against ORB-SLAM3's stereo poses and the plane of the labelled boxes' bottoms.
+- road: the road cues alone on real images (``pedenv.calibration.road``: the travel direction of the
+  monocular visual odometry, and its road-plane scale against the step lengths of GPS/IMU or ORB-SLAM3):
+  KITTI raw 2011_09_26_drive_0002 (10 frames, 9 m/s) against the travel direction GPS/IMU gives (the
+  OXTS velocity, roll and pitch, the calibrated camera -> IMU chain) and against the IMU's forward axis;
+  ``tracking_sequences`` 0001 frames 0-1 and ``tracking_mini`` 0001 frames 10, 15, 20 against
+  ORB-SLAM3's stereo poses and the plane of the labelled boxes' bottoms.
 - real: the real network (``onnx``, ``far``) on the real samples with their true mounting: KITTI
   ``tracking_mini`` 0016 (parked, 3 images; with the positions of the fused method, true and estimated
   mounting) and 0001 (driving, 3 images), ``object_samples`` (3
   single images), nuScenes 0061 (one image per camera): people, road and both combined.
 - synthetic: the built-in vehicle scenes (exact truth: a camera 1.5 m up, level), people from the
-  detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step; the
+  detector model, the road from the scenes' ego poses with :data:`STEP_NOISE_DEG` per step (its scale
+  with :data:`STEP_SCALE_NOISE`); the
   positions of the fused method with the true and the estimated mounting.
 - drives: the whole KITTI drives of ``tracking_sequences`` (labels only): skeletons' ankle and eye
   points rendered from the pedestrians' 3D boxes with 2 px noise (modelled perception), the road cue
   from ORB-SLAM3's stereo poses (the camera's real motion) with the monocular essential matrix's
-  per-step noise added (:data:`STEP_NOISE_DEG`, measured by ``--only road``): people only, road
-  only, both, against the plane of the labelled boxes' bottoms; then the fused method's positions
+  per-step noise added (:data:`STEP_NOISE_DEG`, measured by ``--only road``), and the road's scale
+  (the camera's height from the ego poses' step lengths, ``pedenv.calibration.road.road_scale``) modelled
+  as the nominal camera's odometry over the labelled ground with :data:`STEP_SCALE_NOISE` per step
+  (measured by ``--only road``): people only, road only, people and road, people, road and scale,
+  against the plane of the labelled boxes' bottoms; then the fused method's positions
   (detector model ``yolo11n-pose-far-kitti``, the dataset's ego poses) with the true mounting
   (KITTI's camera 1.65 m up, level) and with the estimate, side by side.
 """
@@ -38,6 +43,12 @@ DEFAULT_SAMPLES = ROOT.parent / "shared" / "samples" / "real"
 #: Per-step noise added to ORB-SLAM3's travel direction on the drives (elevation and yaw, degrees,
 #: 1-sigma): the monocular essential matrix's RMS against GPS/IMU on the raw drive (``--only road``: 0.36, rounded up).
 STEP_NOISE_DEG = 0.4
+#: Per-step noise of the odometry's road-plane step length on the drives (log, 1-sigma): the nominal
+#: camera's step lengths against GPS/IMU on the raw drive (``--only road``: 3.2 %, rounded up).
+STEP_SCALE_NOISE = 0.035
+#: The road scale's misses on real images (``--only road``: raw 0002 against KITTI's 1.65 m, tracking_mini
+#: 0001 against its labelled ground): the drives' estimates are also given with the scale off by these.
+SCALE_MISSES = (-0.026, 0.036)
 #: A drive's frame-to-frame motion below this (metres) is no step (a parked car: the odometry's
 #: parallax gate keeps no keyframe).
 MIN_STEP_M = 0.2
@@ -70,18 +81,24 @@ def show(label: str, est, truth: tuple[float, float] | None) -> None:
         text += (f"  vs H {h:.2f} tilt {np.degrees(t):.2f}: H {100 * (est.height / h - 1):+.1f} % "
                  f"({(est.height - h) / max(s['height_m'], 1e-9):+.1f} sigma), tilt {deg(est.tilt - t)} deg "
                  f"({np.degrees(est.tilt - t) / max(s['tilt_deg'], 1e-9):+.1f} sigma)")
-    if est.road is not None:
-        text += f"  [road {est.road['pitch_deg']:.2f} deg, cues {est.road['disagreement_sigma']:.1f} sigma apart]"
+    road = est.road or {}
+    if "disagreement_sigma" in road:
+        text += f"  [road {road['pitch_deg']:.2f} deg, cues {road['disagreement_sigma']:.1f} sigma apart]"
+    if "height_disagreement_sigma" in road:
+        text += (f"  [scale {road['scale']['height_m']:.3f} m, {road['height_disagreement_sigma']:.1f} sigma from "
+                 "the people]")
+    elif "scale" in road:
+        text += "  [no people: the road's pitch and scale]"
     print(f"  {label:24s} {text}")
 
 
-def mounting(obs, size, k, body, road):
+def mounting(obs, size, k, body, road, scale=None):
     from pedenv.calibration.vehicle import estimate_mounting
     from pedenv.errors import InputError
 
     try:
         return estimate_mounting(obs, size, focal=float(k[0, 0]), centre=(float(k[0, 2]), float(k[1, 2])),
-                                 body=body, road=road)
+                                 body=body, road=road, scale=scale)
     except InputError as exc:
         return exc
 
@@ -180,26 +197,57 @@ def road_real(samples: Path) -> None:
               f"{np.array2string(np.degrees(elevations(found)), precision=2)} vs ORB-SLAM3 "
               f"{np.array2string(np.degrees(elevations(ref)), precision=2)} deg; pooled {pitch} deg; "
               f"labelled ground plane {np.degrees(tilt):+.2f}")
+        tracking_scale(folder, name, frames, seq_k, poses)
+
+
+def scale_steps(images: list[np.ndarray], k: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The odometry (nominal camera, :data:`pedenv.calibration.road.NOMINAL_MOUNTING`) over ``images`` at
+    ``times`` seconds: (S,) its moving steps' lengths, metres, and (S, 2) their first and last image."""
+    from pedenv.calibration.road import NOMINAL_MOUNTING
+    from pedenv.odometry.estimator import VisualOdometry
+
+    odometry = VisualOdometry(k, NOMINAL_MOUNTING)
+    for i, image in enumerate(images):
+        odometry.update(image, float(times[i]), where=f"frame {i}")
+    keys = np.searchsorted(times, odometry.key_timestamps)
+    moved = np.array([s.moved for s in odometry.steps], bool)
+    return odometry.lengths()[moved], np.c_[keys[:-1], keys[1:]][moved]
 
 
 def road_height(raw: Path, k: np.ndarray, images: list[np.ndarray], oxts: np.ndarray) -> None:
-    """Not a cue pedenv uses: the camera's height the road would give where the step lengths are known
-    (ego poses): the odometry's road plane with a nominal 1.5 m camera, scaled by GPS/IMU's distance."""
-    from pedenv.calibration.road import NOMINAL_MOUNTING
-    from pedenv.odometry.estimator import VisualOdometry
+    """The road's scale (:func:`pedenv.calibration.road.road_scale`) with GPS/IMU's step lengths: the
+    camera's height over the road, against KITTI's 1.65 m."""
+    from pedenv.calibration.road import road_scale
     from pedenv.odometry.reference import integrated_distance
 
     sync = raw / "2011_09_26_drive_0002_sync"
     stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02/timestamps.txt").read_text().split("\n")
                        if t.strip()][: len(images)])
     times = (stamps - stamps[0]) / np.timedelta64(1, "s")
-    odometry = VisualOdometry(k, NOMINAL_MOUNTING)
-    for i, image in enumerate(images):
-        odometry.update(image, float(times[i]), where=f"frame {i}")
-    travelled = float(np.nansum(odometry.lengths()))
-    gps = integrated_distance(oxts, times)
-    print(f"    the road plane's scale with GPS/IMU's distance ({gps:.2f} m) would put the camera "
-          f"{NOMINAL_MOUNTING[2, 3] * gps / travelled:.2f} m above the road (KITTI: 1.65 m); not used")
+    lengths, spans = scale_steps(images, k, times)
+    gps = np.array([integrated_distance(oxts[a:b + 1], times[a:b + 1]) for a, b in spans])
+    scale = road_scale(lengths, gps)
+    assert scale is not None
+    print(f"    road scale with GPS/IMU's step lengths ({gps.sum():.2f} m): H {scale.height:.3f} +- {scale.std:.3f} m "
+          f"from {scale.steps} steps (per step {np.array2string(1.5 * gps / lengths, precision=3)}); KITTI 1.65 m: "
+          f"{100 * (scale.height / 1.65 - 1):+.1f} %")
+
+
+def tracking_scale(folder: Path, name: str, frames: list[int], k: np.ndarray, poses: np.ndarray):
+    """The road's scale on a tracking drive's real frames with ORB-SLAM3's (stereo, metric) step lengths."""
+    from pedenv.calibration.road import road_scale
+    from pedenv.datasets import kitti_files
+
+    images = [_grey(folder / "image_02" / name / f"{f:06d}.png") for f in frames]
+    lengths, spans = scale_steps(images, k, np.array(frames, float) / 10.0)
+    ego = np.array([np.linalg.norm(poses[frames[b], :3, 3] - poses[frames[a], :3, 3]) for a, b in spans])
+    scale = road_scale(lengths, ego)
+    h, _, _ = label_plane(kitti_files.read_labels(folder / "label_02" / f"{name}.txt"))
+    text = "no step" if scale is None else (f"H {scale.height:.3f} +- {scale.std:.3f} m from {scale.steps} steps "
+                                            f"(labelled ground {h:.3f} m: {100 * (scale.height / h - 1):+.1f} %; "
+                                            f"KITTI 1.65 m: {100 * (scale.height / 1.65 - 1):+.1f} %)")
+    print(f"    road scale with ORB-SLAM3's step lengths ({ego.sum():.2f} m): {text}")
+    return scale
 
 
 def onnx_far():
@@ -245,6 +293,9 @@ def real(samples: Path) -> None:
             compare_positions(lambda scene=name, kitti=data: kitti.frames(scene), onnx_far, people)
         if road is not None:
             show("people and road", mounting(obs, size, seq.calib.K, NETWORK_BODY, road), (h, tilt))
+            poses = kitti_files.read_camera_trajectory(training / "ego_poses_orbslam3" / name / "CameraTrajectory.txt")
+            scale = tracking_scale(training, name, list(seq.frames), seq.calib.K, poses)
+            show("people, road, scale", mounting(obs, size, seq.calib.K, NETWORK_BODY, road, scale), (h, tilt))
     objects = samples / "kitti" / "object_samples" / "training"
     for path in sorted((objects / "image_2").glob("*.png")):
         calib = kitti_files.read_calib(objects / "calib" / f"{path.stem}.txt")
@@ -286,8 +337,27 @@ def noisy(directions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.c_[np.cos(e) * np.sin(y), -np.sin(e), np.cos(e) * np.cos(y)]
 
 
+def modelled_lengths(positions: np.ndarray, height: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """(odometry, ego) step lengths, metres, of the ego's ``positions`` (N, 3), one per frame: a step ends at
+    the first frame at least :data:`~pedenv.calibration.road.MIN_SCALE_STEP_M` from its start (as the
+    odometry's keyframes wait for motion); the ego's length from the poses, the odometry's as the nominal
+    camera would measure it over a road ``height`` metres under the camera, with :data:`STEP_SCALE_NOISE`
+    of log-normal noise per step."""
+    from pedenv.calibration.road import MIN_SCALE_STEP_M, NOMINAL_MOUNTING
+
+    steps, key = [], 0
+    for i in range(1, len(positions)):
+        length = float(np.linalg.norm(positions[i] - positions[key]))
+        if length >= MIN_SCALE_STEP_M:
+            steps.append(length)
+            key = i
+    ego = np.array(steps)
+    odometry = ego * NOMINAL_MOUNTING[2, 3] / height * np.exp(rng.normal(0.0, STEP_SCALE_NOISE, len(ego)))
+    return odometry, ego
+
+
 def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None:
-    from pedenv.calibration.road import road_cue
+    from pedenv.calibration.road import road_cue, road_scale
     from pedenv.calibration.vehicle import estimate_mounting
     from pedenv.datasets import kitti_files
     from pedenv.errors import InputError
@@ -311,19 +381,38 @@ def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None
               f"{0 if road is None else road.steps} steps of travel"
               + ("" if road is None else f" (road alone: pitch {np.degrees(road.pitch):.2f} +- "
                                          f"{np.degrees(road.std):.2f} deg, vs plane {deg(road.pitch - tilt)})"))
+        scale = road_scale(*modelled_lengths(poses[:, :3, 3], h, rng))
+        if scale is not None:
+            print(f"    road scale alone (ORB-SLAM3's step lengths): H {scale.height:.3f} +- {scale.std:.3f} m from "
+                  f"{scale.steps} steps ({100 * (scale.height / h - 1):+.1f} %)")
         kw = {"focal": float(k[0, 0]), "centre": (float(k[0, 2]), float(k[1, 2]))}
         ests = {}
-        for label, cue in (("people", None), ("people and road", road)):
-            if label == "people and road" and road is None:
+        for label, cue, sc in (("people", None, None), ("people and road", road, None),
+                               ("people, road, scale", road, scale)):
+            if (label != "people" and road is None) or (label == "people, road, scale" and scale is None):
                 continue
             try:
-                ests[label] = estimate_mounting(obs, size, road=cue, **kw)
+                ests[label] = estimate_mounting(obs, size, road=cue, scale=sc, **kw)
             except InputError as exc:
                 ests[label] = exc
             show(label, ests[label], (h, tilt))
-        best = ests.get("people and road", ests.get("people"))
+        best = ests.get("people, road, scale", ests.get("people"))
+        if scale is not None and obs.people:
+            shifted(obs, size, kw, road, scale, h)
         if with_positions and not isinstance(best, Exception) and best is not None:
             positions(samples, name, best)
+
+
+def shifted(obs, size, kw: dict, road, scale, h: float) -> None:
+    """The estimate of all cues with the road's scale off by :data:`SCALE_MISSES` and at KITTI's 1.65 m."""
+    from pedenv.calibration.vehicle import estimate_mounting
+
+    out = []
+    for miss in (*SCALE_MISSES, 1.65 / scale.height - 1.0):
+        off = dataclasses.replace(scale, height=scale.height * (1 + miss), std=scale.std * (1 + miss))
+        est = estimate_mounting(obs, size, road=road, scale=off, **kw)
+        out.append(f"{100 * miss:+.1f} % -> H {100 * (est.height / h - 1):+.1f} %")
+    print(f"    the scale off (real images' misses; KITTI's 1.65 m): {', '.join(out)}")
 
 
 def positions(samples: Path, name: str, est) -> None:
@@ -373,7 +462,7 @@ def synthetic() -> None:
     from pedenv.calibration.geometry import parameters_of
     from pedenv.calibration.linking import BoxLinker
     from pedenv.calibration.observations import Observations, observations_of
-    from pedenv.calibration.road import road_cue
+    from pedenv.calibration.road import road_cue, road_scale
     from pedenv.detection import create_detector
     from pedenv.synthetic import generate_scenes
 
@@ -395,14 +484,16 @@ def synthetic() -> None:
             det = backend(frame)
             parts.append(observations_of(det, frame.index, linker(det.boxes)))
         obs = Observations.concat(parts)
-        moving = np.array(moves)
-        road = road_cue(noisy(moving, np.random.default_rng(0))) if np.isfinite(moving).all(axis=1).any() else None
+        moving, rng = np.array(moves), np.random.default_rng(0)
+        road = road_cue(noisy(moving, rng)) if np.isfinite(moving).all(axis=1).any() else None
+        scale = road_scale(*modelled_lengths(np.array([f.ego.translation for f in scene.frames]), h, rng))
         print(f"  {scene.name}: {obs.people} people, {0 if road is None else road.steps} steps of travel")
         best = None
-        for label, cue in (("people", None), ("people and road", road)):
-            if label == "people and road" and road is None:
+        for label, cue, sc in (("people", None, None), ("people and road", road, None),
+                               ("people, road, scale", road, scale)):
+            if (label != "people" and road is None) or (label == "people, road, scale" and scale is None):
                 continue
-            best = mounting(obs, (camera.width, camera.height), camera.intrinsics, None, cue)
+            best = mounting(obs, (camera.width, camera.height), camera.intrinsics, None, cue, sc)
             show(label, best, (h, tilt))
         if best is not None and not isinstance(best, Exception):
             compare_positions(lambda frames=scene.frames: frames, spec, best)

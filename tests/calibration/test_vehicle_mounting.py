@@ -12,8 +12,18 @@ from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.geometry import camera_rotation
 from pedenv.calibration.observations import Observations
 from pedenv.calibration.refusals import CalibrationRefused
-from pedenv.calibration.road import TRAVEL_GROUND_STD_DEG, RoadCue, TravelWatcher, road_cue, travel_direction
-from pedenv.calibration.vehicle import PEOPLE_GROUND_TILT_STD_DEG, combine, estimate_mounting, widen_people
+from pedenv.calibration.road import (
+    ROAD_SCALE_STD,
+    STEP_SCALE_STD,
+    TRAVEL_GROUND_STD_DEG,
+    RoadCue,
+    RoadScale,
+    TravelWatcher,
+    road_cue,
+    road_scale,
+    travel_direction,
+)
+from pedenv.calibration.vehicle import PEOPLE_GROUND_TILT_STD_DEG, combine, estimate_mounting, scaled, widen_people
 
 from shared_paths import REAL_SAMPLES
 
@@ -88,16 +98,61 @@ def test_a_parked_car_keeps_the_people_estimate_and_few_people_are_refused_namin
     few = obs.subset(obs.tracks < 3)
     road = RoadCue(np.array([0.0, -np.sin(np.radians(1.0)), np.cos(np.radians(1.0))]), np.radians(0.2), 50)
     with pytest.raises(CalibrationRefused, match=r"height cannot be estimated: too few .* road alone gave only the "
-                                                 r"pitch \(1\.00 \+- 0\.20 deg from 50 steps"):
+                                                 r"pitch \(1\.00 \+- 0\.20 deg from 50 steps.*ego poses"):
         estimate_mounting(few, (1242, 375), focal=721.5, centre=(609.6, 172.9), road=road)
+    # with the ego poses the road's scale gives the height: the road alone then places the camera
+    alone = estimate_mounting(few, (1242, 375), focal=721.5, centre=(609.6, 172.9), road=road,
+                              scale=RoadScale(1.62, 0.05, 40))
+    assert alone.people == 0 and alone.height == 1.62 and np.degrees(alone.tilt) == pytest.approx(1.0)
+    assert alone.roll == 0.0 and alone.std[1] == pytest.approx(0.05) and alone.road is not None
+    assert alone.road["scale"]["steps"] == 40 and alone.road["steps"] == 50
 
 
-def test_real_kitti_frames_give_the_pitch_of_travel_of_the_gps_imu() -> None:
+def test_the_road_scale_pools_the_steps_heights_and_leaves_out_the_wild_ones() -> None:
+    rng = np.random.default_rng(1)
+    ego = rng.uniform(0.5, 1.5, 60)
+    odometry = ego * 1.5 / 1.62 * np.exp(rng.normal(0.0, 0.03, 60))
+    odometry[:3] *= 2.0  # three steps whose road was a parked car's roof: their heights halved
+    odometry[3], ego[4] = np.nan, 0.1  # a step without road, one too short to count
+    scale = road_scale(odometry, ego)
+    assert scale is not None and scale.steps == 55 and scale.dropped == 3
+    assert scale.height == pytest.approx(1.62, rel=0.01)
+    assert scale.std / scale.height == pytest.approx(np.hypot(scale.scatter / np.sqrt(55), ROAD_SCALE_STD), rel=1e-6)
+    assert scale.scatter == pytest.approx(0.03, rel=0.3)
+    few = road_scale(np.array([1.0]), np.array([1.1]))  # one step: the per-step spread assumed
+    assert few is not None and few.height == pytest.approx(1.65) and few.std == pytest.approx(
+        1.65 * np.hypot(STEP_SCALE_STD, ROAD_SCALE_STD))
+    assert road_scale(np.array([np.nan]), np.array([1.0])) is None
+
+
+def test_the_road_scale_corrects_short_people_and_the_pitch_follows() -> None:
+    # short people put the camera 0.15 m too high; the tilt is correlated with the height
+    people = _people(1.75, 1.0, (0.08, 0.3), 0.5)
+    both = scaled(people, RoadScale(1.60, 0.05, 100))
+    weight = 0.08 ** 2 / (0.08 ** 2 + 0.05 ** 2)
+    assert both.height == pytest.approx(1.75 - 0.15 * weight, abs=1e-6)
+    assert np.degrees(both.tilt) < 1.0 - 0.05  # the tilt follows the height down
+    assert both.std[1] == pytest.approx(np.sqrt(0.08 ** 2 * 0.05 ** 2 / (0.08 ** 2 + 0.05 ** 2)), rel=1e-6)
+    assert both.road is not None and both.road["people_height_m"] == 1.75
+    assert both.road["height_disagreement_sigma"] == pytest.approx(0.15 / np.hypot(0.08, 0.05))
+
+
+def test_real_kitti_frames_give_the_pitch_of_travel_and_the_height_of_the_gps_imu() -> None:
     from pedenv.images import read_image_rgb
+    from pedenv.odometry.reference import integrated_distance, read_oxts
 
     line = next(t for t in (RAW / "calib_cam_to_cam.txt").read_text().splitlines() if t.startswith("P_rect_02:"))
     k = np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3]
-    watcher = TravelWatcher(k)
+    sync = RAW / "2011_09_26_drive_0002_sync"
+    oxts = read_oxts(sorted((sync / "oxts" / "data").glob("*.txt"))[:5])
+    stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02" / "timestamps.txt").read_text().splitlines()
+                       if t.strip()][:5])
+    times = (stamps - stamps[0]) / np.timedelta64(1, "s")
+
+    def gps_length(a: int, b: int) -> float:
+        return integrated_distance(oxts[a:b + 1], times[a:b + 1])
+
+    watcher = TravelWatcher(k, gps_length)
     frames = ((i, read_image_rgb(RAW / f"2011_09_26_drive_0002_sync/image_02/data/{i:010d}.png")) for i in range(5))
     assert [i for i, _ in watcher.watch(frames)] == [0, 1, 2, 3, 4]
     cue = watcher.cue()
@@ -106,6 +161,12 @@ def test_real_kitti_frames_give_the_pitch_of_travel_of_the_gps_imu() -> None:
     assert cue is not None and cue.steps == 4 and watcher.refused == 0
     assert np.degrees(cue.pitch) == pytest.approx(-0.23, abs=0.5)
     assert np.degrees(cue.std) == pytest.approx(np.hypot(0.4 / 2, TRAVEL_GROUND_STD_DEG), abs=0.01)
+    # the road's scale with GPS/IMU's step lengths: KITTI's camera is 1.65 m over the road
+    # (all 9 steps of the drive: 1.607 m, benchmarks/vehicle_mounting.py --only road)
+    scale = watcher.scale()
+    assert scale is not None and scale.steps == 4
+    assert scale.height == pytest.approx(1.65, rel=0.05)
+    assert TravelWatcher(k).scale() is None  # no ego poses, no scale
 
 
 def test_a_blank_recording_gives_no_road() -> None:
@@ -151,3 +212,30 @@ def test_calibrate_a_vehicle_camera_without_people_names_the_road_pitch(tmp_path
         calibrate(output=tmp_path / "out", images=RAW / "2011_09_26_drive_0002_sync/image_02/data", backend=_NoPeople(),
                   calibration=intrinsics, static=False, frames=4)
     assert not (tmp_path / "out").exists()
+
+
+def test_a_run_with_ego_poses_and_no_people_places_the_camera_from_the_road(tmp_path) -> None:
+    from pedenv.apps.calibrate import ego_lengths, self_calibrate
+    from pedenv.odometry.reference import integrated_distance, read_oxts
+
+    sync = RAW / "2011_09_26_drive_0002_sync"
+    oxts = read_oxts(sorted((sync / "oxts" / "data").glob("*.txt")))
+    stamps = np.array([np.datetime64(t.strip()) for t in (sync / "image_02" / "timestamps.txt").read_text().splitlines()
+                       if t.strip()])
+    times = (stamps - stamps[0]) / np.timedelta64(1, "s")
+    along = [integrated_distance(oxts[: i + 1], times[: i + 1]) for i in range(len(oxts))]
+    poses = tmp_path / "poses.csv"  # GPS/IMU's distance along a straight line, one pose per frame at 10 Hz
+    poses.write_text("timestamp,x,y,yaw\n" + "".join(f"{100 + i / 10:.1f},{x:.4f},0,0\n" for i, x in enumerate(along)))
+    intrinsics = tmp_path / "k.yaml"
+    intrinsics.write_text("width: 1242\nheight: 375\nintrinsics: [[721.5377, 0, 609.5593], [0, 721.5377, 172.854], "
+                          "[0, 0, 1]]\n")
+    lengths = ego_lengths(poses, sync / "image_02" / "data", None, fps=10.0)
+    assert lengths is not None and lengths(0, 2) == pytest.approx(along[2], abs=1e-4) and np.isnan(lengths(0, 99))
+    found = self_calibrate(sync / "image_02" / "data", None, intrinsics, _NoPeople(), "detector-model",
+                           mount="vehicle", ego_length=lengths)
+    est = found.estimate
+    # no people: the road's scale with GPS/IMU's steps (KITTI: 1.65 m) and its direction of travel
+    assert est.people == 0 and est.height == pytest.approx(1.65, rel=0.05) and abs(np.degrees(est.tilt)) < 1.0
+    (tmp_path / "out").mkdir()
+    summary = found.write(tmp_path / "out")
+    assert summary["road"]["scale"]["steps"] == 9 and (tmp_path / "out" / "calibration.png").is_file()

@@ -165,15 +165,49 @@ def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | No
     centre = None if intrinsics is None else (float(intrinsics[0, 2]), float(intrinsics[1, 2]))
     if road is not None and focal is not None:
         return estimate_mounting(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
-                                 road=road.cue())
+                                 road=road.cue(), scale=road.scale())
     return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
                            walking=static)
 
 
-def road_watcher(intrinsics: np.ndarray | None, mount: str) -> TravelWatcher | None:
+def road_watcher(intrinsics: np.ndarray | None, mount: str,
+                 ego_length: Callable[[int, int], float] | None = None) -> TravelWatcher | None:
     """A vehicle camera with its intrinsics: a watcher of its direction of travel during the warm-up
-    (:class:`~pedenv.calibration.road.TravelWatcher`); else None (a static camera has no road cue)."""
-    return TravelWatcher(intrinsics) if mount == "vehicle" and intrinsics is not None else None
+    (:class:`~pedenv.calibration.road.TravelWatcher`; ``ego_length``: the ego poses' metres between two
+    frames, for the road's scale); else None (a static camera has no road cue)."""
+    return TravelWatcher(intrinsics, ego_length) if mount == "vehicle" and intrinsics is not None else None
+
+
+def ego_lengths(ego_poses: str | Path | None, images: str | Path | None, video: str | Path | None,
+                fps: float | None = None, start_time: float | None = None) -> Callable[[int, int], float] | None:
+    """Where ``ego_poses`` (a CSV) are given: the metres the car moved between two frames of the
+    recording (their indices), the frames timed as ``pedenv run`` times them; else None."""
+    if ego_poses is None:
+        return None
+    from pedenv.calibration.road import ego_length
+    from pedenv.recordings.ego_poses import load_ego_poses
+    from pedenv.recordings.footage import _folder_frames
+
+    trajectory = load_ego_poses(ego_poses)
+    start = float(trajectory.timestamps[0] if start_time is None else start_time)
+    if images is not None:
+        stamps = np.array([t for _, t in _folder_frames(Path(images), fps, start)])
+    else:
+        assert video is not None
+        stamps = start + np.arange(WARMUP_LONGEST_FRAMES) / (fps or _video_rate(video))
+    return ego_length(trajectory, stamps)
+
+
+def _video_rate(video: str | Path) -> float:
+    import cv2
+
+    from pedenv.video_files import video_capture
+
+    with video_capture(video) as cap:
+        rate = float(cap.get(cv2.CAP_PROP_FPS))
+    if not rate > 0:
+        raise InputError(f"{video}: the video gives no frame rate to time its frames against the ego poses; give --fps")
+    return rate
 
 
 def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backend_name: str,
@@ -286,10 +320,11 @@ def needs_estimate(images: str | Path | None, video: str | Path | None, calibrat
 
 def self_calibrate(images: str | Path | None, video: str | Path | None, calibration: str | Path | None,
                    backend: PoseBackend | None, backend_name: str, device: str = "auto",
-                   mount: str = "static") -> SelfCalibration:
+                   mount: str = "static", ego_length: Callable[[int, int], float] | None = None) -> SelfCalibration:
     """The warm-up of ``pedenv run`` without a placed camera: the camera estimated from the first
     frames' people (``backend``, else the onnx network's whole-image ``far`` detection on ``device``),
-    written as a plain calibration file in a temporary folder for the run to read."""
+    written as a plain calibration file in a temporary folder for the run to read. ``ego_length``
+    (:func:`ego_lengths`): a vehicle's given ego poses, whose step lengths give the road's scale."""
     import tempfile
 
     from pedenv.calibration.files import calibration_mapping
@@ -300,7 +335,7 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
         from pedenv.detection import backend_options, create_detector
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
-    road = road_watcher(k, mount)
+    road = road_watcher(k, mount, ego_length)
     warmup, estimate = warm_up(images, video, backend, partial(estimate_from, backend_name=backend_name,
                                                                intrinsics=k, road=road, static=mount == "static"),
                                block_frames(video, WARMUP_MAX_FRAMES), road)
@@ -321,8 +356,10 @@ def estimate_for_source(source: RecordingSource, pose: PoseOptions,
     origin on the road under the camera, its x axis along the camera's horizontal view."""
     if source.bag is not None or not needs_estimate(source.images, source.video, source.calibration, source.static):
         return source, None
+    ego = None if source.static else ego_lengths(source.ego_poses, source.images, source.video, source.fps,
+                                                 source.start_time)
     found = self_calibrate(source.images, source.video, source.calibration, backend, pose.backend or "onnx",
-                           pose.device, "static" if source.static else "vehicle")
+                           pose.device, "static" if source.static else "vehicle", ego)
     return dataclasses.replace(source, calibration=found.path), found
 
 

@@ -12,8 +12,13 @@ their ground's sideways slope). The people's height and
 tilt are correlated (a horizon placed too high makes every person nearer and the camera lower),
 so a better pitch moves the height too.
 
-Without enough people the height is not seen at all: the road alone gives the pitch, never a
-mounting, and the estimate is refused in one line that says what the road gave.
+Where the ego poses give the steps' metric lengths, the road's scale gives the height in metres
+(:class:`~pedenv.calibration.road.RoadScale`), independently of the people's heights: the estimate
+is then conditioned on it too (a Gaussian update on the height, the tilt and roll following through
+their correlation). With the road's pitch and scale the mounting stands without people (the roll
+then the mounting's prior). Without ego poses and without enough people the height is not seen at
+all: the road alone gives the pitch, never a mounting, and the estimate is refused in one line that
+says what the road gave.
 """
 
 from __future__ import annotations
@@ -27,7 +32,7 @@ from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.fit import BodyModel, estimate_camera
 from pedenv.calibration.observations import Observations
 from pedenv.calibration.refusals import CalibrationRefused
-from pedenv.calibration.road import RoadCue
+from pedenv.calibration.road import RoadCue, RoadScale
 
 #: 1-sigma of the people's tilt against the road the car drives on, degrees, added to the people's own
 #: (along the fit's correlation: the height follows a tilt error as the fit couples them). The
@@ -113,27 +118,61 @@ def combine(people: CameraEstimate, road: RoadCue) -> CameraEstimate:
                                            "disagreement_sigma": apart})
 
 
+def scaled(estimate: CameraEstimate, scale: RoadScale) -> CameraEstimate:
+    """``estimate`` conditioned on the road's scale: its height measured as ``scale.height`` within
+    ``scale.std`` (a linear Gaussian update; tilt and roll follow through their correlation with it).
+    ``road`` in ``summary()`` then holds the scale's summary (``scale``), the people's height and the
+    disagreement in sigmas (``height_disagreement_sigma``)."""
+    x = np.array([estimate.height, estimate.tilt, estimate.roll])
+    p = estimate.covariance[1:, 1:]
+    total = float(p[0, 0]) + scale.std ** 2
+    gain = p[:, 0] / total
+    x = x + gain * (scale.height - x[0])
+    covariance = estimate.covariance.copy()
+    updated = p - np.outer(gain, p[0])
+    covariance[1:, 1:] = 0.5 * (updated + updated.T)
+    road = {**(estimate.road or {}), "scale": scale.summary(), "people_height_m": estimate.height,
+            "height_disagreement_sigma": abs(scale.height - estimate.height) / np.sqrt(total)}
+    return dataclasses.replace(estimate, height=float(x[0]), tilt=float(x[1]), roll=float(x[2]),
+                               covariance=covariance, road=road)
+
+
+def road_mounting(road: RoadCue, scale: RoadScale, size: tuple[int, int], focal: float,
+                  centre: tuple[float, float]) -> CameraEstimate:
+    """The mounting from the road alone: the height its scale gives, the pitch its direction of travel
+    gives, the roll the mounting's prior (0 within :data:`MOUNT_ROLL_STD_DEG`); no people."""
+    cov = np.diag([0.0, scale.std ** 2, road.std ** 2, np.radians(MOUNT_ROLL_STD_DEG) ** 2])
+    return CameraEstimate(focal, scale.height, road.pitch, 0.0, cov, size, centre, 0, 0, 0.0, True,
+                          {**road.summary(), "scale": scale.summary()})
+
+
 def estimate_mounting(people: Observations, size: tuple[int, int], *, focal: float,
                       centre: tuple[float, float] | None = None, body: BodyModel | None = None,
-                      road: RoadCue | None = None) -> CameraEstimate:
-    """A vehicle camera's height, tilt and roll from ``people`` and, where the car moved, ``road``.
+                      road: RoadCue | None = None, scale: RoadScale | None = None) -> CameraEstimate:
+    """A vehicle camera's height, tilt and roll from ``people`` and, where the car moved, ``road``
+    and (ego poses given) ``scale``.
 
     people: the upright people of the warm-up (:mod:`pedenv.calibration.observations`). size:
     (width, height) pixels; focal: pixels (the intrinsics or ``fov_deg`` given); centre: the
     principal point (default: the image centre); body: where the pose source puts the keypoints.
     road: the pooled travel direction (:class:`~pedenv.calibration.road.RoadCue`), None for a
-    parked car. Raises :class:`~pedenv.calibration.refusals.CalibrationRefused` when the people do
-    not fix the height (with or without the road: the road gives no height), naming what the road gave.
+    parked car; scale: the road's height from the ego poses' step lengths
+    (:class:`~pedenv.calibration.road.RoadScale`), None without ego poses. Raises
+    :class:`~pedenv.calibration.refusals.CalibrationRefused` when nothing fixes the height (too few
+    people and no road scale), naming what the road gave.
     """
     try:
         found = estimate_camera(people, size, focal=focal, centre=centre, body=body)
     except CalibrationRefused as exc:
+        if road is not None and scale is not None:
+            return road_mounting(road, scale, size, focal, centre if centre is not None else (size[0] / 2, size[1] / 2))
         if road is None:
             raise
         reason = str(exc).split("; give")[0]
         raise CalibrationRefused(
             f"the camera's height cannot be estimated: {reason}; the road alone gave only the pitch "
             f"({np.degrees(road.pitch):.2f} +- {np.degrees(road.std):.2f} deg from {road.steps} steps of travel), "
-            f"the height needs people; {INSTEAD}") from exc
+            f"the height needs people or the ego poses (--ego-poses: the road's scale); {INSTEAD}") from exc
     found = level_roll(widen_people(found))
-    return found if road is None else combine(found, road)
+    found = found if road is None else combine(found, road)
+    return found if scale is None else scaled(found, scale)
