@@ -15,7 +15,6 @@ that jumps) is drawn toward a walker's.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,6 +86,7 @@ def _grid() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 _VELOCITIES, _QUADRATIC, _LOG_PRIOR = _grid()
+_PRIOR = np.exp(_LOG_PRIOR)  # at least about 1e-6 over the grid's speeds (0-5 m/s)
 
 
 @dataclass(frozen=True)
@@ -153,17 +153,21 @@ def speed_posterior(velocities: np.ndarray, velocity_covariances: np.ndarray
     if n == 0:
         return np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2))
     p, c, s = _log_likelihood(velocities, velocity_covariances)
-    gaussian = p + _LOG_PRIOR
-    # the mixture (module doc): log((1 - e) exp(p) + e exp(p / k^2) / k^2), the normalisers in 2D
-    p = np.logaddexp(p + math.log1p(-OUTLIER_SHARE),
-                     p * (1.0 / OUTLIER_SPREAD**2) + math.log(OUTLIER_SHARE / OUTLIER_SPREAD**2))
-    p += _LOG_PRIOR
+    # the mixture (module doc), (1 - e) exp(p) + e exp(p / k^2) / k^2 (the normalisers in 2D), both terms
+    # taken relative to the grid's best p, so that neither underflows where the other does not
+    k2, top = OUTLIER_SPREAD**2, p.max(axis=1, keepdims=True)
+    p -= top
+    wide = np.exp(p * (1.0 / k2))
+    np.exp(p, out=p)  # the Gaussian's likelihood alone (the corridor's posterior)
+    narrow = (1.0 - OUTLIER_SHARE) * np.exp(top * (1.0 - 1.0 / k2))
+    wide *= OUTLIER_SHARE / k2
+    wide += narrow * p
     means = []
-    for q in (p, gaussian):
-        q -= q.max(axis=1, keepdims=True)
-        np.exp(q, out=q)  # the posterior on the grid, not normalised
+    for q in (wide, p):
+        q *= _PRIOR  # the posterior on the grid, not normalised
         turned = (q @ _VELOCITIES.T) / q.sum(axis=1, keepdims=True)
         means.append(np.stack([c * turned[:, 0] - s * turned[:, 1], s * turned[:, 0] + c * turned[:, 1]], axis=1))
+    p = wide
     cdf = np.cumsum(p.reshape(n, DIRECTIONS, len(SPEED_GRID_MPS)).sum(axis=1), axis=1)  # the speed's, unnormalised
     median = SPEED_GRID_MPS[np.minimum((cdf < 0.5 * cdf[:, -1:]).sum(axis=1), len(SPEED_GRID_MPS) - 1)]
     return median, means[0], means[1]
