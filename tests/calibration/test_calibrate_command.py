@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from scene_backend import SceneBackend
 
+from pedenv.apps.options import RecordingSource
 from pedenv.calibration.geometry import parameters_of
 from pedenv.recordings.footage import load_calibration, load_intrinsics
 from pedenv.records import Frame
@@ -36,7 +37,8 @@ def test_calibrate_writes_a_reusable_estimated_calibration(plaza: tuple[Path, tu
     from pedenv.apps.calibrate import calibrate
 
     folder, frames = plaza
-    summary = calibrate(output=tmp_path / "cal", images=folder, backend=SceneBackend(frames))
+    summary = calibrate(output=tmp_path / "cal", source=RecordingSource(images=folder, static=True),
+                        backend=SceneBackend(frames))
     truth = parameters_of(frames[0].camera)
     assert summary["focal_px"] == pytest.approx(truth[0], rel=0.05)
     assert summary["height_m"] == pytest.approx(truth[1], rel=0.05)
@@ -106,6 +108,7 @@ def test_a_warm_up_whose_people_do_not_fix_the_camera_goes_on(plaza: tuple[Path,
 
     folder, frames = plaza
     monkeypatch.setattr(refusals, "MAX_FOCAL_RELATIVE_STD", 0.05)  # 3 or 6 frames' people leave 5-6 %
-    summary = calibrate(output=tmp_path / "cal", images=folder, backend=SceneBackend(frames), frames=3)
+    summary = calibrate(output=tmp_path / "cal", source=RecordingSource(images=folder, static=True),
+                        backend=SceneBackend(frames), frames=3)
     assert summary["warmup_frames"] == 9 and summary["std"]["focal_px"] <= 0.05 * summary["focal_px"]
     assert summary["focal_px"] == pytest.approx(parameters_of(frames[0].camera)[0], rel=0.1)

@@ -4,10 +4,12 @@ combination by uncertainties, the refusal, and the cue on real KITTI frames agai
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from pedenv.apps.options import RecordingSource
 from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.geometry import camera_rotation
 from pedenv.calibration.observations import Observations
@@ -209,13 +211,15 @@ def test_calibrate_a_vehicle_camera_without_people_names_the_road_pitch(tmp_path
                           "[0, 0, 1]]\n")
     with pytest.raises(CalibrationRefused, match=r"the road alone gave only the pitch \(-0\.\d\d \+- 0\.\d\d deg from "
                                                  r"3 steps of travel\).*give cam_to_vehicle"):
-        calibrate(output=tmp_path / "out", images=RAW / "2011_09_26_drive_0002_sync/image_02/data", backend=_NoPeople(),
-                  calibration=intrinsics, static=False, frames=4)
+        calibrate(output=tmp_path / "out", source=RecordingSource(
+            images=RAW / "2011_09_26_drive_0002_sync/image_02/data", calibration=intrinsics, static=False),
+            backend=_NoPeople(), frames=4)
     assert not (tmp_path / "out").exists()
 
 
-def test_a_run_with_ego_poses_and_no_people_places_the_camera_from_the_road(tmp_path) -> None:
-    from pedenv.apps.calibrate import ego_lengths, self_calibrate
+def _gps_poses_and_intrinsics(tmp_path) -> tuple[list[float], Path, Path]:
+    """KITTI raw 0002's GPS/IMU distance along a straight line as ego poses (one a frame at 10 Hz), and its
+    intrinsics without a mounting."""
     from pedenv.odometry.reference import integrated_distance, read_oxts
 
     sync = RAW / "2011_09_26_drive_0002_sync"
@@ -224,11 +228,19 @@ def test_a_run_with_ego_poses_and_no_people_places_the_camera_from_the_road(tmp_
                        if t.strip()])
     times = (stamps - stamps[0]) / np.timedelta64(1, "s")
     along = [integrated_distance(oxts[: i + 1], times[: i + 1]) for i in range(len(oxts))]
-    poses = tmp_path / "poses.csv"  # GPS/IMU's distance along a straight line, one pose per frame at 10 Hz
+    poses = tmp_path / "poses.csv"
     poses.write_text("timestamp,x,y,yaw\n" + "".join(f"{100 + i / 10:.1f},{x:.4f},0,0\n" for i, x in enumerate(along)))
     intrinsics = tmp_path / "k.yaml"
     intrinsics.write_text("width: 1242\nheight: 375\nintrinsics: [[721.5377, 0, 609.5593], [0, 721.5377, 172.854], "
                           "[0, 0, 1]]\n")
+    return along, poses, intrinsics
+
+
+def test_a_run_with_ego_poses_and_no_people_places_the_camera_from_the_road(tmp_path) -> None:
+    from pedenv.apps.calibrate import ego_lengths, self_calibrate
+
+    sync = RAW / "2011_09_26_drive_0002_sync"
+    along, poses, intrinsics = _gps_poses_and_intrinsics(tmp_path)
     lengths = ego_lengths(poses, sync / "image_02" / "data", None, fps=10.0)
     assert lengths is not None and lengths(0, 2) == pytest.approx(along[2], abs=1e-4) and np.isnan(lengths(0, 99))
     found = self_calibrate(sync / "image_02" / "data", None, intrinsics, _NoPeople(), "detector-model",
@@ -239,3 +251,29 @@ def test_a_run_with_ego_poses_and_no_people_places_the_camera_from_the_road(tmp_
     (tmp_path / "out").mkdir()
     summary = found.write(tmp_path / "out")
     assert summary["road"]["scale"]["steps"] == 9 and (tmp_path / "out" / "calibration.png").is_file()
+
+
+def test_calibrate_with_ego_poses_places_a_vehicle_camera_from_the_road(tmp_path) -> None:
+    from pedenv.apps.calibrate import calibrate
+
+    _, poses, intrinsics = _gps_poses_and_intrinsics(tmp_path)
+    source = RecordingSource(images=RAW / "2011_09_26_drive_0002_sync/image_02/data", calibration=intrinsics,
+                             ego_poses=poses, static=False, fps=10.0)
+    summary = calibrate(output=tmp_path / "out", source=source, backend=_NoPeople())
+    # the road's scale from GPS/IMU's steps (KITTI: 1.65 m); without the poses the same frames are refused (above)
+    assert summary["people"] == 0 and summary["height_m"] == pytest.approx(1.65, rel=0.05)
+    assert (tmp_path / "out" / "calibration.yaml").is_file()
+
+
+def test_calibrate_refuses_ego_poses_for_a_static_camera(tmp_path) -> None:
+    import subprocess
+    import sys
+
+    poses = tmp_path / "poses.csv"
+    poses.write_text("timestamp,x,y,yaw\n0,0,0,0\n")
+    result = subprocess.run([sys.executable, "-c", "from pedenv.cli import main; main()", "calibrate", "--images",
+                             str(tmp_path), "--ego-poses", str(poses), "--output", str(tmp_path / "out")],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "--ego-poses is for the mounting of a camera on a vehicle" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "out").exists()

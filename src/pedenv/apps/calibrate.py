@@ -186,12 +186,12 @@ def ego_lengths(ego_poses: str | Path | None, images: str | Path | None, video: 
         return None
     from pedenv.calibration.road import ego_length
     from pedenv.recordings.ego_poses import load_ego_poses
-    from pedenv.recordings.footage import _folder_frames
+    from pedenv.recordings.footage import folder_frames
 
     trajectory = load_ego_poses(ego_poses)
     start = float(trajectory.timestamps[0] if start_time is None else start_time)
     if images is not None:
-        stamps = np.array([t for _, t in _folder_frames(Path(images), fps, start)])
+        stamps = np.array([t for _, t in folder_frames(Path(images), fps, start)])
     else:
         assert video is not None
         stamps = start + np.arange(WARMUP_LONGEST_FRAMES) / (fps or _video_rate(video))
@@ -228,22 +228,23 @@ def write_estimate(folder: Path, estimate: CameraEstimate, warmup: WarmUp, backe
     return summary
 
 
-def calibrate(*, output: str | Path, images: str | Path | None = None, video: str | Path | None = None,
-              backend: PoseBackend, calibration: str | Path | None = None,
-              static: bool = True, overwrite: bool = False, frames: int = WARMUP_MAX_FRAMES) -> dict:
-    """Estimate the camera of ``images`` (a folder) or ``video`` from its warm-up's people and write
-    ``calibration.yaml``, ``calibration.json`` and ``calibration.png`` into ``output``.
+def calibrate(*, output: str | Path, source: RecordingSource, backend: PoseBackend, overwrite: bool = False,
+              frames: int = WARMUP_MAX_FRAMES) -> dict:
+    """Estimate the camera of ``source`` (its ``images`` folder or ``video``) from its warm-up's
+    people and write ``calibration.yaml``, ``calibration.json`` and ``calibration.png`` into ``output``.
 
-    calibration: a YAML with the image size and the intrinsics or ``fov_deg`` (no ``cam_to_vehicle``
-    needed): the focal length is then taken from it. static: ``mount: static`` (else ``vehicle``,
-    the vehicle origin under the camera). ``backend.name`` says where its keypoints sit on a person
-    (:func:`body_of`). Returns the summary (``calibration.json``). Raises
-    :class:`~pedenv.calibration.refusals.CalibrationRefused` (one line: what could not be
-    estimated and what to give instead) before ``output`` is touched.
+    ``source.calibration``: a YAML with the image size and the intrinsics or ``fov_deg`` (no
+    ``cam_to_vehicle`` needed): the focal length is then taken from it. ``source.static``: ``mount:
+    static`` (else ``vehicle``, the vehicle origin under the camera; its ``ego_poses``, where given,
+    give the road's scale: :func:`ego_lengths`, timed with ``fps`` and ``start_time``).
+    ``backend.name`` says where its keypoints sit on a person (:func:`body_of`). Returns the
+    summary (``calibration.json``). Raises :class:`~pedenv.calibration.refusals.CalibrationRefused`
+    (one line: what could not be estimated and what to give instead) before ``output`` is touched.
     """
     from pedenv.outputs.output_dir import prepare_output_dir
     from pedenv.recordings.footage import load_intrinsics
 
+    images, video, calibration, static = source.images, source.video, source.calibration, source.static
     if (images is None) == (video is None):
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if video is not None and not Path(video).is_file():
@@ -252,7 +253,8 @@ def calibrate(*, output: str | Path, images: str | Path | None = None, video: st
     if calibration is not None:
         width, height, k = load_intrinsics(calibration)
         size = (width, height)
-    road = road_watcher(k, "static" if static else "vehicle")
+    ego = None if static else ego_lengths(source.ego_poses, images, video, source.fps, source.start_time)
+    road = road_watcher(k, "static" if static else "vehicle", ego)
 
     def fit(warmup: WarmUp) -> CameraEstimate:
         if size is not None and (warmup.image.shape[1], warmup.image.shape[0]) != size:

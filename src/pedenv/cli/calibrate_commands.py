@@ -25,8 +25,11 @@ def calibrate(
                                                                         "most its first 20 s)."),
     odometry: bool = typer.Option(False, "--odometry", help="Instead: the vehicle's motion from the images "
                                                             "(needs a full --calibration): ego_poses_estimated.csv."),
-    fps: float | None = typer.Option(None, "--fps", help="--odometry: frame rate of an image folder without "
-                                                         "timestamps.csv."),
+    ego_poses: Path | None = typer.Option(
+        None, "--ego-poses", help="--vehicle: the car's ego poses (CSV, the run's format): their step lengths give "
+                                  "the camera's height from the road's image motion."),
+    fps: float | None = typer.Option(None, "--fps", help="Frame rate of an image folder without timestamps.csv "
+                                                         "(--odometry, --ego-poses)."),
     pose_backend: str = typer.Option("onnx", "--pose-backend", help="onnx or ultralytics."),
     pose_model: PoseModel = None,
     detection: str = typer.Option("far", "--detection", help="onnx: far (whole frame + tiles) or fast (one pass)."),
@@ -35,15 +38,21 @@ def calibrate(
 ) -> None:
     """Estimate a camera (focal length, height, tilt, roll) from the people in its first frames."""
     from pedenv.apps.calibrate import calibrate as run_calibration
+    from pedenv.apps.options import RecordingSource
     from pedenv.detection import backend_options, create_detector
+    from pedenv.errors import InputError
+
+    if ego_poses is not None and (static or odometry):
+        raise InputError("--ego-poses is for the mounting of a camera on a vehicle (--vehicle, without --odometry)")
 
     backend = create_detector(pose_backend, **backend_options(pose_backend, pose_model, None, detection,
                                                                   device=device))
     if odometry:
         _odometry(output, calibration, images, video, fps, backend, overwrite)
         return
-    summary = run_calibration(output=output, images=images, video=video, backend=backend,
-                              calibration=calibration, static=static, overwrite=overwrite, frames=frames)
+    source = RecordingSource(images=images, video=video, calibration=calibration, ego_poses=ego_poses, static=static,
+                             fps=fps)
+    summary = run_calibration(output=output, source=source, backend=backend, overwrite=overwrite, frames=frames)
     std = summary["std"]
     typer.echo(f"focal {summary['focal_px']:.0f} +- {std['focal_px']:.0f} px, height {summary['height_m']:.2f} +- "
                f"{std['height_m']:.2f} m, tilt {summary['tilt_deg']:.1f} +- {std['tilt_deg']:.1f} deg, roll "

@@ -162,7 +162,9 @@ def load_calibration(path: str | Path) -> Camera:
         raise InputError(f"{path}: {exc}") from None
 
 
-def _folder_frames(folder: Path, fps: float | None, start_time: float) -> list[tuple[Path, float]]:
+def folder_frames(folder: Path, fps: float | None, start_time: float) -> list[tuple[Path, float]]:
+    """The folder's images in name order, each with its timestamp: ``start_time + i / fps`` with
+    ``fps``, else from the folder's ``timestamps.csv`` (filename,timestamp)."""
     images = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
     if not images:
         raise InputError(f"{folder}: no images ({', '.join(IMAGE_SUFFIXES)}) in the folder")
@@ -312,7 +314,7 @@ def load_recording(*, calibration: str | Path, ego_poses: str | Path | None, ima
     folder = check_path(images, "image folder")
     if not folder.is_dir():
         raise InputError(f"{folder}: image folder not found")
-    frames = tuple(_folder_frames(folder, fps, start))
+    frames = tuple(folder_frames(folder, fps, start))
     return Recording(name or _text(folder.resolve().name), camera, trajectory, frames)
 
 
