@@ -58,6 +58,14 @@ MIN_TRAVEL_M = 0.3
 TRAVEL_WINDOW = 5
 
 
+#: How a walker's keypoints sit against an upright person's, shares of body height, averaged over
+#: the stride: the ankles' midpoint rises (the swing foot is off the ground) and the head sinks
+#: (the pelvis rides lower on a bent stance leg). Measured on the synthetic walker's exact 3D
+#: skeletons (``pedenv.synthetic.walker`` at 1.0-1.6 m/s; ``static-plaza`` seed 0, 60 s, 13 500
+#: walking person-images): ankles +0.025, ears -0.012, the ankle-to-ear span 0.958 of standing.
+WALKING_ANKLE_RISE, WALKING_HEAD_DROP = 0.025, 0.012
+
+
 @dataclass(frozen=True)
 class BodyModel:
     """Where a pose source puts an upright person's keypoints.
@@ -65,12 +73,18 @@ class BodyModel:
     span_scale: the source's ankle-to-head span as a share of the anatomical table's
     (:mod:`pedenv.body`; the fused method's ``keypoint_span_scale``). ankle_offset_m: the
     ankle keypoint above the anatomical ankle, metres (``ankle_keypoint_offset_m``).
+    walking_ankle_rise_m, walking_head_drop_m: how much higher a walker's ankle keypoints and
+    lower its head keypoint sit than a standing person's, metres, on average over the stride
+    (:data:`WALKING_ANKLE_RISE`, :data:`WALKING_HEAD_DROP`; used by the ``walking`` fit, whose
+    tracks' travel tells walkers from standing people).
     """
 
     span_scale: float = 1.0
     ankle_offset_m: float = 0.0
     height_mean_m: float = PERSON_HEIGHT_MEAN_M
     height_std_m: float = PERSON_HEIGHT_STD_M
+    walking_ankle_rise_m: float = WALKING_ANKLE_RISE * PERSON_HEIGHT_MEAN_M
+    walking_head_drop_m: float = WALKING_HEAD_DROP * PERSON_HEIGHT_MEAN_M
 
     def ankle_m(self) -> float:
         return ANKLE * self.height_mean_m + self.ankle_offset_m
@@ -81,8 +95,10 @@ class BodyModel:
 
 #: Where a real pose network (YOLO11n-pose) puts the keypoints: its ankle-to-eye span is 0.823 of
 #: the true height on KITTI, 0.928 of the anatomical table's, and its ankle keypoint 0.039 m above
-#: the anatomical ankle (the fused method's measured figures, ``pedenv.config_position``).
-NETWORK_BODY = BodyModel(span_scale=0.928, ankle_offset_m=0.039)
+#: the anatomical ankle (the fused method's measured figures, ``pedenv.config_position``). Those
+#: were measured on KITTI's pedestrians, walkers and standing people together, so no walker's
+#: rise or drop is added on top of them.
+NETWORK_BODY = BodyModel(span_scale=0.928, ankle_offset_m=0.039, walking_ankle_rise_m=0.0, walking_head_drop_m=0.0)
 
 
 def _camera_count(focal: float | None, walking: bool = False) -> int:
@@ -112,17 +128,24 @@ def travel_directions(ground: np.ndarray, obs: Observations) -> np.ndarray:
 def _predicted(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
                focal: float | None, walking: bool = False) -> np.ndarray:
     """(N, 2) pixels: each head keypoint its person's span above the ground under the feet (and,
-    ``walking``, ``x``'s forward offset along the track's travel), for ``x`` = (H, tilt, roll[, f]
-    [, forward m], one height scale per track): the person's height over the mean."""
+    ``walking``, ``x``'s forward offset along the track's travel, the feet raised and the head
+    lowered by the body's walking figures), for ``x`` = (H, tilt, roll[, f][, forward m], one
+    height scale per track): the person's height over the mean."""
     n_cam = _camera_count(focal, walking)
     f = focal if focal is not None else x[3]
     k, r = intrinsics(f, centre), camera_rotation(x[1], x[2])
     ground = ground_points(obs.feet, k, r, x[0], body.ankle_m())
     slots = _slots(obs)
     scale = np.where(slots >= 0, x[n_cam + np.maximum(slots, 0)] if len(x) > n_cam else 1.0, 1.0)
+    span = body.head_m(obs.head_share) - body.ankle_m()
     if walking:
-        ground[:, :2] += x[n_cam - 1] * travel_directions(ground, obs)
-    ground[:, 2] = body.ankle_m() + (body.head_m(obs.head_share) - body.ankle_m()) * scale
+        travel = travel_directions(ground, obs)
+        moving = np.any(travel != 0.0, axis=1)
+        if body.walking_ankle_rise_m:
+            ground = ground_points(obs.feet, k, r, x[0], body.ankle_m() + body.walking_ankle_rise_m * moving)
+        ground[:, :2] += x[n_cam - 1] * travel
+        span = span - (body.walking_ankle_rise_m + body.walking_head_drop_m) * moving
+    ground[:, 2] += span * scale
     return project(ground, k, r, x[0])
 
 
