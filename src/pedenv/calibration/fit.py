@@ -33,7 +33,7 @@ KEYPOINT_PIXEL_STD = 3.0
 #: A head's sideways spread about the feet's vertical, share of the span (gait, lean, the
 #: feet's midpoint against the body's axis).
 SIDEWAYS_SHARE = 0.05
-#: Spread of one person's ankle-to-eye span from image to image, share of it: the synthetic
+#: Spread of one person's ankle-to-head span from image to image, share of it: the synthetic
 #: walker's gait moves the ankles' midpoint by 0.021 and the eyes by 0.010 of body height
 #: (1-sigma) over a span of 0.857 of it. A person's height itself is a parameter of the fit
 #: (one per track, prior :data:`PERSON_HEIGHT_STD_M`).
@@ -44,10 +44,10 @@ UNFIXED_RIDGE = 1e-12
 #: Misfit (in sigmas) above which a person-image is dropped before the final fit.
 OUTLIER_SIGMA = 3.0
 #: Bounds of the fitted forward offset of the head keypoint from the feet's vertical, along a
-#: walker's direction of travel, metres (:func:`estimate_camera` ``walking``). The eyes sit on
-#: the face, about 0.07 m in front of the body's axis (``pedenv.body.EYE_FORWARD`` of 1.72 m),
-#: and a walker leans forward a few centimetres more; the bounds leave room for a network's
-#: own placement.
+#: walker's direction of travel, metres (:func:`estimate_camera` ``walking``). A walker leans
+#: forward and its ankles' midpoint trails the body's axis: the synthetic walker's ears sit 0.12 m
+#: ahead of its ankles on average (its eyes 0.20 m); the bounds leave room for a network's own
+#: placement.
 FORWARD_BOUNDS_M = (-0.3, 0.3)
 #: Least ground distance (metres) a track's feet cover between the images around one image for
 #: its direction of travel to count: a standing person's facing is unknown (its head is placed
@@ -209,7 +209,7 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     instead when the people cannot fix the camera (too few, one row only, a level camera
     without a focal length). walking: the head keypoint is placed a fitted offset (metres,
     :data:`FORWARD_BOUNDS_M`) ahead of the feet along each track's direction of travel on the
-    ground (the eyes sit in front of the body's axis, and walkers lean forward): for a static
+    ground (walkers lean forward, their ankles trail the body's axis): for a static
     camera, whose tracks' ground points are the world's; without it the head is over the feet.
     """
     body = body or BodyModel()
