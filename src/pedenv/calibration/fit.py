@@ -126,11 +126,13 @@ def travel_directions(ground: np.ndarray, obs: Observations) -> np.ndarray:
 
 
 def _predicted(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-               focal: float | None, walking: bool = False) -> np.ndarray:
+               focal: float | None, travel: np.ndarray | None = None) -> np.ndarray:
     """(N, 2) pixels: each head keypoint its person's span above the ground under the feet (and,
-    ``walking``, ``x``'s forward offset along the track's travel, the feet raised and the head
-    lowered by the body's walking figures), for ``x`` = (H, tilt, roll[, f][, forward m], one
-    height scale per track): the person's height over the mean."""
+    given ``travel`` ((N, 2) unit ground directions, zero for a standing person), ``x``'s forward
+    offset along it, a walker's feet raised and head lowered by the body's walking figures), for
+    ``x`` = (H, tilt, roll[, f][, forward m], one height scale per track): the person's height
+    over the mean."""
+    walking = travel is not None
     n_cam = _camera_count(focal, walking)
     f = focal if focal is not None else x[3]
     k, r = intrinsics(f, centre), camera_rotation(x[1], x[2])
@@ -138,8 +140,7 @@ def _predicted(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[
     slots = _slots(obs)
     scale = np.where(slots >= 0, x[n_cam + np.maximum(slots, 0)] if len(x) > n_cam else 1.0, 1.0)
     span = body.head_m(obs.head_share) - body.ankle_m()
-    if walking:
-        travel = travel_directions(ground, obs)
+    if travel is not None:
         moving = np.any(travel != 0.0, axis=1)
         if body.walking_ankle_rise_m:
             ground = ground_points(obs.feet, k, r, x[0], body.ankle_m() + body.walking_ankle_rise_m * moving)
@@ -158,14 +159,14 @@ def _slots(obs: Observations) -> np.ndarray:
 
 
 def _residuals(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-               focal: float | None, walking: bool = False) -> np.ndarray:
+               focal: float | None, travel: np.ndarray | None = None) -> np.ndarray:
     """Whitened misfits: (u, v) per person-image, then one prior term per track's height scale."""
     span = np.maximum(obs.feet[:, 1] - obs.heads[:, 1], 1.0)
     spread = np.where(obs.tracks >= 0, WITHIN_PERSON_SPAN_STD, body.height_std_m / body.height_mean_m)
     sigma_v = np.hypot(KEYPOINT_PIXEL_STD, span * spread)
     sigma_u = np.hypot(KEYPOINT_PIXEL_STD, span * SIDEWAYS_SHARE)
-    miss = (obs.heads - _predicted(x, obs, body, centre, focal, walking)) / np.stack([sigma_u, sigma_v], axis=1)
-    prior = (x[_camera_count(focal, walking):] - 1.0) / (body.height_std_m / body.height_mean_m)
+    miss = (obs.heads - _predicted(x, obs, body, centre, focal, travel)) / np.stack([sigma_u, sigma_v], axis=1)
+    prior = (x[_camera_count(focal, travel is not None):] - 1.0) / (body.height_std_m / body.height_mean_m)
     return np.concatenate([np.nan_to_num(miss, nan=1e3).ravel(), prior])
 
 
@@ -183,7 +184,8 @@ def _sparsity(obs: Observations, n_cam: int) -> lil_matrix:
 
 
 def _solve(x0: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-           focal: float | None, loss: str = "soft_l1", walking: bool = False) -> least_squares:
+           focal: float | None, loss: str = "soft_l1", travel: np.ndarray | None = None) -> least_squares:
+    walking = travel is not None
     n_cam = _camera_count(focal, walking)
     tracks = int(_slots(obs).max()) + 1 if len(obs) else 0
     forward = ([FORWARD_BOUNDS_M[0]], [FORWARD_BOUNDS_M[1]]) if walking else ([], [])
@@ -194,7 +196,7 @@ def _solve(x0: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[flo
     x0 = np.concatenate([x0[:n_cam], np.zeros(n_cam - len(x0[:n_cam])), np.ones(tracks)])
     x0 = np.clip(x0, np.array(lower) + 1e-6, np.array(upper) - 1e-6)
     return least_squares(_residuals, x0, bounds=(lower, upper), loss=loss, x_scale="jac",
-                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal, walking))
+                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal, travel))
 
 
 def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | None = None,
@@ -219,17 +221,18 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     start = closed_form(obs, centre, span_world, body.ankle_m(), focal)
     f0 = start.focal if start.focal is not None else float(size[0])  # about a 53 deg field of view
     x0 = np.array([start.height if np.isfinite(start.height) else 5.0, start.tilt, 0.0] + ([] if focal else [f0]))
-    walking = walking and _travels(x0, obs, body, centre, focal)
-    fit = _solve(x0, obs, body, centre, focal, walking=walking)
+    travel = _travel(x0, obs, body, centre, focal) if walking else None
+    fit = _solve(x0, obs, body, centre, focal, travel=travel)
     inliers = np.abs(fit.fun[: 2 * len(obs)].reshape(-1, 2)).max(axis=1) <= OUTLIER_SIGMA
     kept = obs.subset(inliers)
     check_spread(kept, size)
-    fit = _solve(fit.x, kept, body, centre, focal, loss="linear", walking=walking)
+    travel = _travel(fit.x, kept, body, centre, focal) if travel is not None else None
+    fit = _solve(fit.x, kept, body, centre, focal, loss="linear", travel=travel)
     cov = _covariance(fit, kept, focal is not None)
     h = fit.x[0]
     cov[1, 1] += (h * CROWD_MEAN_STD_M / body.height_mean_m) ** 2
     f = float(focal if focal is not None else fit.x[3])
-    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal, walking)
+    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal, travel)
     rms = float(np.sqrt(np.nanmean(np.sum(miss ** 2, axis=1))))
     estimate = CameraEstimate(f, float(h), float(fit.x[1]), float(fit.x[2]), cov, size, centre, kept.people,
                               len(kept), rms, focal is not None)
@@ -237,13 +240,17 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     return estimate
 
 
-def _travels(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-             focal: float | None) -> bool:
-    """Whether any track moves on the ground under the camera ``x`` (H, tilt, roll[, f]): else a
-    walker's forward offset has nothing to fix it and is left out."""
+def _travel(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+            focal: float | None) -> np.ndarray | None:
+    """Each person-image's direction of travel (:func:`travel_directions`) on the ground under the
+    camera ``x`` (H, tilt, roll[, f], ...), held fixed while the camera is fitted (a person-image
+    crossing :data:`MIN_TRAVEL_M` as the camera moves would make the misfits jump, and the
+    Jacobian with them); None where nobody moves (a walker's forward offset would have nothing to
+    fix it)."""
     f = focal if focal is not None else x[3]
     ground = ground_points(obs.feet, intrinsics(f, centre), camera_rotation(x[1], x[2]), x[0], body.ankle_m())
-    return bool(np.any(travel_directions(ground, obs) != 0.0))
+    travel = travel_directions(ground, obs)
+    return travel if np.any(travel != 0.0) else None
 
 
 def _inverse(information: np.ndarray) -> np.ndarray:
