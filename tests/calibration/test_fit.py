@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pedenv.body import ANKLE, EYE
+from pedenv.body import ANKLE, EAR, EYE
 from pedenv.calibration.fit import estimate_camera
 from pedenv.calibration.geometry import camera_rotation, intrinsics, parameters_of, project, static_camera
 from pedenv.calibration.linking import BoxLinker
@@ -57,6 +57,44 @@ def test_the_static_scene_through_the_detector_model() -> None:
     assert np.degrees(est.tilt - truth[2]) == pytest.approx(0.0, abs=1.0)
     camera = est.camera()
     assert camera.static and camera.cam_to_vehicle[2, 3] == pytest.approx(est.height)
+
+
+def test_the_walkers_exact_skeletons_give_the_camera() -> None:
+    """The walkers' own 3D skeletons projected exactly, linked by box overlap: the head point on the
+    body's axis (the ears) and the walker's stride (ankles up, head down) leave no bias; with the
+    eyes as the head point the facing of standing people tilted the fit (focal +2.1 %, tilt -0.45 deg,
+    height +3.1 % on this scene)."""
+    from pedenv.pose.ground_truth import GroundTruthPose
+    from pedenv.synthetic.generator import generate_scenes
+
+    scene = generate_scenes(0, ["static-plaza"])[0]
+    pose, linker, parts = GroundTruthPose(), BoxLinker(), []
+    for frame in scene.frames:
+        det = pose(frame)
+        parts.append(observations_of(det, frame.index, linker(det.boxes)))
+    obs = Observations.concat(parts)
+    assert np.all(obs.head_share == EAR)  # every exact skeleton's ears are seen
+    truth = parameters_of(scene.frames[0].camera)
+    est = estimate_camera(obs, (1600, 900), walking=True)
+    assert est.focal == pytest.approx(truth[0], rel=0.01)
+    assert est.height == pytest.approx(truth[1], rel=0.02)
+    assert np.degrees(est.tilt - truth[2]) == pytest.approx(0.0, abs=0.15)
+
+
+def test_the_head_point_is_the_ears_else_the_eyes() -> None:
+    from pedenv.body import STANDING
+    from pedenv.records import Detections
+    from pedenv.skeleton import CocoKeypoint as KP
+
+    k, r = intrinsics(1266.4, (800.0, 450.0)), camera_rotation(np.radians(20.0), 0.0)
+    body = STANDING * 1.72 + np.array([15.0, 0.0, 0.0])  # facing away from the camera, 15 m ahead
+    kp = np.repeat(project(body, k, r, 6.0)[None], 2, axis=0)
+    conf = np.ones((2, 17))
+    conf[1, KP.LEFT_EAR] = 0.1  # one ear hidden: the eyes
+    obs = observations_of(Detections(kp, conf))
+    ears, eyes = kp[0, [KP.LEFT_EAR, KP.RIGHT_EAR]].mean(axis=0), kp[1, [KP.LEFT_EYE, KP.RIGHT_EYE]].mean(axis=0)
+    np.testing.assert_allclose(obs.heads, [ears, eyes])
+    np.testing.assert_allclose(obs.head_share, [EAR, EYE])
 
 
 def test_a_level_camera_at_eye_height_asks_for_the_field_of_view() -> None:

@@ -33,7 +33,7 @@ KEYPOINT_PIXEL_STD = 3.0
 #: A head's sideways spread about the feet's vertical, share of the span (gait, lean, the
 #: feet's midpoint against the body's axis).
 SIDEWAYS_SHARE = 0.05
-#: Spread of one person's ankle-to-eye span from image to image, share of it: the synthetic
+#: Spread of one person's ankle-to-head span from image to image, share of it: the synthetic
 #: walker's gait moves the ankles' midpoint by 0.021 and the eyes by 0.010 of body height
 #: (1-sigma) over a span of 0.857 of it. A person's height itself is a parameter of the fit
 #: (one per track, prior :data:`PERSON_HEIGHT_STD_M`).
@@ -44,10 +44,10 @@ UNFIXED_RIDGE = 1e-12
 #: Misfit (in sigmas) above which a person-image is dropped before the final fit.
 OUTLIER_SIGMA = 3.0
 #: Bounds of the fitted forward offset of the head keypoint from the feet's vertical, along a
-#: walker's direction of travel, metres (:func:`estimate_camera` ``walking``). The eyes sit on
-#: the face, about 0.07 m in front of the body's axis (``pedenv.body.EYE_FORWARD`` of 1.72 m),
-#: and a walker leans forward a few centimetres more; the bounds leave room for a network's
-#: own placement.
+#: walker's direction of travel, metres (:func:`estimate_camera` ``walking``). A walker leans
+#: forward and its ankles' midpoint trails the body's axis: the synthetic walker's ears sit 0.12 m
+#: ahead of its ankles on average (its eyes 0.20 m); the bounds leave room for a network's own
+#: placement.
 FORWARD_BOUNDS_M = (-0.3, 0.3)
 #: Least ground distance (metres) a track's feet cover between the images around one image for
 #: its direction of travel to count: a standing person's facing is unknown (its head is placed
@@ -58,6 +58,14 @@ MIN_TRAVEL_M = 0.3
 TRAVEL_WINDOW = 5
 
 
+#: How a walker's keypoints sit against an upright person's, shares of body height, averaged over
+#: the stride: the ankles' midpoint rises (the swing foot is off the ground) and the head sinks
+#: (the pelvis rides lower on a bent stance leg). Measured on the synthetic walker's exact 3D
+#: skeletons (``pedenv.synthetic.walker`` at 1.0-1.6 m/s; ``static-plaza`` seed 0, 60 s, 13 500
+#: walking person-images): ankles +0.025, ears -0.012, the ankle-to-ear span 0.958 of standing.
+WALKING_ANKLE_RISE, WALKING_HEAD_DROP = 0.025, 0.012
+
+
 @dataclass(frozen=True)
 class BodyModel:
     """Where a pose source puts an upright person's keypoints.
@@ -65,12 +73,18 @@ class BodyModel:
     span_scale: the source's ankle-to-head span as a share of the anatomical table's
     (:mod:`pedenv.body`; the fused method's ``keypoint_span_scale``). ankle_offset_m: the
     ankle keypoint above the anatomical ankle, metres (``ankle_keypoint_offset_m``).
+    walking_ankle_rise_m, walking_head_drop_m: how much higher a walker's ankle keypoints and
+    lower its head keypoint sit than a standing person's, metres, on average over the stride
+    (:data:`WALKING_ANKLE_RISE`, :data:`WALKING_HEAD_DROP`; used by the ``walking`` fit, whose
+    tracks' travel tells walkers from standing people).
     """
 
     span_scale: float = 1.0
     ankle_offset_m: float = 0.0
     height_mean_m: float = PERSON_HEIGHT_MEAN_M
     height_std_m: float = PERSON_HEIGHT_STD_M
+    walking_ankle_rise_m: float = WALKING_ANKLE_RISE * PERSON_HEIGHT_MEAN_M
+    walking_head_drop_m: float = WALKING_HEAD_DROP * PERSON_HEIGHT_MEAN_M
 
     def ankle_m(self) -> float:
         return ANKLE * self.height_mean_m + self.ankle_offset_m
@@ -81,8 +95,10 @@ class BodyModel:
 
 #: Where a real pose network (YOLO11n-pose) puts the keypoints: its ankle-to-eye span is 0.823 of
 #: the true height on KITTI, 0.928 of the anatomical table's, and its ankle keypoint 0.039 m above
-#: the anatomical ankle (the fused method's measured figures, ``pedenv.config_position``).
-NETWORK_BODY = BodyModel(span_scale=0.928, ankle_offset_m=0.039)
+#: the anatomical ankle (the fused method's measured figures, ``pedenv.config_position``). Those
+#: were measured on KITTI's pedestrians, walkers and standing people together, so no walker's
+#: rise or drop is added on top of them.
+NETWORK_BODY = BodyModel(span_scale=0.928, ankle_offset_m=0.039, walking_ankle_rise_m=0.0, walking_head_drop_m=0.0)
 
 
 def _camera_count(focal: float | None, walking: bool = False) -> int:
@@ -110,19 +126,27 @@ def travel_directions(ground: np.ndarray, obs: Observations) -> np.ndarray:
 
 
 def _predicted(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-               focal: float | None, walking: bool = False) -> np.ndarray:
+               focal: float | None, travel: np.ndarray | None = None) -> np.ndarray:
     """(N, 2) pixels: each head keypoint its person's span above the ground under the feet (and,
-    ``walking``, ``x``'s forward offset along the track's travel), for ``x`` = (H, tilt, roll[, f]
-    [, forward m], one height scale per track): the person's height over the mean."""
+    given ``travel`` ((N, 2) unit ground directions, zero for a standing person), ``x``'s forward
+    offset along it, a walker's feet raised and head lowered by the body's walking figures), for
+    ``x`` = (H, tilt, roll[, f][, forward m], one height scale per track): the person's height
+    over the mean."""
+    walking = travel is not None
     n_cam = _camera_count(focal, walking)
     f = focal if focal is not None else x[3]
     k, r = intrinsics(f, centre), camera_rotation(x[1], x[2])
     ground = ground_points(obs.feet, k, r, x[0], body.ankle_m())
     slots = _slots(obs)
     scale = np.where(slots >= 0, x[n_cam + np.maximum(slots, 0)] if len(x) > n_cam else 1.0, 1.0)
-    if walking:
-        ground[:, :2] += x[n_cam - 1] * travel_directions(ground, obs)
-    ground[:, 2] = body.ankle_m() + (body.head_m(obs.head_share) - body.ankle_m()) * scale
+    span = body.head_m(obs.head_share) - body.ankle_m()
+    if travel is not None:
+        moving = np.any(travel != 0.0, axis=1)
+        if body.walking_ankle_rise_m:
+            ground = ground_points(obs.feet, k, r, x[0], body.ankle_m() + body.walking_ankle_rise_m * moving)
+        ground[:, :2] += x[n_cam - 1] * travel
+        span = span - (body.walking_ankle_rise_m + body.walking_head_drop_m) * moving
+    ground[:, 2] += span * scale
     return project(ground, k, r, x[0])
 
 
@@ -135,14 +159,14 @@ def _slots(obs: Observations) -> np.ndarray:
 
 
 def _residuals(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-               focal: float | None, walking: bool = False) -> np.ndarray:
+               focal: float | None, travel: np.ndarray | None = None) -> np.ndarray:
     """Whitened misfits: (u, v) per person-image, then one prior term per track's height scale."""
     span = np.maximum(obs.feet[:, 1] - obs.heads[:, 1], 1.0)
     spread = np.where(obs.tracks >= 0, WITHIN_PERSON_SPAN_STD, body.height_std_m / body.height_mean_m)
     sigma_v = np.hypot(KEYPOINT_PIXEL_STD, span * spread)
     sigma_u = np.hypot(KEYPOINT_PIXEL_STD, span * SIDEWAYS_SHARE)
-    miss = (obs.heads - _predicted(x, obs, body, centre, focal, walking)) / np.stack([sigma_u, sigma_v], axis=1)
-    prior = (x[_camera_count(focal, walking):] - 1.0) / (body.height_std_m / body.height_mean_m)
+    miss = (obs.heads - _predicted(x, obs, body, centre, focal, travel)) / np.stack([sigma_u, sigma_v], axis=1)
+    prior = (x[_camera_count(focal, travel is not None):] - 1.0) / (body.height_std_m / body.height_mean_m)
     return np.concatenate([np.nan_to_num(miss, nan=1e3).ravel(), prior])
 
 
@@ -160,7 +184,8 @@ def _sparsity(obs: Observations, n_cam: int) -> lil_matrix:
 
 
 def _solve(x0: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-           focal: float | None, loss: str = "soft_l1", walking: bool = False) -> least_squares:
+           focal: float | None, loss: str = "soft_l1", travel: np.ndarray | None = None) -> least_squares:
+    walking = travel is not None
     n_cam = _camera_count(focal, walking)
     tracks = int(_slots(obs).max()) + 1 if len(obs) else 0
     forward = ([FORWARD_BOUNDS_M[0]], [FORWARD_BOUNDS_M[1]]) if walking else ([], [])
@@ -171,7 +196,7 @@ def _solve(x0: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[flo
     x0 = np.concatenate([x0[:n_cam], np.zeros(n_cam - len(x0[:n_cam])), np.ones(tracks)])
     x0 = np.clip(x0, np.array(lower) + 1e-6, np.array(upper) - 1e-6)
     return least_squares(_residuals, x0, bounds=(lower, upper), loss=loss, x_scale="jac",
-                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal, walking))
+                         jac_sparsity=_sparsity(obs, n_cam), args=(obs, body, centre, focal, travel))
 
 
 def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | None = None,
@@ -186,7 +211,7 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     instead when the people cannot fix the camera (too few, one row only, a level camera
     without a focal length). walking: the head keypoint is placed a fitted offset (metres,
     :data:`FORWARD_BOUNDS_M`) ahead of the feet along each track's direction of travel on the
-    ground (the eyes sit in front of the body's axis, and walkers lean forward): for a static
+    ground (walkers lean forward, their ankles trail the body's axis): for a static
     camera, whose tracks' ground points are the world's; without it the head is over the feet.
     """
     body = body or BodyModel()
@@ -196,17 +221,18 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     start = closed_form(obs, centre, span_world, body.ankle_m(), focal)
     f0 = start.focal if start.focal is not None else float(size[0])  # about a 53 deg field of view
     x0 = np.array([start.height if np.isfinite(start.height) else 5.0, start.tilt, 0.0] + ([] if focal else [f0]))
-    walking = walking and _travels(x0, obs, body, centre, focal)
-    fit = _solve(x0, obs, body, centre, focal, walking=walking)
+    travel = _travel(x0, obs, body, centre, focal) if walking else None
+    fit = _solve(x0, obs, body, centre, focal, travel=travel)
     inliers = np.abs(fit.fun[: 2 * len(obs)].reshape(-1, 2)).max(axis=1) <= OUTLIER_SIGMA
     kept = obs.subset(inliers)
     check_spread(kept, size)
-    fit = _solve(fit.x, kept, body, centre, focal, loss="linear", walking=walking)
+    travel = _travel(fit.x, kept, body, centre, focal) if travel is not None else None
+    fit = _solve(fit.x, kept, body, centre, focal, loss="linear", travel=travel)
     cov = _covariance(fit, kept, focal is not None)
     h = fit.x[0]
     cov[1, 1] += (h * CROWD_MEAN_STD_M / body.height_mean_m) ** 2
     f = float(focal if focal is not None else fit.x[3])
-    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal, walking)
+    miss = kept.heads - _predicted(fit.x, kept, body, centre, focal, travel)
     rms = float(np.sqrt(np.nanmean(np.sum(miss ** 2, axis=1))))
     estimate = CameraEstimate(f, float(h), float(fit.x[1]), float(fit.x[2]), cov, size, centre, kept.people,
                               len(kept), rms, focal is not None)
@@ -214,13 +240,17 @@ def estimate_camera(obs: Observations, size: tuple[int, int], *, focal: float | 
     return estimate
 
 
-def _travels(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
-             focal: float | None) -> bool:
-    """Whether any track moves on the ground under the camera ``x`` (H, tilt, roll[, f]): else a
-    walker's forward offset has nothing to fix it and is left out."""
+def _travel(x: np.ndarray, obs: Observations, body: BodyModel, centre: tuple[float, float],
+            focal: float | None) -> np.ndarray | None:
+    """Each person-image's direction of travel (:func:`travel_directions`) on the ground under the
+    camera ``x`` (H, tilt, roll[, f], ...), held fixed while the camera is fitted (a person-image
+    crossing :data:`MIN_TRAVEL_M` as the camera moves would make the misfits jump, and the
+    Jacobian with them); None where nobody moves (a walker's forward offset would have nothing to
+    fix it)."""
     f = focal if focal is not None else x[3]
     ground = ground_points(obs.feet, intrinsics(f, centre), camera_rotation(x[1], x[2]), x[0], body.ankle_m())
-    return bool(np.any(travel_directions(ground, obs) != 0.0))
+    travel = travel_directions(ground, obs)
+    return travel if np.any(travel != 0.0) else None
 
 
 def _inverse(information: np.ndarray) -> np.ndarray:
