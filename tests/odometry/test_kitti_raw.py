@@ -9,6 +9,7 @@ import pytest
 from pedenv.errors import InputError
 from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
+from pedenv.odometry.features import detect_corners, track, track_half
 from pedenv.odometry.motion import estimate_step
 from pedenv.odometry.reference import mercator_positions, read_oxts, travelled
 
@@ -52,3 +53,17 @@ def test_real_frames_too_dark_or_blurred_are_one_line_not_wrong_poses(spoil, wor
         with pytest.raises(InputError, match=r"^0000000000\.png: too dark, blurred or covered for visual odometry: "
                                              r"\d+ tracks to the next frame, 40 needed; give the ego poses"):
             estimate_step(first, second, k, mount, where="0000000000.png")
+
+
+def test_the_half_images_flow_lands_where_the_full_images_does():
+    # track_half follows the pyramid on the half image and places each track on the full image's level:
+    # measured on frames 0-1: 976 tracks against 1110; the 943 both keep a median 0.0008 px apart, 95 % within 0.1
+    first, second = (cv2.imread(str(SYNC / f"image_02/data/{i:010d}.png"), cv2.IMREAD_GRAYSCALE) for i in (0, 1))
+    corners = detect_corners(first, np.full(first.shape, 255, np.uint8))
+    _, full, full_kept = track(first, second, corners)
+    _, half, half_kept = track_half(first, second, corners)
+    assert half_kept.sum() >= 0.8 * full_kept.sum()
+    both = full_kept & half_kept
+    apart = np.linalg.norm(full[np.cumsum(full_kept)[both] - 1] - half[np.cumsum(half_kept)[both] - 1], axis=1)
+    assert np.median(apart) < 0.01
+    assert np.mean(apart < 0.1) > 0.9
