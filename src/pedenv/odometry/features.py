@@ -48,15 +48,17 @@ COARSE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 10, 0.1)
 #: tests/odometry/test_motion.py, tests/odometry/test_kitti_raw.py). (A 13 px backward window instead took
 #: a rendered road blurred over 3 px 10 % short.)
 BACK_FLOW_LEVELS = 0
-#: The half image's flow (:func:`track_half`), for the FAST corners that only the essential matrix uses (the
-#: road's corners, which give the step its length, keep :func:`track`): the whole pyramid followed on the half
-#: image (OpenCV's ``pyrDown``) with a window of :data:`HALF_WINDOW_PX` (the full image's 21 px window at half
-#: scale) and :data:`COARSE_CRITERIA`'s loose stop, checked by the backward flow on the half image's own level
-#: (:data:`MAX_ROUND_TRIP_PX` full-image pixels), then placed to OpenCV's precision by the full image's own level
-#: (21 px window, started at the half image's result; a track that moves :data:`MAX_ROUND_TRIP_PX` or more there
-#: is dropped). On KITTI raw 0002 it took the step from about 47 to 34-39 ms of CPU at the same figures within
-#: their spread (benchmarks/visual_odometry.py). The half image's flow alone (no full level) took a rendered road
-#: at a 6 degree pitch 2.2 % short, beyond tests/odometry/test_motion.py's 2 %.
+#: The half image's flow (:func:`track_half`), for the FAST corners (the essential matrix's tracks; the few on
+#: the road patch join its fit too), while the Shi-Tomasi road corners keep :func:`track`: the whole pyramid followed
+#: on the half image (OpenCV's ``pyrDown``) with a window of :data:`HALF_WINDOW_PX` (the full image's 21 px window
+#: at half scale) and :data:`COARSE_CRITERIA`'s loose stop, checked by the backward flow on the half image's own
+#: level (:data:`MAX_ROUND_TRIP_PX` full-image pixels), then placed to OpenCV's precision by the full image's own
+#: level (21 px window, started at the half image's result; a track that moves :data:`MAX_ROUND_TRIP_PX` or more
+#: there is dropped). On KITTI raw 0002 frames 3-4 (749 corners, one OpenCV thread) it took their flow from 18.9 to
+#: 6.5 ms, at the same figures within their spread (benchmarks/visual_odometry.py). The half image's flow alone
+#: (no full level) took a rendered road at a 6 degree pitch 2.2 % short, beyond tests/odometry/test_motion.py's
+#: 2 %; the road corners by this flow took the rendered road 2.8 % short and KITTI raw 0002's step blurred over
+#: 4 px 8 % short (tests/odometry/test_kitti_raw.py's bound is 5 %).
 HALF_WINDOW_PX = 11
 #: Margin added around each person box before its corners are left out, in box widths.
 BOX_MARGIN = 0.1
