@@ -10,7 +10,7 @@ from pedenv.errors import InputError
 from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
 from pedenv.odometry.features import detect_corners, track, track_half
-from pedenv.odometry.motion import estimate_step
+from pedenv.odometry.motion import estimate_step, pose_in_front
 from pedenv.odometry.reference import mercator_positions, read_oxts, travelled
 
 from shared_paths import REAL_SAMPLES
@@ -67,3 +67,20 @@ def test_the_half_images_flow_lands_where_the_full_images_does():
     apart = np.linalg.norm(full[np.cumsum(full_kept)[both] - 1] - half[np.cumsum(half_kept)[both] - 1], axis=1)
     assert np.median(apart) < 0.01
     assert np.mean(apart < 0.1) > 0.9
+
+
+def test_the_pose_in_front_is_opencvs_recover_pose():
+    # the essential matrix's pose with the most tracks in front, each track's depths in closed form: measured on
+    # frames 3-4 the same pose as cv2.recoverPose and 12 of 700 tracks judged otherwise (far ones)
+    line = next(t for t in (DRIVE / "calib_cam_to_cam.txt").read_text().splitlines() if t.startswith("P_rect_02:"))
+    k = np.ascontiguousarray(np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3])
+    first, second = (cv2.imread(str(SYNC / f"image_02/data/{i:010d}.png"), cv2.IMREAD_GRAYSCALE) for i in (3, 4))
+    p0, p1, _ = track(first, second, detect_corners(first, np.full(first.shape, 255, np.uint8)))
+    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, threshold=1.0)
+    inlier = mask.ravel() > 0
+    count, rotation, direction, front = cv2.recoverPose(essential[:3], p0[inlier], p1[inlier], k)
+    ours_rotation, ours_direction, ours_front = pose_in_front(essential[:3], p0[inlier], p1[inlier], k)
+    np.testing.assert_allclose(ours_rotation, rotation, atol=1e-9)
+    np.testing.assert_allclose(ours_direction, direction.ravel(), atol=1e-9)
+    assert abs(int(ours_front.sum()) - count) <= 0.03 * count
+    assert np.mean(ours_front == (front.ravel() > 0)) > 0.97
