@@ -9,7 +9,8 @@ import pytest
 from pedenv.errors import InputError
 from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
-from pedenv.odometry.motion import estimate_step
+from pedenv.odometry.features import detect_corners, track, track_half
+from pedenv.odometry.motion import estimate_step, pose_in_front
 from pedenv.odometry.reference import mercator_positions, read_oxts, travelled
 
 from shared_paths import REAL_SAMPLES
@@ -52,3 +53,34 @@ def test_real_frames_too_dark_or_blurred_are_one_line_not_wrong_poses(spoil, wor
         with pytest.raises(InputError, match=r"^0000000000\.png: too dark, blurred or covered for visual odometry: "
                                              r"\d+ tracks to the next frame, 40 needed; give the ego poses"):
             estimate_step(first, second, k, mount, where="0000000000.png")
+
+
+def test_the_half_images_flow_lands_where_the_full_images_does():
+    # track_half follows the pyramid on the half image and places each track on the full image's level:
+    # measured on frames 0-1: 976 tracks against 1110; the 943 both keep a median 0.0008 px apart, 95 % within 0.1
+    first, second = (cv2.imread(str(SYNC / f"image_02/data/{i:010d}.png"), cv2.IMREAD_GRAYSCALE) for i in (0, 1))
+    corners = detect_corners(first, np.full(first.shape, 255, np.uint8))
+    _, full, full_kept = track(first, second, corners)
+    _, half, half_kept = track_half(first, second, corners)
+    assert half_kept.sum() >= 0.8 * full_kept.sum()
+    both = full_kept & half_kept
+    apart = np.linalg.norm(full[np.cumsum(full_kept)[both] - 1] - half[np.cumsum(half_kept)[both] - 1], axis=1)
+    assert np.median(apart) < 0.01
+    assert np.mean(apart < 0.1) > 0.9
+
+
+def test_the_pose_in_front_is_opencvs_recover_pose():
+    # the essential matrix's pose with the most tracks in front, each track's depths in closed form: measured on
+    # frames 3-4 the same pose as cv2.recoverPose and 12 of 700 tracks judged otherwise (far ones)
+    line = next(t for t in (DRIVE / "calib_cam_to_cam.txt").read_text().splitlines() if t.startswith("P_rect_02:"))
+    k = np.ascontiguousarray(np.array(line.split()[1:], dtype=np.float64).reshape(3, 4)[:, :3])
+    first, second = (cv2.imread(str(SYNC / f"image_02/data/{i:010d}.png"), cv2.IMREAD_GRAYSCALE) for i in (3, 4))
+    p0, p1, _ = track(first, second, detect_corners(first, np.full(first.shape, 255, np.uint8)))
+    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, threshold=1.0)
+    inlier = mask.ravel() > 0
+    count, rotation, direction, front = cv2.recoverPose(essential[:3], p0[inlier], p1[inlier], k)
+    ours_rotation, ours_direction, ours_front = pose_in_front(essential[:3], p0[inlier], p1[inlier], k)
+    np.testing.assert_allclose(ours_rotation, rotation, atol=1e-9)
+    np.testing.assert_allclose(ours_direction, direction.ravel(), atol=1e-9)
+    assert abs(int(ours_front.sum()) - count) <= 0.03 * count
+    assert np.mean(ours_front == (front.ravel() > 0)) > 0.97

@@ -1,5 +1,6 @@
 """Tracks between two grey images: FAST corners outside the person boxes, followed by pyramidal
-Lucas-Kanade flow and kept when the backward flow returns to the start (pure functions)."""
+Lucas-Kanade flow (the full image's, or the half image's refined on the full image's level) and kept
+when the backward flow returns to the start (pure functions)."""
 
 from __future__ import annotations
 
@@ -47,6 +48,18 @@ COARSE_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 10, 0.1)
 #: tests/odometry/test_motion.py, tests/odometry/test_kitti_raw.py). (A 13 px backward window instead took
 #: a rendered road blurred over 3 px 10 % short.)
 BACK_FLOW_LEVELS = 0
+#: The half image's flow (:func:`track_half`), for the FAST corners (the essential matrix's tracks; the few on
+#: the road patch join its fit too), while the Shi-Tomasi road corners keep :func:`track`: the whole pyramid followed
+#: on the half image (OpenCV's ``pyrDown``) with a window of :data:`HALF_WINDOW_PX` (the full image's 21 px window
+#: at half scale) and :data:`COARSE_CRITERIA`'s loose stop, checked by the backward flow on the half image's own
+#: level (:data:`MAX_ROUND_TRIP_PX` full-image pixels), then placed to OpenCV's precision by the full image's own
+#: level (21 px window, started at the half image's result; a track that moves :data:`MAX_ROUND_TRIP_PX` or more
+#: there is dropped). On KITTI raw 0002 frames 3-4 (749 corners, one OpenCV thread) it took their flow from 18.9 to
+#: 6.5 ms, at the same figures within their spread (benchmarks/visual_odometry.py). The half image's flow alone
+#: (no full level) took a rendered road at a 6 degree pitch 2.2 % short, beyond tests/odometry/test_motion.py's
+#: 2 %; the road corners by this flow took the rendered road 2.8 % short and KITTI raw 0002's step blurred over
+#: 4 px 8 % short (tests/odometry/test_kitti_raw.py's bound is 5 %).
+HALF_WINDOW_PX = 11
 #: Margin added around each person box before its corners are left out, in box widths.
 BOX_MARGIN = 0.1
 
@@ -138,6 +151,33 @@ def track(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray, levels: int 
     inside = (q[:, 0] >= edge) & (q[:, 0] < w - edge) & (q[:, 1] >= edge) & (q[:, 1] < h - edge)
     keep = ok1.ravel().astype(bool) & ok2.ravel().astype(bool) & (error < MAX_ROUND_TRIP_PX) & inside
     return p0.reshape(-1, 2)[keep].astype(np.float64), q[keep].astype(np.float64), keep
+
+
+def track_half(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`track`'s result, (M, 2) float64 pixels in ``gray0`` and ``gray1`` and (N,) bool, from the half
+    image's flow and backward check, refined on the full image's level (:data:`HALF_WINDOW_PX`)."""
+    if len(points) == 0:
+        return np.empty((0, 2)), np.empty((0, 2)), np.zeros(0, bool)
+    window = (HALF_WINDOW_PX, HALF_WINDOW_PX)
+    half0, half1 = cv2.pyrDown(gray0), cv2.pyrDown(gray1)
+    p0 = points.reshape(-1, 1, 2).astype(np.float32) / 2
+    p1, ok1, _ = cv2.calcOpticalFlowPyrLK(half0, half1, p0, np.empty(0), winSize=window, maxLevel=FLOW_LEVELS - 1,
+                                          criteria=COARSE_CRITERIA)
+    back, ok2, _ = cv2.calcOpticalFlowPyrLK(half1, half0, p1, p0.copy(), winSize=window, maxLevel=0,
+                                            flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+    error = 2 * np.linalg.norm((back - p0).reshape(-1, 2), axis=1)
+    keep = ok1.ravel().astype(bool) & ok2.ravel().astype(bool) & (error < MAX_ROUND_TRIP_PX)
+    start, coarse = 2 * p0[keep], 2 * p1[keep]
+    full = (FLOW_WINDOW_PX, FLOW_WINDOW_PX)
+    fine, ok3, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, start, coarse.copy(), winSize=full, maxLevel=0,
+                                            flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
+    q = fine.reshape(-1, 2)
+    h, w = gray1.shape
+    edge = FLOW_WINDOW_PX // 2  # a window cut by the image's edge drags the flow
+    inside = (q[:, 0] >= edge) & (q[:, 0] < w - edge) & (q[:, 1] >= edge) & (q[:, 1] < h - edge)
+    good = ok3.ravel().astype(bool) & inside & (np.linalg.norm(q - coarse.reshape(-1, 2), axis=1) < MAX_ROUND_TRIP_PX)
+    keep[np.flatnonzero(keep)[~good]] = False
+    return start.reshape(-1, 2)[good].astype(np.float64), q[good].astype(np.float64), keep
 
 
 #: Descriptor matching across a wide baseline (:func:`match_features`), when the flow loses the frames:

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from pedenv.errors import InputError
-from pedenv.odometry.features import detect_road_corners, match_features, person_mask, ranked_corners, track
+from pedenv.odometry.features import detect_road_corners, match_features, person_mask, ranked_corners, track, track_half
 from pedenv.odometry.ground import camera_down, fit_road, guided_road_length, on_road, road_mask
 
 #: Fewest tracks between two frames, and fewest of them agreeing on one motion (the essential
@@ -118,11 +118,7 @@ def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, 
     allowed = person_mask(shape, boxes)
     corners, rank = ranked_corners(gray0, allowed)
     road_corners = detect_road_corners(gray0, allowed & road_mask(shape, k, cam_to_vehicle))
-    first = int((rank < FIRST_PASS_PER_CELL).sum())  # the corners come strongest of each cell first
-    p0, p1, kept = track(gray0, gray1, np.vstack([corners[:first], road_corners]))
-    if len(p0) < FIRST_PASS_MIN_TRACKS:  # a hard step: the rest of the corners tracked too
-        q0, q1, more = track(gray0, gray1, corners[first:])
-        p0, p1, kept = np.vstack([p0, q0]), np.vstack([p1, q1]), np.concatenate([kept[:first], more, kept[first:]])
+    p0, p1, kept = _tracks(gray0, gray1, corners, int((rank < FIRST_PASS_PER_CELL).sum()), road_corners)
     # the count of FAST's corners tracked says whether the images hold enough contrast (absolute)
     tracked, wide = int(kept[:len(corners)].sum()), False
     count, rotation, direction, inlier = 0, np.eye(3), np.zeros(3), np.zeros(len(p0), bool)
@@ -155,6 +151,23 @@ def estimate_step(gray0: np.ndarray, gray1: np.ndarray, intrinsics: np.ndarray, 
                 (p0[road], p1[road]), wide=wide)
 
 
+def _tracks(gray0: np.ndarray, gray1: np.ndarray, corners: np.ndarray, first: int,
+            road_corners: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The tracks (p0, p1: (M, 2) pixels) of the FAST ``corners`` (N, 2), strongest of each cell first, and the
+    ``road_corners`` (R, 2), and which of them tracked ((N + R,) bool, in that order): the ``first`` corners by
+    the half image's flow (:func:`~pedenv.odometry.features.track_half`), the road's by the full image's. A hard
+    step (fewer than :data:`FIRST_PASS_MIN_TRACKS` tracks) takes the full image's flow for the corners, then
+    follows the rest of them too."""
+    fast, road = track_half(gray0, gray1, corners[:first]), track(gray0, gray1, road_corners)
+    if len(fast[0]) + len(road[0]) < FIRST_PASS_MIN_TRACKS:
+        fast = track(gray0, gray1, corners[:first])
+    p0, p1, kept = np.vstack([fast[0], road[0]]), np.vstack([fast[1], road[1]]), np.concatenate([fast[2], road[2]])
+    if len(p0) < FIRST_PASS_MIN_TRACKS:
+        q0, q1, more = track(gray0, gray1, corners[first:])
+        p0, p1, kept = np.vstack([p0, q0]), np.vstack([p1, q1]), np.concatenate([kept[:first], more, kept[first:]])
+    return p0, p1, kept
+
+
 def _along_vehicle(direction: np.ndarray, cam_to_vehicle: np.ndarray) -> bool:
     """Whether the camera's ``direction`` of travel (3,), camera frame, lies within :data:`MAX_SIDESLIP_DEG`
     of the vehicle's forward or backward axis (a car does not move sideways)."""
@@ -164,14 +177,51 @@ def _along_vehicle(direction: np.ndarray, cam_to_vehicle: np.ndarray) -> bool:
 
 def _essential(p0: np.ndarray, p1: np.ndarray, k: np.ndarray) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """(inliers, rotation (3, 3), unit direction (3,), which tracks are inliers (N,) bool) of the essential
-    matrix between the tracks ``p0`` -> ``p1`` (N, 2) pixels (USAC, then ``recoverPose``); 0 inliers when none."""
+    matrix between the tracks ``p0`` -> ``p1`` (N, 2) pixels (USAC, then its pose with the most tracks in front,
+    :func:`pose_in_front`); 0 inliers when none."""
     essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
                                            threshold=EPIPOLAR_TOLERANCE_PX)
     if essential is None or essential.shape[0] < 3:
         return 0, np.eye(3), np.zeros(3), np.zeros(len(p0), bool)
     # several solutions stack up: the first, the best
-    count, rotation, direction, mask = cv2.recoverPose(essential[:3], p0, p1, k, mask=mask)
-    return int(count), rotation, direction.ravel(), mask.ravel() > 0
+    inlier = np.flatnonzero(mask.ravel() > 0)
+    rotation, direction, front = pose_in_front(essential[:3], p0[inlier], p1[inlier], k)
+    chosen = np.zeros(len(p0), bool)
+    chosen[inlier[front]] = True
+    return int(front.sum()), rotation, direction, chosen
+
+
+#: Farthest depth, in step lengths, of a track counted in front of the cameras (OpenCV's ``recoverPose``
+#: default, 50: a farther point is as good as at infinity, its side of the cameras undecided).
+MAX_DEPTH_STEPS = 50.0
+
+
+def pose_in_front(essential: np.ndarray, p0: np.ndarray, p1: np.ndarray,
+              k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rotation (3, 3), unit direction (3,), which tracks are in front (N,) bool): of the essential matrix's
+    four poses (OpenCV's ``decomposeEssentialMat``), the one that puts the most tracks ``p0`` -> ``p1`` (N, 2)
+    pixels in front of both cameras, closer than :data:`MAX_DEPTH_STEPS`. As OpenCV's ``recoverPose``, with
+    each track's two depths solved in closed form (least squares of ``z0 rotation x0 + direction = z1 x1``)
+    instead of its linear triangulation: on KITTI raw 0002 frames 3-4 (1034 tracks, one OpenCV thread)
+    0.4 against 5.0 ms, the same pose, 12 of its 700 tracks in front judged otherwise."""
+    rotation_a, rotation_b, t = cv2.decomposeEssentialMat(essential)
+    inverse = np.linalg.inv(k)
+    x0 = inverse @ np.vstack([p0.T, np.ones(len(p0))])
+    x1 = inverse @ np.vstack([p1.T, np.ones(len(p1))])
+    best: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    for rotation, direction in ((rotation_a, t.ravel()), (rotation_b, t.ravel()), (rotation_a, -t.ravel()),
+                                (rotation_b, -t.ravel())):
+        a = rotation @ x0
+        aa, ab, bb = (a * a).sum(axis=0), -(a * x1).sum(axis=0), (x1 * x1).sum(axis=0)
+        at, bt = direction @ a, -(direction @ x1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z0 = (ab * bt - bb * at) / (aa * bb - ab * ab)
+            z1 = (ab * at - aa * bt) / (aa * bb - ab * ab)
+        front = (z0 > 0) & (z1 > 0) & (z0 < MAX_DEPTH_STEPS) & (z1 < MAX_DEPTH_STEPS)
+        if best is None or front.sum() > best[2].sum():
+            best = (rotation, direction, front)
+    assert best is not None
+    return best
 
 
 def _parallax(p0: np.ndarray, p1: np.ndarray, k: np.ndarray, rotation: np.ndarray) -> float:
