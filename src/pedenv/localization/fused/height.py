@@ -19,6 +19,7 @@ import numpy as np
 
 from pedenv.body import STANDING
 from pedenv.config import FusedConfig
+from pedenv.localization.fused.body_height import prior_std
 from pedenv.localization.fused.cue import (
     LATERAL_STD_M,
     CueEstimate,
@@ -114,7 +115,9 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
 
     skeletons: the frame's rays (world), usable keypoints and stance ankles.
     height_mean, height_std: (N,) metres, each person's
-    height belief (default: the population prior of ``config``). reference_range: (N,)
+    height as its keypoints' span reads it, and its spread (default: the population prior of
+    ``config``, :func:`~pedenv.localization.fused.body_height.prior_std`; a track's own:
+    :func:`~pedenv.localization.fused.body_height.track_heights`). reference_range: (N,)
     metres, the range at which to scale the variance (NaN or None: this frame's range).
     The variance grows with the range squared; scaled at this frame's noisy range, a
     too-near estimate would count more than a too-far one and a filter averaging them
@@ -126,7 +129,7 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     """
     n, idx = len(skeletons), HEIGHT_KEYPOINTS
     hm = np.full(n, config.person_height_mean_m) if height_mean is None else np.asarray(height_mean, float)
-    hs = np.full(n, config.person_height_std_m) if height_std is None else np.asarray(height_std, float)
+    hs = np.full(n, prior_std(config)) if height_std is None else np.asarray(height_std, float)
     used = skeletons.usable[:, idx]
     used[:, ANKLE_COLUMNS] = skeletons.stance
     frac = KEYPOINT_HEIGHT_FRACTION[idx]
@@ -149,7 +152,7 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     r = np.where(good, r, 1.0)
     r2 = r**2
     frame_rel = np.where(good, (var_pix + var_frac) / r2, 1.0)
-    bias_rel = (hs / hm) ** 2 + config.keypoint_span_std**2  # height spread and posture, per person
+    bias_rel = (hs / hm) ** 2  # height spread and posture, per person
     scale = r
     if reference_range is not None:
         ref = np.asarray(reference_range, float)

@@ -28,10 +28,11 @@ from pedenv.localization.fused.cue import (
     keypoint_usable,
     range_bearing_covariance,
 )
+from pedenv.localization.fused.body_height import add_measurements, height_measurements, track_heights
 from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, fuse_cues
 from pedenv.localization.fused.ground import box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
-from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.history import HEIGHT_CUES, TORSO_KEYPOINTS, TrackHistory, ray_terms
 from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
 
@@ -148,8 +149,9 @@ class FusedLocator:
         cues: list[CueEstimate] = []
         if "ground" in cfg.cues:
             cues.append(ground_cue(frame, skel, cfg))
+        heights = track_heights(h.height_sums[rows], cfg)
         if "height" in cfg.cues:
-            cues.append(height_cue(skel, cfg, reference_range=last_range))
+            cues.append(height_cue(skel, cfg, *heights, reference_range=last_range))
         terms, dots = ray_terms(rays, origin)
         # where each keypoint was: the track's last skeleton, moved onto this frame's rays
         last_skel = h.skeletons[rows]
@@ -164,6 +166,7 @@ class FusedLocator:
         fused = fuse_cues(cues, GATE_PROBABILITY, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
         sources = CueSources.of(cues, fused, ~fused.valid).spell()
         self.last_cues = cues
+        self._learn_heights(rows, origin, heights)
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
         if not fused.valid.all():
@@ -181,6 +184,19 @@ class FusedLocator:
         skeleton = skeleton_3d(tri, rays, origin, xy, bearing, ranges)
         h.place(rows, xy, skeleton, fused.valid)
         return Measurement(positions, cov, sources, skeleton, bias)
+
+    def _learn_heights(self, rows: np.ndarray, origin: np.ndarray, heights: tuple[np.ndarray, np.ndarray]) -> None:
+        """Add this frame's body-height measurements of the tracks at ``rows`` (N,) to their
+        sums: each cue of :data:`HEIGHT_CUES` against the height cue (placed with ``heights``,
+        the tracks' height and spread, metres)."""
+        by_name = {q.name: q for q in self.last_cues}
+        if "height" not in by_name:
+            return
+        sums = self.history.height_sums
+        for c, name in enumerate(HEIGHT_CUES):
+            if name in by_name:
+                measured = height_measurements(by_name["height"], by_name[name], origin, heights[0])
+                sums[rows, c] = add_measurements(sums[rows, c], *heights, measured)
 
     def _gap_start(self, time: float) -> float:
         """The time (seconds) a track's newest past ray must reach at this frame's ``time``
