@@ -180,12 +180,13 @@ class AnkleHits:
     lift_std: np.ndarray
 
     @classmethod
-    def of(cls, frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> AnkleHits:
-        """The stance ankles of ``skeletons`` on the vehicle's road plane, lifted by the
-        ankle keypoint's resting height (:func:`ankle_height`)."""
+    def of(cls, frame: Frame, skeletons: FrameSkeletons, config: FusedConfig, level_m: float = 0.0) -> AnkleHits:
+        """The stance ankles of ``skeletons`` on the vehicle's road plane raised by ``level_m``
+        metres (:mod:`~pedenv.localization.fused.road_level`), lifted by the ankle keypoint's
+        resting height (:func:`ankle_height`)."""
         origin, normal = skeletons.origin, frame.ego.rotation[:, 2]
         rest = ankle_height(config)
-        road = float(normal @ frame.ego.translation) + rest  # the plane's offset, metres
+        road = float(normal @ frame.ego.translation) + level_m + rest  # the plane's offset, metres
         rays = skeletons.rays[:, list(ANKLE_KEYPOINTS)]  # (N, 2, 3)
         points, sine, cam_height = plane_intersection(rays, origin, normal, road)
         hits = skeletons.stance & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
@@ -208,17 +209,18 @@ class AnkleHits:
         return self.hits & (spread <= (STATIC_GROUND_MAX_RELATIVE_STD * self.ranges) ** 2)
 
 
-def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
+def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig, level_m: float = 0.0) -> CueEstimate:
     """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
 
-    skeletons: the frame's rays (world) and stance ankles. The frame-to-frame covariance
+    skeletons: the frame's rays (world) and stance ankles. level_m: metres, the plane raised
+    to the scene's ground level (:mod:`~pedenv.localization.fused.road_level`). The frame-to-frame covariance
     holds the pixel noise, the ankle's lift and where the foot stands against the body
     (:data:`STANCE_STD_M`, it changes with each step); the per-person part the road's unknown
     height under the pedestrian and the body's lateral spread.
     Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
     """
     n, seen = len(skeletons), skeletons.stance
-    ankles = AnkleHits.of(frame, skeletons, config)
+    ankles = AnkleHits.of(frame, skeletons, config, level_m)
     near = ankles.near(frame.camera.static, config)
     count = near.sum(axis=1)
     if not count.any():

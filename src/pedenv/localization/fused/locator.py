@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import Config
+from pedenv.records import Frame
 from pedenv.localization.base import FrameGeometry, Measurement
 from pedenv.localization.fused.cue import (
     CueEstimate,
@@ -28,11 +29,12 @@ from pedenv.localization.fused.cue import (
     keypoint_usable,
     range_bearing_covariance,
 )
-from pedenv.localization.fused.body_height import add_measurements, height_measurements, track_heights
+from pedenv.localization.fused.body_height import add_measurements, height_measurements, prior_std, track_heights
 from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, fuse_cues
-from pedenv.localization.fused.ground import box_bottom_ranges, ground_cue
+from pedenv.localization.fused.ground import ankle_height, box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import HEIGHT_CUES, TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.road_level import RoadLevel, people_levels
 from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
 
@@ -133,6 +135,7 @@ class FusedLocator:
         self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = self.history = TrackHistory(config.fused.history_length)
         self.last_cues: list[CueEstimate] = []
+        self.road = RoadLevel()
         self._last_time, self._frame_dt = -np.inf, np.inf  # the last frame's time, the shortest interval (s)
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
@@ -147,8 +150,9 @@ class FusedLocator:
         last_range = np.where(placed, np.sqrt(last[:, 0] ** 2 + last[:, 1] ** 2), np.nan)
 
         cues: list[CueEstimate] = []
+        level = 0.0 if cam.static else self.road.level
         if "ground" in cfg.cues:
-            cues.append(ground_cue(frame, skel, cfg))
+            cues.append(ground_cue(frame, skel, cfg, level))
         heights = track_heights(h.height_sums[rows], cfg)
         if "height" in cfg.cues:
             cues.append(height_cue(skel, cfg, *heights, reference_range=last_range))
@@ -167,6 +171,8 @@ class FusedLocator:
         sources = CueSources.of(cues, fused, ~fused.valid).spell()
         self.last_cues = cues
         self._learn_heights(rows, origin, heights)
+        if not cam.static:
+            self._learn_level(frame, origin, heights[0], level)
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
         if not fused.valid.all():
@@ -197,6 +203,20 @@ class FusedLocator:
             if name in by_name:
                 measured = height_measurements(by_name["height"], by_name[name], origin, heights[0])
                 sums[rows, c] = add_measurements(sums[rows, c], *heights, measured)
+
+    def _learn_level(self, frame: Frame, origin: np.ndarray, used_heights: np.ndarray, level: float) -> None:
+        """Add this frame's people to the scene's ground level (:mod:`~pedenv.localization.fused.road_level`):
+        where the height cue (placed with ``used_heights`` (N,) metres) puts the feet above the
+        plane the ground cue used (raised by ``level`` metres)."""
+        by_name = {q.name: q for q in self.last_cues}
+        if "height" not in by_name or "ground" not in by_name:
+            return
+        cfg, normal = self.config.fused, frame.ego.rotation[:, 2]
+        camera_height = float(normal @ origin - normal @ frame.ego.translation) - level - ankle_height(cfg)
+        levels, variances = people_levels(by_name["height"], by_name["ground"], origin, used_heights,
+                                          cfg.person_height_mean_m, (prior_std(cfg) / cfg.person_height_mean_m) ** 2,
+                                          camera_height)
+        self.road.update(frame.timestamp, levels + level, variances)
 
     def _gap_start(self, time: float) -> float:
         """The time (seconds) a track's newest past ray must reach at this frame's ``time``
