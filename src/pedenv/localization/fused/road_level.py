@@ -12,9 +12,15 @@ ground cue then cuts the rays with the plane lifted by that level.
 For each person placed by both cues the height cue's range ``r_h`` (at the mean height) and the
 ground cue's ``r_g`` say the feet lie ``c (1 - r_h / r_g)`` above the plane used (``c`` the camera's
 height above it): a measurement of the level whose spread is the height prior's share of ``c`` (about
-9 cm) plus the road's own spread under one person (``ROAD_HEIGHT_STD_M``). Their information decays
-over :data:`MEMORY_S` (a moving car leaves the pavement behind); the level starts at 0 with spread
-:data:`PRIOR_STD_M`. A static camera's ground is its calibrated plane and keeps no level.
+9 cm) plus the frame's noise of both ranges. Each frame's people add their information, which
+decays over :data:`MEMORY_S` (a moving car leaves the pavement behind); the level starts at 0 with
+spread :data:`PRIOR_STD_M`. The ground cue's per-person spread (``ROAD_HEIGHT_STD_M``, the road
+under one person against the rest) stays as it was. A static camera's ground is its calibrated
+plane and keeps no level.
+
+The level rests on the people's mean height being the population's: where a scene's people are
+all tall, it reads them as standing on a raised ground and places them nearer (the parked KITTI
+drive 0016, whose people average 1.86 m, is placed worse with it).
 """
 
 from __future__ import annotations
@@ -52,8 +58,11 @@ class RoadLevel:
 
     def update(self, time: float, levels: np.ndarray, variances: np.ndarray) -> None:
         """Decay to ``time`` (seconds), then add the people's measured ``levels`` (M,) metres
-        with their ``variances`` (M,) m^2."""
-        if self.time is not None and time > self.time:
+        with their ``variances`` (M,) m^2. A time before the last one starts a new scene:
+        what was learned is forgotten."""
+        if self.time is not None and time < self.time:
+            self.information, self.weighted = 0.0, 0.0
+        elif self.time is not None and time > self.time:
             keep = float(np.exp(-(time - self.time) / MEMORY_S))
             self.information *= keep
             self.weighted *= keep
