@@ -37,8 +37,8 @@ def test_the_prior_spread_holds_heights_and_posture():
 @pytest.mark.parametrize("ground_range, expected", [(10.0, 1.72), (7.0, 1.204), (11.5, 1.978)])
 def test_a_cue_that_needs_no_height_measures_it(ground_range, expected):
     # the height cue put them 10 m away at 1.72 m: a ground cue at 7 m says 1.204 m
-    h, frame_var, spread, valid = height_measurements(cue("height", [10.0], 0.3), cue("ground", [ground_range], 0.2, 0.4),
-                                                      ORIGIN, np.array([1.72]))
+    ground = cue("ground", [ground_range], 0.2, 0.4)
+    h, frame_var, spread, valid = height_measurements(cue("height", [10.0], 0.3), ground, ORIGIN, np.array([1.72]))
     assert valid[0]
     assert h[0] == pytest.approx(expected, rel=1e-6)
     assert frame_var[0] == pytest.approx(expected**2 * ((0.3 / 10.0) ** 2 + (0.2 / ground_range) ** 2), rel=1e-6)

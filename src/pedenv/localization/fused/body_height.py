@@ -63,7 +63,8 @@ def height_measurements(height: CueEstimate, other: CueEstimate, origin: np.ndar
     valid = height.valid & other.valid & (r_h > 0) & (r_o > 0)
     r_h, r_o = np.where(valid, r_h, 1.0), np.where(valid, r_o, 1.0)
     h = used_heights * r_o / r_h
-    frame_rel = along_variance(height.covariances, bearing) / r_h**2 + along_variance(other.covariances, bearing) / r_o**2
+    frame_rel = (along_variance(height.covariances, bearing) / r_h**2
+                 + along_variance(other.covariances, bearing) / r_o**2)
     spread = h * np.sqrt(along_variance(other.bias_covariances, bearing)) / r_o
     with np.errstate(invalid="ignore"):
         valid &= np.isfinite(h + frame_rel + spread) & (h >= HEIGHT_RANGE_M[0]) & (h <= HEIGHT_RANGE_M[1])

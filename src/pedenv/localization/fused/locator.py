@@ -9,6 +9,11 @@ covariance and adds the per-person part to what it reports. ``sources`` says whi
 made each position and why the others did not, e.g. ``ground+height;triangulation:no-baseline``.
 A pedestrian no cue can place gets a wide guess from its box height (``box``).
 
+The height cue uses each track's own body height, learned from the frames where the ground or
+the triangulation placed the person too (:mod:`~pedenv.localization.fused.body_height`); the
+ground cue cuts the ankle rays with the road plane raised to the scene's ground level, learned
+from its people (:mod:`~pedenv.localization.fused.road_level`; not under a static camera).
+
 The 3D skeleton: the person's shape triangulated over the track's history where the
 parallax allows (a swinging limb fails the outlier test), placed at the fused position;
 else each keypoint cut from its ray at the person's range.
@@ -19,8 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from pedenv.config import Config
-from pedenv.records import Frame
 from pedenv.localization.base import FrameGeometry, Measurement
+from pedenv.localization.fused.body_height import add_measurements, height_measurements, prior_std, track_heights
 from pedenv.localization.fused.cue import (
     CueEstimate,
     FrameSkeletons,
@@ -29,7 +34,6 @@ from pedenv.localization.fused.cue import (
     keypoint_usable,
     range_bearing_covariance,
 )
-from pedenv.localization.fused.body_height import add_measurements, height_measurements, prior_std, track_heights
 from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, fuse_cues
 from pedenv.localization.fused.ground import ankle_height, box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
@@ -37,6 +41,7 @@ from pedenv.localization.fused.history import HEIGHT_CUES, TORSO_KEYPOINTS, Trac
 from pedenv.localization.fused.road_level import RoadLevel, people_levels
 from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
+from pedenv.records import Frame
 
 #: A cue whose disagreement with the others exceeds this chi-square quantile (2 dof) is
 #: dropped before fusion: 0.999, so a cue within its own covariance is kept but for one

@@ -49,7 +49,8 @@ class RoadLevel:
     """
 
     def __init__(self) -> None:
-        self.information, self.weighted, self.time = 0.0, 0.0, None
+        self.information, self.weighted = 0.0, 0.0
+        self.time: float | None = None
 
     @property
     def level(self) -> float:
