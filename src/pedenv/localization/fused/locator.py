@@ -175,8 +175,8 @@ class FusedLocator:
         fused = fuse_cues(cues, GATE_PROBABILITY, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
         sources = CueSources.of(cues, fused, ~fused.valid).spell()
         self.last_cues = cues
-        self._learn_heights(rows, origin, heights)
-        if not cam.static:
+        if not cam.static:  # a static camera's calibrated ground is trusted first (STATIC_TRUST_ORDER)
+            self._learn_heights(rows, origin, heights)
             self._learn_level(frame, origin, heights[0], level)
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
