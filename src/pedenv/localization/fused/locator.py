@@ -38,7 +38,7 @@ from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, fu
 from pedenv.localization.fused.ground import ankle_height, box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
 from pedenv.localization.fused.history import HEIGHT_CUES, TORSO_KEYPOINTS, TrackHistory, ray_terms
-from pedenv.localization.fused.road_level import RoadLevel, people_levels
+from pedenv.localization.fused.road_level import RoadLevel, crowd_floor, people_levels
 from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
 from pedenv.records import Frame
@@ -155,9 +155,10 @@ class FusedLocator:
         last_range = np.where(placed, np.sqrt(last[:, 0] ** 2 + last[:, 1] ** 2), np.nan)
 
         cues: list[CueEstimate] = []
-        level = 0.0 if cam.static else self.road.level
+        level, level_var = (0.0, 0.0) if cam.static else self.road.estimate(
+            crowd_floor(self._camera_height(frame, origin), cfg.person_height_mean_m))
         if "ground" in cfg.cues:
-            cues.append(ground_cue(frame, skel, cfg, level))
+            cues.append(ground_cue(frame, skel, cfg, level, level_var))
         heights = track_heights(h.height_sums[rows], cfg)
         if "height" in cfg.cues:
             cues.append(height_cue(skel, cfg, *heights, reference_range=last_range))
@@ -216,12 +217,18 @@ class FusedLocator:
         by_name = {q.name: q for q in self.last_cues}
         if "height" not in by_name or "ground" not in by_name:
             return
-        cfg, normal = self.config.fused, frame.ego.rotation[:, 2]
-        camera_height = float(normal @ origin - normal @ frame.ego.translation) - level - ankle_height(cfg)
+        cfg = self.config.fused
+        camera_height = self._camera_height(frame, origin) - level
         levels, variances = people_levels(by_name["height"], by_name["ground"], origin, used_heights,
                                           cfg.person_height_mean_m, (prior_std(cfg) / cfg.person_height_mean_m) ** 2,
                                           camera_height)
         self.road.update(frame.timestamp, levels + level, variances)
+
+    def _camera_height(self, frame: Frame, origin: np.ndarray) -> float:
+        """Metres: the camera centre ``origin`` (3,) above the vehicle's road plane lifted by the
+        ankle keypoint's resting height (the plane the ground cue cuts before any level)."""
+        normal = frame.ego.rotation[:, 2]
+        return float(normal @ origin - normal @ frame.ego.translation) - ankle_height(self.config.fused)
 
     def _gap_start(self, time: float) -> float:
         """The time (seconds) a track's newest past ray must reach at this frame's ``time``
