@@ -18,9 +18,13 @@ spread :data:`PRIOR_STD_M`. The ground cue's per-person spread (``ROAD_HEIGHT_ST
 under one person against the rest) stays as it was. A static camera's ground is its calibrated
 plane and keeps no level.
 
-The level rests on the people's mean height being the population's: where a scene's people are
-all tall, it reads them as standing on a raised ground and places them nearer (the parked KITTI
-drive 0016, whose people average 1.86 m, is placed worse with it).
+The level rests on the people's mean height being the population's, and a scene's people may all
+be tall (the parked KITTI drive 0016, whose people average 1.85 m): however many are seen, their
+mean level is off by the crowd's mean height (:data:`CROWD_MEAN_STD_M`, :func:`crowd_floor`), so
+it is fused with the prior with that floor in its variance (:meth:`RoadLevel.estimate`) and moves
+the plane only part of the way; the level's error from the people goes into the ground cue's
+per-person covariance (and so into its weight in the fusion and into the track heights learned
+from it).
 """
 
 from __future__ import annotations
