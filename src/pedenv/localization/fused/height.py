@@ -9,8 +9,8 @@ A weighted straight-line fit of ``tan_k`` over ``f_k`` gives the slope ``H / r``
 assuming where the ground is (so rolling terrain does not bias it); the rows' noise is
 the pixel noise plus the spread of the fraction (head tilt, pelvis bob). Of two seen
 ankles only the lower (the stance foot) is used; a lone ankle may be lifted and counts less. The spread
-of human heights (``person_height_std_m``, about 5 %; for a tracked person what is left of it
-once their own height is learned, :mod:`~pedenv.localization.fused.body_height`) scales the
+of human heights (``person_height_std_m``, about 5 %; for a tracked person the same spread about
+their learned height, :mod:`~pedenv.localization.fused.body_height`) scales the
 range as a whole and repeats every frame for the same person, so it is the cue's per-person covariance; the
 keypoint noise (each skeleton's own, :func:`~pedenv.localization.fused.cue.observed_angle_std`) and the
 fractions' spread (gait, head tilt) are new every frame.
