@@ -120,12 +120,15 @@ def test_the_reported_covariance_holds_the_per_person_part():
 def test_the_ground_cue_corrects_a_tall_persons_height_prior_nearby():
     # 1.95 m against the 1.72 m prior: the height cue puts them 11.7 % too near at 8 m; the ground
     # cue (a flat road, exact ankles) pulls the fused position back (0.96 of the height cue's
-    # error while the road's curvature spread was 0.008 per m)
-    ground = np.array([[8.0, 2.0, 0.0]])
+    # error while the road's curvature spread was 0.008 per m). Beside people of the prior's
+    # height: alone, a tall person reads in part as a raised ground (the scene's level)
+    ground = np.array([[8.0, 2.0, 0.0], [7.0, -2.0, 0.0], [9.0, 4.0, 0.0], [10.0, -3.0, 0.0]])
     exact = FUSED.replace(fused={"ankle_keypoint_offset_m": 0.0})  # the rendered ankles sit at the anatomical height
-    peds = run([make_frame(ground, [1.95], index=i, timestamp=0.1 * i) for i in range(10)], exact)[-1].pedestrians
-    assert peds.sources[0].startswith("ground+height")
-    rel = np.linalg.norm(peds.positions[0, :2] - ground[0, :2]) / np.linalg.norm(ground[0, :2])
+    frames = [make_frame(ground, [1.95, 1.72, 1.72, 1.72], index=i, timestamp=0.1 * i) for i in range(10)]
+    peds = run(frames, exact)[-1].pedestrians
+    i = int(np.argmin(np.linalg.norm(peds.positions[:, :2] - ground[0, :2], axis=1)))
+    assert peds.sources[i].startswith("ground+height")
+    rel = np.linalg.norm(peds.positions[i, :2] - ground[0, :2]) / np.linalg.norm(ground[0, :2])
     assert rel < 0.75 * (1.0 - 1.72 / 1.95)
 
 

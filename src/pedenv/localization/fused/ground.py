@@ -180,12 +180,13 @@ class AnkleHits:
     lift_std: np.ndarray
 
     @classmethod
-    def of(cls, frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> AnkleHits:
-        """The stance ankles of ``skeletons`` on the vehicle's road plane, lifted by the
-        ankle keypoint's resting height (:func:`ankle_height`)."""
+    def of(cls, frame: Frame, skeletons: FrameSkeletons, config: FusedConfig, level_m: float = 0.0) -> AnkleHits:
+        """The stance ankles of ``skeletons`` on the vehicle's road plane raised by ``level_m``
+        metres (:mod:`~pedenv.localization.fused.road_level`), lifted by the ankle keypoint's
+        resting height (:func:`ankle_height`)."""
         origin, normal = skeletons.origin, frame.ego.rotation[:, 2]
         rest = ankle_height(config)
-        road = float(normal @ frame.ego.translation) + rest  # the plane's offset, metres
+        road = float(normal @ frame.ego.translation) + level_m + rest  # the plane's offset, metres
         rays = skeletons.rays[:, list(ANKLE_KEYPOINTS)]  # (N, 2, 3)
         points, sine, cam_height = plane_intersection(rays, origin, normal, road)
         hits = skeletons.stance & (sine > MIN_GRAZING_SINE) & (cam_height > 0)
@@ -208,17 +209,20 @@ class AnkleHits:
         return self.hits & (spread <= (STATIC_GROUND_MAX_RELATIVE_STD * self.ranges) ** 2)
 
 
-def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> CueEstimate:
+def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig, level_m: float = 0.0,
+               level_var: float = 0.0) -> CueEstimate:
     """Ground point of N pedestrians from their stance ankle on the vehicle's road plane.
 
-    skeletons: the frame's rays (world) and stance ankles. The frame-to-frame covariance
+    skeletons: the frame's rays (world) and stance ankles. level_m: metres, the plane raised
+    to the scene's ground level (:mod:`~pedenv.localization.fused.road_level`), with its
+    variance ``level_var`` (m^2, part of the per-person covariance). The frame-to-frame covariance
     holds the pixel noise, the ankle's lift and where the foot stands against the body
     (:data:`STANCE_STD_M`, it changes with each step); the per-person part the road's unknown
     height under the pedestrian and the body's lateral spread.
     Declines with ``no-ankles``, ``camera-below-road``, ``above-horizon`` or ``beyond-range``.
     """
     n, seen = len(skeletons), skeletons.stance
-    ankles = AnkleHits.of(frame, skeletons, config)
+    ankles = AnkleHits.of(frame, skeletons, config, level_m)
     near = ankles.near(frame.camera.static, config)
     count = near.sum(axis=1)
     if not count.any():
@@ -233,7 +237,7 @@ def ground_cue(frame: Frame, skeletons: FrameSkeletons, config: FusedConfig) -> 
     along = (weight[..., None] * ankles.rays[..., :2] / np.where(near, ankles.sine, 1.0)[..., None]).sum(axis=1)
     frame_cov = frame_covariance(ankles, near, weight, along)
     r = np.sqrt((xy[:, 0] - skeletons.origin[0]) ** 2 + (xy[:, 1] - skeletons.origin[1]) ** 2)
-    bias = person_covariance(r, along, frame.camera.static, config)
+    bias = person_covariance(r, along, frame.camera.static, config, level_var)
     return CueEstimate(NAME, xy, frame_cov, bias, count > 0, reasons)
 
 
@@ -257,16 +261,18 @@ def frame_covariance(ankles: AnkleHits, near: np.ndarray, weight: np.ndarray, al
     return symmetric_2x2(pxx + lift * ax * ax + stance, pxy + lift * ax * ay, pyy + lift * ay * ay + stance)
 
 
-def person_covariance(ranges: np.ndarray, along: np.ndarray, static: bool, config: FusedConfig) -> np.ndarray:
+def person_covariance(ranges: np.ndarray, along: np.ndarray, static: bool, config: FusedConfig,
+                      level_var: float = 0.0) -> np.ndarray:
     """(N, 2, 2) m^2, the part of the error that repeats for the same person: the road under
     a pedestrian ``ranges`` (N,) metres away stays off the vehicle's plane frame after frame
     (a ``static`` camera's calibrated ground: its unevenness and the calibration's own
     error, :func:`static_ground_variance`), and so does the
     body's sideways spread about its ground point (lean). along: (N, 2) as in :func:`frame_covariance`.
+    level_var: m^2, the variance of the scene's ground level the plane was raised to (moving camera).
     """
     if static:
         road = static_ground_variance(ranges, config)
     else:
-        road = (ROAD_HEIGHT_STD_M + 0.5 * ROAD_CURVATURE_STD_PER_M * ranges**2) ** 2
+        road = (ROAD_HEIGHT_STD_M + 0.5 * ROAD_CURVATURE_STD_PER_M * ranges**2) ** 2 + level_var
     ax, ay, lat = along[:, 0], along[:, 1], LATERAL_STD_M**2
     return symmetric_2x2(road * ax * ax + lat, road * ax * ay, road * ay * ay + lat)

@@ -9,8 +9,9 @@ A weighted straight-line fit of ``tan_k`` over ``f_k`` gives the slope ``H / r``
 assuming where the ground is (so rolling terrain does not bias it); the rows' noise is
 the pixel noise plus the spread of the fraction (head tilt, pelvis bob). Of two seen
 ankles only the lower (the stance foot) is used; a lone ankle may be lifted and counts less. The spread
-of human heights (``person_height_std_m``, about 5 %) scales the range as a whole and
-repeats every frame for the same person, so it is the cue's per-person covariance; the
+of human heights (``person_height_std_m``, about 5 %; for a tracked person the same spread about
+their learned height, :mod:`~pedenv.localization.fused.body_height`) scales the
+range as a whole and repeats every frame for the same person, so it is the cue's per-person covariance; the
 keypoint noise (each skeleton's own, :func:`~pedenv.localization.fused.cue.observed_angle_std`) and the
 fractions' spread (gait, head tilt) are new every frame.
 """
@@ -19,6 +20,7 @@ import numpy as np
 
 from pedenv.body import STANDING
 from pedenv.config import FusedConfig
+from pedenv.localization.fused.body_height import prior_std
 from pedenv.localization.fused.cue import (
     LATERAL_STD_M,
     CueEstimate,
@@ -114,7 +116,9 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
 
     skeletons: the frame's rays (world), usable keypoints and stance ankles.
     height_mean, height_std: (N,) metres, each person's
-    height belief (default: the population prior of ``config``). reference_range: (N,)
+    height as its keypoints' span reads it, and its spread (default: the population prior of
+    ``config``, :func:`~pedenv.localization.fused.body_height.prior_std`; a track's own:
+    :func:`~pedenv.localization.fused.body_height.track_heights`). reference_range: (N,)
     metres, the range at which to scale the variance (NaN or None: this frame's range).
     The variance grows with the range squared; scaled at this frame's noisy range, a
     too-near estimate would count more than a too-far one and a filter averaging them
@@ -126,7 +130,7 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     """
     n, idx = len(skeletons), HEIGHT_KEYPOINTS
     hm = np.full(n, config.person_height_mean_m) if height_mean is None else np.asarray(height_mean, float)
-    hs = np.full(n, config.person_height_std_m) if height_std is None else np.asarray(height_std, float)
+    hs = np.full(n, prior_std(config)) if height_std is None else np.asarray(height_std, float)
     used = skeletons.usable[:, idx]
     used[:, ANKLE_COLUMNS] = skeletons.stance
     frac = KEYPOINT_HEIGHT_FRACTION[idx]
@@ -149,7 +153,7 @@ def height_cue(skeletons: FrameSkeletons, config: FusedConfig,
     r = np.where(good, r, 1.0)
     r2 = r**2
     frame_rel = np.where(good, (var_pix + var_frac) / r2, 1.0)
-    bias_rel = (hs / hm) ** 2 + config.keypoint_span_std**2  # height spread and posture, per person
+    bias_rel = (hs / hm) ** 2  # height spread and posture, per person
     scale = r
     if reference_range is not None:
         ref = np.asarray(reference_range, float)

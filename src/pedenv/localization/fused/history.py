@@ -20,6 +20,8 @@ from pedenv.tracking.table import ColumnGroup
 #: The keypoints whose triangulation places the person: shoulders and hips, the
 #: steadiest points of a walking body (arms and legs swing, the head turns).
 TORSO_KEYPOINTS = np.array([KP.LEFT_SHOULDER, KP.RIGHT_SHOULDER, KP.LEFT_HIP, KP.RIGHT_HIP])
+#: The cues that measure a track's body height (they place a person without assuming it).
+HEIGHT_CUES = ("ground", "triangulation")
 #: Layout of a ray's least-squares terms: the upper triangle of ``I - d d^T`` (xx, xy,
 #: xz, yy, yz, zz) then ``(I - d d^T) o`` (3), d the ray, o the camera centre.
 NUM_TERMS = 9
@@ -81,7 +83,9 @@ class TrackHistory(ColumnGroup):
     (seconds). filled: (T, L) bool, slot holds an observation. count: (T,) pushes so far.
     positions: (T, 2) the last fused ground point, world x-y, metres. placed: (T,) bool,
     ``positions`` holds one (a cue placed the track before). skeletons: (T, 17, 3) the
-    last 3D skeleton, world, metres (valid where ``placed``).
+    last 3D skeleton, world, metres (valid where ``placed``). height_sums: (T, C, 3) the body
+    height measured by each of :data:`HEIGHT_CUES` (C), as sums ``(sum w, sum w H, sum w s)``
+    (:mod:`~pedenv.localization.fused.body_height`).
     """
 
     rays: np.ndarray
@@ -94,6 +98,7 @@ class TrackHistory(ColumnGroup):
     placed: np.ndarray
     skeletons: np.ndarray
     count: np.ndarray
+    height_sums: np.ndarray
 
     def __init__(self, length: int) -> None:
         self.length = L = int(length)
@@ -101,7 +106,7 @@ class TrackHistory(ColumnGroup):
         super().__init__({
             "rays": ((k, L, 3), f), "terms": ((k, L, NUM_TERMS), f), "dots": ((k, L), f), "usable": ((k, L), bool),
             "cameras": ((L, 5), f), "filled": ((L,), bool), "positions": ((2,), f), "placed": ((), bool),
-            "skeletons": ((k, 3), f), "count": ((), np.int64)})
+            "skeletons": ((k, 3), f), "count": ((), np.int64), "height_sums": ((len(HEIGHT_CUES), 3), f)})
 
     def push(self, rows: np.ndarray, rays: np.ndarray, terms: np.ndarray, dots: np.ndarray, usable: np.ndarray,
              origin: np.ndarray, time: float) -> None:

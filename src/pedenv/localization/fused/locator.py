@@ -9,6 +9,11 @@ covariance and adds the per-person part to what it reports. ``sources`` says whi
 made each position and why the others did not, e.g. ``ground+height;triangulation:no-baseline``.
 A pedestrian no cue can place gets a wide guess from its box height (``box``).
 
+The height cue uses each track's own body height, learned from the frames where the ground or
+the triangulation placed the person too (:mod:`~pedenv.localization.fused.body_height`); the
+ground cue cuts the ankle rays with the road plane raised to the scene's ground level, learned
+from its people (:mod:`~pedenv.localization.fused.road_level`; not under a static camera).
+
 The 3D skeleton: the person's shape triangulated over the track's history where the
 parallax allows (a swinging limb fails the outlier test), placed at the fused position;
 else each keypoint cut from its ray at the person's range.
@@ -20,6 +25,7 @@ import numpy as np
 
 from pedenv.config import Config
 from pedenv.localization.base import FrameGeometry, Measurement
+from pedenv.localization.fused.body_height import add_measurements, height_measurements, prior_std, track_heights
 from pedenv.localization.fused.cue import (
     CueEstimate,
     FrameSkeletons,
@@ -29,11 +35,13 @@ from pedenv.localization.fused.cue import (
     range_bearing_covariance,
 )
 from pedenv.localization.fused.fusion import STATIC_TRUST_ORDER, TRUST_ORDER, fuse_cues
-from pedenv.localization.fused.ground import box_bottom_ranges, ground_cue
+from pedenv.localization.fused.ground import ankle_height, box_bottom_ranges, ground_cue
 from pedenv.localization.fused.height import height_cue
-from pedenv.localization.fused.history import TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.history import HEIGHT_CUES, TORSO_KEYPOINTS, TrackHistory, ray_terms
+from pedenv.localization.fused.road_level import RoadLevel, crowd_floor, people_levels
 from pedenv.localization.fused.sources import CueSources
 from pedenv.localization.fused.triangulation import RaysNow, Triangulated, triangulate, triangulation_cue
+from pedenv.records import Frame
 
 #: A cue whose disagreement with the others exceeds this chi-square quantile (2 dof) is
 #: dropped before fusion: 0.999, so a cue within its own covariance is kept but for one
@@ -132,6 +140,7 @@ class FusedLocator:
         self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = self.history = TrackHistory(config.fused.history_length)
         self.last_cues: list[CueEstimate] = []
+        self.road = RoadLevel()
         self._last_time, self._frame_dt = -np.inf, np.inf  # the last frame's time, the shortest interval (s)
 
     def locate(self, geo: FrameGeometry, rows: np.ndarray) -> Measurement:
@@ -146,10 +155,13 @@ class FusedLocator:
         last_range = np.where(placed, np.sqrt(last[:, 0] ** 2 + last[:, 1] ** 2), np.nan)
 
         cues: list[CueEstimate] = []
+        level, level_var = (0.0, 0.0) if cam.static else self.road.estimate(
+            crowd_floor(self._camera_height(frame, origin), cfg.person_height_mean_m))
         if "ground" in cfg.cues:
-            cues.append(ground_cue(frame, skel, cfg))
+            cues.append(ground_cue(frame, skel, cfg, level, level_var))
+        heights = track_heights(h.height_sums[rows], cfg)
         if "height" in cfg.cues:
-            cues.append(height_cue(skel, cfg, reference_range=last_range))
+            cues.append(height_cue(skel, cfg, *heights, reference_range=last_range))
         terms, dots = ray_terms(rays, origin)
         # where each keypoint was: the track's last skeleton, moved onto this frame's rays
         last_skel = h.skeletons[rows]
@@ -164,6 +176,9 @@ class FusedLocator:
         fused = fuse_cues(cues, GATE_PROBABILITY, origin[:2], STATIC_TRUST_ORDER if cam.static else TRUST_ORDER)
         sources = CueSources.of(cues, fused, ~fused.valid).spell()
         self.last_cues = cues
+        if not cam.static:  # a static camera's calibrated ground is trusted first (STATIC_TRUST_ORDER)
+            self._learn_heights(rows, origin, heights)
+            self._learn_level(frame, origin, heights[0], level)
 
         xy, cov, bias = fused.positions, fused.covariances, fused.bias_covariances
         if not fused.valid.all():
@@ -181,6 +196,39 @@ class FusedLocator:
         skeleton = skeleton_3d(tri, rays, origin, xy, bearing, ranges)
         h.place(rows, xy, skeleton, fused.valid)
         return Measurement(positions, cov, sources, skeleton, bias)
+
+    def _learn_heights(self, rows: np.ndarray, origin: np.ndarray, heights: tuple[np.ndarray, np.ndarray]) -> None:
+        """Add this frame's body-height measurements of the tracks at ``rows`` (N,) to their
+        sums: each cue of :data:`HEIGHT_CUES` against the height cue (placed with ``heights``,
+        the tracks' height and spread, metres)."""
+        by_name = {q.name: q for q in self.last_cues}
+        if "height" not in by_name:
+            return
+        sums = self.history.height_sums
+        for c, name in enumerate(HEIGHT_CUES):
+            if name in by_name:
+                measured = height_measurements(by_name["height"], by_name[name], origin, heights[0])
+                sums[rows, c] = add_measurements(sums[rows, c], *heights, measured)
+
+    def _learn_level(self, frame: Frame, origin: np.ndarray, used_heights: np.ndarray, level: float) -> None:
+        """Add this frame's people to the scene's ground level (:mod:`~pedenv.localization.fused.road_level`):
+        where the height cue (placed with ``used_heights`` (N,) metres) puts the feet above the
+        plane the ground cue used (raised by ``level`` metres)."""
+        by_name = {q.name: q for q in self.last_cues}
+        if "height" not in by_name or "ground" not in by_name:
+            return
+        cfg = self.config.fused
+        camera_height = self._camera_height(frame, origin) - level
+        levels, variances = people_levels(by_name["height"], by_name["ground"], origin, used_heights,
+                                          cfg.person_height_mean_m, (prior_std(cfg) / cfg.person_height_mean_m) ** 2,
+                                          camera_height)
+        self.road.update(frame.timestamp, levels + level, variances)
+
+    def _camera_height(self, frame: Frame, origin: np.ndarray) -> float:
+        """Metres: the camera centre ``origin`` (3,) above the vehicle's road plane lifted by the
+        ankle keypoint's resting height (the plane the ground cue cuts before any level)."""
+        normal = frame.ego.rotation[:, 2]
+        return float(normal @ origin - normal @ frame.ego.translation) - ankle_height(self.config.fused)
 
     def _gap_start(self, time: float) -> float:
         """The time (seconds) a track's newest past ray must reach at this frame's ``time``
