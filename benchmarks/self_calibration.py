@@ -6,9 +6,8 @@
 - synthetic: the built-in ``static-plaza`` scene (seed 0, 150 frames, a camera 6 m up, 20 deg
   down, 64.5 deg field of view), skeletons from the detector model (``yolo11n-pose-far``
   profile) and exact skeletons: the estimate against the truth, then the positions of the fused
-  method with the true and with the estimated camera (the estimate's spreads widening the static
-  camera's ``fused.static_camera_*`` as ``pedenv run`` does) side by side, then the true camera
-  with those widened spreads and the estimate with them not widened.
+  method with the true and with the estimated camera side by side, and with the estimate's
+  uncertainty added to the covariances as ``pedenv run`` writes them.
 - refinement: the estimate as ``pedenv run`` refines it on a 60 s synthetic scene (first 200
   frames, then more), against the truth, and the true ground points cut with it again.
 - mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
@@ -140,15 +139,10 @@ def synthetic() -> None:
         row(label, est, truth)
         if isinstance(est, Exception):
             continue
-        from pedenv.config import Config
-
-        widened = {**EXACT, **est.fused_spreads(Config().replace(fused=EXACT).fused)}
-        # the last two rows part the estimate's own error from the widened spreads' effect on the cues
+        # as pedenv run: the fused method as with a given camera, the estimate's uncertainty added to the covariances
         for name, camera, fused, spread in (("true camera", truth_camera, EXACT, None),
-                                            ("estimated camera", est.camera(), widened, None),
-                                            ("estimated, spread", est.camera(), widened, est),
-                                            ("true, widened", truth_camera, widened, None),
-                                            ("estimated, unwidened", est.camera(), EXACT, None)):
+                                            ("estimated camera", est.camera(), EXACT, None),
+                                            ("estimated, spread", est.camera(), EXACT, est)):
             m = coverage(scene.frames, camera, spec, fused, spread)
             print(f"  {'':34s} positions, {name:20s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
                   f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")
@@ -214,14 +208,12 @@ def mot17(samples: Path) -> None:
 def positions(folder: Path, reference, est) -> None:
     """The fused method on a MOT17 sequence with UCMCTrack's camera and with the estimate, against
     the box bottoms cut with UCMCTrack's ground (:func:`pedenv.datasets.ucmctrack.mot17_static_scene`)."""
-    from pedenv.config import Config
     from pedenv.datasets.ucmctrack import mot17_static_scene
 
     scene = mot17_static_scene(folder, folder.parent / "ucmctrack_cam_para" / f"{folder.name}.txt")
-    widened = est.fused_spreads(Config().fused)
     for name, camera, fused, spread in (("UCMCTrack camera", reference, {}, None),
-                                        ("estimated camera", est.camera(), widened, None),
-                                        ("estimated, spread", est.camera(), widened, est)):
+                                        ("estimated camera", est.camera(), {}, None),
+                                        ("estimated, spread", est.camera(), {}, est)):
         m = coverage(scene.frames, camera, onnx_far, fused, spread)
         print(f"  {'':34s} positions, {name:20s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
               f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")

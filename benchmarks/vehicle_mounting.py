@@ -434,8 +434,8 @@ def compare_positions(frames, spec, est) -> None:
     from pedenv.model import PedestrianEnvironmentModel
 
     for label in ("true mounting", "estimated", "estimated, spread"):
-        cfg = Config() if label == "true mounting" else Config().replace(fused=est.fused_spreads(Config().fused))
-        model, backend = PedestrianEnvironmentModel(cfg), create_detector(spec) if isinstance(spec, str) else spec()
+        model = PedestrianEnvironmentModel(Config())
+        backend = create_detector(spec) if isinstance(spec, str) else spec()
         rel, d2 = [], []
         for frame in frames():
             if label != "true mounting":

@@ -33,11 +33,25 @@ def test_a_static_run_without_calibration_estimates_it_and_widens_the_covariance
         from pedenv.recordings.footage import load_calibration
 
         load_calibration(out / "calibration.yaml")
-    fused = json.loads((out / "config.json").read_text())["fused"]
-    std = summary["calibration"]["std"]
-    assert fused["static_camera_tilt_std_deg"] >= max(std["tilt_deg"], std["roll_deg"]) - 1e-9
-    assert fused["static_camera_height_std_m"] >= std["height_m"] - 1e-9
-    assert fused["person_height_std_m"] > 0.09  # the focal length's spread added to the height prior's
+    from pedenv.config import Config
+
+    assert json.loads((out / "config.json").read_text())["fused"] == json.loads(json.dumps(Config().to_dict()["fused"]))
     assert json.loads((out / "run.json").read_text())["calibration"]["people"] >= 5
     lines = (out / "environment.jsonl").read_text().splitlines()
     assert len(lines) == 60 and any(json.loads(line)["pedestrians"] for line in lines[-5:])
+    # the same frames with the estimate given as a file: the same positions, the calibration's spread not added
+    given = RecordingSource(images=folder, static=True, fps=10.0, calibration=out / "calibration.yaml")
+    with pytest.warns(UserWarning, match="estimated"):
+        run_recording(given, OutputOptions(tmp_path / "given", video_out=True),
+                      PoseOptions(backend="detector-model", detection=None), backend=SceneBackend(frames))
+    widened = [json.loads(line)["pedestrians"] for line in lines]
+    given_lines = (tmp_path / "given" / "environment.jsonl").read_text().splitlines()
+    plain = [json.loads(line)["pedestrians"] for line in given_lines]
+    extra = []
+    for a, b in zip(widened, plain):
+        assert [p["track_id"] for p in a] == [p["track_id"] for p in b]
+        for p, q in zip(a, b):
+            np.testing.assert_allclose(p["position"], q["position"], atol=1e-3)
+            extra.append(np.array(p["covariance_xy"]) - np.array(q["covariance_xy"]))
+    assert len(extra) > 100 and min(np.linalg.eigvalsh(e).min() for e in extra) > -2e-3  # JSON Lines keep 3 decimals
+    assert np.median([np.trace(e) for e in extra]) > 1e-3  # m^2: the estimate's spread, one error for all

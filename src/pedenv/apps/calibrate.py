@@ -28,7 +28,6 @@ from pedenv.calibration.linking import BoxLinker
 from pedenv.calibration.observations import Observations, observations_of
 from pedenv.calibration.road import TravelWatcher
 from pedenv.calibration.vehicle import estimate_mounting
-from pedenv.config import Config
 from pedenv.errors import InputError
 from pedenv.pose.base import PoseBackend
 from pedenv.records import Camera, Detections, EgoPose, Frame
@@ -282,11 +281,6 @@ class SelfCalibration:
     def refinement(self) -> Refinement | None:
         """A static camera's :class:`Refinement` over the run, None on a vehicle."""
         return Refinement(self) if self.mount == "static" else None
-
-    def widen(self, cfg: Config) -> Config:
-        """``cfg`` with the fused method's spreads widened by the estimate's uncertainty
-        (:meth:`~pedenv.calibration.estimate.CameraEstimate.fused_spreads`)."""
-        return cfg.replace(fused=self.estimate.fused_spreads(cfg.fused))
 
     def widened(self, write: Callable[[tuple[EnvironmentState, Frame]], None]
                 ) -> Callable[[tuple[EnvironmentState, Frame]], None]:

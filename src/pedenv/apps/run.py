@@ -111,9 +111,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
 def _self_calibrated(source: RecordingSource, pose: PoseOptions, backend: PoseBackend | None,
                      cfg: Config) -> tuple[RecordingSource, SelfCalibration | None, Config]:
     """The recording with its camera (estimated in a warm-up where it has no placement,
-    :func:`~pedenv.apps.calibrate.estimate_for_source`) and ``cfg`` widened by the estimate's uncertainty."""
+    :func:`~pedenv.apps.calibrate.estimate_for_source`) and ``cfg``. The model runs with ``cfg`` as
+    with a given camera: the estimate's error is one error shared by every position, which its
+    uncertainty added to the written covariances carries (:meth:`SelfCalibration.widened`); widening
+    the fused method's camera spreads instead moved weight from the ground cue to the height cue
+    and doubled the positions' error on the built-in plaza (docs/any_camera.md)."""
     source, estimated = estimate_for_source(source, pose, backend)
-    return source, estimated, estimated.widen(cfg) if estimated is not None else cfg
+    return source, estimated, cfg
 
 
 def _calibration_stages(estimated: SelfCalibration | None, step: Callable[[Frame], Any],

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -51,19 +50,6 @@ class CameraEstimate:
         camera = static_camera(self.focal, self.height, self.tilt, self.roll, self.size, self.centre)
         return camera if mount == "static" else Camera(camera.intrinsics, camera.width, camera.height,
                                                        camera.cam_to_vehicle, mount)
-
-    def fused_spreads(self, fused: Any) -> dict[str, float]:
-        """The fused method's settings (``fused``: a :class:`~pedenv.config_position.FusedConfig`)
-        that carry this estimate's uncertainty into every position's covariance, each at least its
-        current value: ``static_camera_tilt_std_deg`` (the tilt's or roll's 1-sigma, the larger),
-        ``static_camera_height_std_m`` (the height's) and ``person_height_std_m`` (the prior's
-        spread with the focal length's relative 1-sigma added: the height cue's range scales with it)."""
-        s = self.std
-        tilt = float(np.degrees(max(s[2], s[3])))
-        people = float(np.hypot(fused.person_height_std_m, fused.person_height_mean_m * s[0] / self.focal))
-        return {"static_camera_tilt_std_deg": max(fused.static_camera_tilt_std_deg, tilt),
-                "static_camera_height_std_m": max(fused.static_camera_height_std_m, float(s[1])),
-                "person_height_std_m": people}
 
     def uncertainty(self) -> dict[str, float]:
         """1-sigma of each parameter in the units of :data:`PARAMETERS`."""
