@@ -10,7 +10,7 @@ track age (frames), ego speed and the cues that made the estimate (``sources``);
 error's signed part along the viewing ray (+: too far), its size along and across the ray, and
 each cue's own error where it had an
 estimate (ground, height, triangulation), with the height cue's error had it known each person's
-labelled height (``height@H``: what is left when the body-height prior is right). The last line
+labelled height in place of its track's (``height@H``: what is left when the body height is right). The last line
 gives the 1- and 2-sigma coverage of the one-to-one pairs. ``--ego-poses oxts``: GPS/IMU poses
 instead of ORB-SLAM3 (0000 and 0001 only).
 """
@@ -43,7 +43,7 @@ def pairs_of(data: KittiDrivesDataset, scene: str, config: Config) -> tuple[list
     (metres); and the squared Mahalanobis distance of each one-to-one pair (the coverage's)."""
     model = PedestrianEnvironmentModel(config)
     backend = create_detector(data.default_pose_backend, redetect=config.redetect)
-    prior, out, nees, last = config.fused.person_height_mean_m, [], [], None
+    out, nees, last = [], [], None
     for frame in data.frames(scene):
         frame = replace(frame, detections=backend(frame, model.predict_tracks(frame)))
         state = model.update(frame)
@@ -69,8 +69,9 @@ def pairs_of(data: KittiDrivesDataset, scene: str, config: Config) -> tuple[list
             for name, q in cues.items():
                 if q.valid[i]:
                     row[name] = q.positions[i] - truth
-            if "height" in row and gt.heights is not None:  # its range scales with the height it assumes
-                scaled = origin + (cues["height"].positions[i] - origin) * gt.heights[match[i]] / prior
+            if "height" in row and gt.heights is not None:  # its range scales with the height it took (the track's)
+                used = model.locator.last_heights[i]
+                scaled = origin + (cues["height"].positions[i] - origin) * gt.heights[match[i]] / used
                 row["height@H"] = scaled - truth
             out.append(row)
     return out, nees

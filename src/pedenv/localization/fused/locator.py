@@ -132,7 +132,8 @@ class FusedLocator:
 
     Its per-track memory (``columns``) is the :class:`TrackHistory`. ``last_cues``: the last
     frame's cue estimates, one row per pedestrian of its measurement (what
-    ``benchmarks/kitti_position_breakdown.py`` scores each cue by); read-only.
+    ``benchmarks/kitti_position_breakdown.py`` scores each cue by) and ``last_heights``: the
+    body height each one's height cue took (its track's); read-only.
     """
 
     def __init__(self, config: Config) -> None:
@@ -140,6 +141,7 @@ class FusedLocator:
         self.max_range_m = config.fused.max_range_m  # the model clamps beyond (pedenv.localization.bounds)
         self.columns = self.history = TrackHistory(config.fused.history_length)
         self.last_cues: list[CueEstimate] = []
+        self.last_heights = np.zeros(0)  # the body height (m) the last frame's height cue took per pedestrian
         self.road = RoadLevel()
         self._last_time, self._frame_dt = -np.inf, np.inf  # the last frame's time, the shortest interval (s)
 
@@ -160,6 +162,7 @@ class FusedLocator:
         if "ground" in cfg.cues:
             cues.append(ground_cue(frame, skel, cfg, level, level_var))
         heights = track_heights(h.height_sums[rows], cfg)
+        self.last_heights = heights[0]
         if "height" in cfg.cues:
             cues.append(height_cue(skel, cfg, *heights, reference_range=last_range))
         terms, dots = ray_terms(rays, origin)
