@@ -185,10 +185,10 @@ def _estimated_poses(stream: OdometryStream | None, folder: RunFolder, summary: 
 def check_before_prepasses(source: RecordingSource, output: OutputOptions,
                            config: Config | str | Path | None) -> RecordingSource:
     """``source``, once what refuses a run is checked before any pre-pass reads the recording (the static
-    camera's warm-up, the visual odometry, the check of a ``--static`` camera): no output on an input, an
-    output folder that would be refused (:func:`refuse_output_folder`), then a camera declared ``--static``
-    whose view moves (:func:`pedenv.odometry.static_check.check_static`). A run without a pre-pass checks
-    its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
+    camera's warm-up, the check of a ``--static`` camera) or the visual odometry estimates its poses: no
+    output on an input, an output folder that would be refused (:func:`refuse_output_folder`), then a camera
+    declared ``--static`` whose view moves (:func:`pedenv.odometry.static_check.check_static`). Any other run
+    checks its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
     check_run_paths(source, output, config)
     if source.bag is not None or not (source.static or source.ego_poses is None or needs_estimate(
             source.images, source.video, source.calibration, source.static)):
