@@ -175,11 +175,13 @@ def _posed(rec: Recording | BagRecording, stream: OdometryStream | None) -> Iter
 def _estimated_poses(stream: OdometryStream | None, folder: RunFolder, summary: dict) -> None:
     """The poses the visual odometry gave the frames, written as ``ego_poses_estimated.csv``, and what
     ``run.json`` says of them (``ego_poses``), also when the run stopped early (the frames that had poses)."""
-    trajectory = stream.trajectory() if stream is not None else None
-    if stream is None or trajectory is None:
+    if stream is None:
         return
-    write_ego_poses(folder.work / ESTIMATED_SOURCE, trajectory)
-    summary["ego_poses"] = {**stream.report(), "file": str(folder.final / ESTIMATED_SOURCE)}
+    trajectory, file = stream.trajectory(), None  # no frame had its pose: no file (``file`` null)
+    if trajectory is not None:
+        write_ego_poses(folder.work / ESTIMATED_SOURCE, trajectory)
+        file = str(folder.final / ESTIMATED_SOURCE)
+    summary["ego_poses"] = {**stream.report(), "file": file}
 
 
 def check_before_prepasses(source: RecordingSource, output: OutputOptions,
