@@ -28,7 +28,10 @@ from pedenv.recordings.ego_poses import EgoTrajectory
 
 #: Frames a pose lags behind the newest frame estimated: the steps of these frames join the pitch's pool
 #: and the neighbours' speed of a step without road scale. The frames wait, decoded, between the reader
-#: and the network (4 at 1600x900: 17 MB). Measured on KITTI raw 0002 (docs/visual_odometry.md).
+#: and the network (4 at 1600x900: 17 MB). On KITTI raw 0002's 10 frames against the GPS distance: no lag
+#: +2.84 %, 2 frames +1.53 %, 4 +1.94 %, all 9 steps (the whole drive's estimate) +1.69 %, the yaw the same;
+#: the poses at most 11.5, 2.9 and 2.8 cm from the whole drive's. A frame lagging is a frame later out of the
+#: run (``--realtime``: 0.4 s at 10 Hz).
 POSE_LAG_FRAMES = 4
 #: Most frames that wait for their poses before any step was measured by the road (the first step
 #: with a length gives the speed of those before it): 30 frames, 3 s at 10 Hz; a recording whose first
