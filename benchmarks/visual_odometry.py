@@ -30,6 +30,7 @@ from pedenv.geometry import rotation_from_ypr
 from pedenv.images import read_image_rgb
 from pedenv.odometry.estimator import VisualOdometry
 from pedenv.odometry.reference import integrated_distance, mercator_positions, read_oxts, travelled, yaw_change
+from pedenv.odometry.stream import OdometryStream
 
 #: KITTI's colour camera is about 1.65 m above the road, looking straight ahead (KITTI's setup page).
 KITTI_CAMERA_HEIGHT_M = 1.65
@@ -57,7 +58,8 @@ def measure_or_say(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: 
 def measure(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: np.ndarray, oxts_times: np.ndarray,
             name: str) -> None:
     """Print the odometry of ``images`` at ``stamps`` (seconds) against ``oxts`` (the rows spanning them,
-    at ``oxts_times`` seconds): the GPS positions' path and the speed integrated."""
+    at ``oxts_times`` seconds): the GPS positions' path and the speed integrated; then the poses of
+    ``pedenv run``'s frame loop (:class:`~pedenv.odometry.stream.OdometryStream`)."""
     vo = VisualOdometry(k, mounting(KITTI_CAMERA_HEIGHT_M))
     start, cpu = time.perf_counter(), time.process_time()
     for path, stamp in zip(images, stamps):
@@ -75,6 +77,16 @@ def measure(images: list[Path], stamps: np.ndarray, k: np.ndarray, oxts: np.ndar
           f"(error {yaw - truth_yaw:+.3f} deg); {len(vo.steps)} steps, {sum(s.guided for s in vo.steps)} scaled by "
           f"aligning the road, {sum(s.wide for s in vo.steps)} from matched descriptors; {1e3 * per_step:.0f} ms "
           f"per frame ({1e3 * cpu_step:.0f} ms of CPU, the image's decoding included)")
+    stream, handed = OdometryStream(k, mounting(KITTI_CAMERA_HEIGHT_M)), []
+    for path, stamp in zip(images, stamps):  # pedenv run's frame loop: each pose final POSE_LAG_FRAMES later
+        handed += stream.add(read_image_rgb(path), float(stamp), where=str(path))
+    looped = np.array(handed + stream.finish())
+    loop_yaw = np.degrees(np.arctan2(looped[-1, 1, 0], looped[-1, 0, 0]))
+    print(f"{name}, pedenv run's frame loop (poses final {stream.lag} frames later): distance "
+          f"{travelled(looped[:, :3, 3]):.3f} m ({100 * (travelled(looped[:, :3, 3]) / truth - 1):+.2f} % of the GPS "
+          f"positions'), yaw error {loop_yaw - truth_yaw:+.3f} deg, at most "
+          f"{np.abs(looped[:, :3, 3] - poses[:, :3, 3]).max():.3f} m from the whole recording's poses"
+          if len(looped) == len(poses) else f"{name}, frame loop: {len(looped)} poses")
 
 
 def kitti_raw(root: Path) -> None:

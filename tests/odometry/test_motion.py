@@ -79,6 +79,14 @@ def test_a_dark_or_blurred_image_is_one_input_error_naming_the_frame(spoil):
         estimate_step(first, second, K, mount, where="night.png")
 
 
+def test_a_clear_frame_then_a_black_one_is_one_input_error():
+    # the clear frame's corners track nowhere into the black one (no track at all on the half image)
+    mount, tex = cam_to_vehicle(), texture()
+    first = render(tex, vehicle_pose(0.0, 0.0, 0.0), mount)
+    with pytest.raises(InputError, match=r"^day\.png: too dark, blurred or covered for visual odometry: 0 tracks"):
+        estimate_step(first, np.zeros_like(first), K, mount, where="day.png")
+
+
 def test_a_slightly_blurred_image_still_gives_the_step():
     mount, tex = cam_to_vehicle(), texture()
     first, second = (cv2.GaussianBlur(render(tex, vehicle_pose(x, 0.0, 0.0), mount), (0, 0), 2.0) for x in (0.0, 1.0))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import cv2
 import numpy as np
 import pytest
@@ -105,3 +107,22 @@ def test_calibrate_odometry_writes_the_same_poses_as_the_run(tmp_path):
                   backend=NoPeople())
     assert (tmp_path / "vo" / "ego_poses_estimated.csv").read_bytes() == \
         (tmp_path / "out" / "ego_poses_estimated.csv").read_bytes()
+
+
+def test_a_frame_too_dark_stops_the_run_with_the_frames_before_it_written(tmp_path):
+    # frames 0-5 of the drive, then a black frame: frames 0 and 1 had their poses (each final 4 frames
+    # later) and were run; the run stops with one line, their outputs and poses on disk
+    images, calib = _recording(tmp_path / "rec")
+    mount, tex = cam_to_vehicle(4.0), texture()
+    for i in range(4, 6):
+        cv2.imwrite(str(images / f"{i:06d}.png"), render(tex, vehicle_pose(0.9 * i, 0.0, 0.0), mount))
+    cv2.imwrite(str(images / "000006.png"), np.zeros((HEIGHT, WIDTH, 3), np.uint8))
+    out = tmp_path / "out"
+    with pytest.raises(InputError, match=r"000005\.png: frame 5: too dark, blurred or covered for visual odometry"):
+        run_recording(RecordingSource(images=images, calibration=calib, fps=10.0), OutputOptions(out),
+                      backend=NoPeople())
+    assert len((out / "environment.jsonl").read_text().splitlines()) == 2
+    poses = load_ego_poses(out / "ego_poses_estimated.csv")
+    np.testing.assert_allclose(poses.translations[:, 0], [0.0, 0.9], atol=0.054)
+    summary = json.loads((out / "run.json").read_text())
+    assert summary["frames_done"] == 2 and summary["ego_poses"]["frames"] == 2

@@ -48,10 +48,10 @@ def test_a_driving_car_declared_static_stops_the_run_before_anything_runs(tmp_pa
 
 
 def test_a_refused_output_folder_is_refused_before_the_odometry(tmp_path, monkeypatch):
-    def no_pre_pass(**_):
-        raise AssertionError("the odometry's pre-pass ran before the output folder was checked")
+    def no_odometry(*_, **__):
+        raise AssertionError("the odometry ran before the output folder was checked")
 
-    monkeypatch.setattr("pedenv.odometry.recording.load_with_odometry_report", no_pre_pass)
+    monkeypatch.setattr("pedenv.odometry.stream.OdometryStream.add", no_odometry)
     calib = tmp_path / "calib.yaml"
     calib.write_text("width: 1242\nheight: 375\nfx: 721.5\nfy: 721.5\ncx: 609.6\ncy: 172.9\n"
                      "cam_to_vehicle: {rotation: [0.5, -0.5, 0.5, -0.5], translation: [0, 0, 1.65]}\n")

@@ -2,7 +2,8 @@
 
 Every frame of the recording (an image folder with its timestamps, or a video) goes through
 :class:`pedenv.odometry.VisualOdometry` with the people found by the pose backend left out (the
-pre-pass of ``pedenv run`` without ``--ego-poses`` runs the same estimator before any detection);
+frame loop of ``pedenv run`` without ``--ego-poses`` runs the same steps a few frames ahead of the
+network, :mod:`pedenv.odometry.stream`);
 the poses are written to ``ego_poses_estimated.csv`` (the ``--ego-poses`` format; the first
 frame's vehicle frame is the world).
 """

@@ -19,6 +19,7 @@ from pedenv.outputs.png import OVERLAY_FORMATS, check_png_compression
 from pedenv.outputs.sinks import ExtraOutputs
 
 if TYPE_CHECKING:
+    from pedenv.odometry.stream import OdometryStream
     from pedenv.recordings.bag import BagRecording
     from pedenv.recordings.bag_topics import BagOptions
     from pedenv.recordings.footage import Recording
@@ -72,6 +73,21 @@ class RecordingSource:
                              video=self.video, fps=self.fps, start_time=self.start_time, static=self.static)
         given = {"source": "given", "file": str(self.ego_poses)} if self.ego_poses is not None else None
         return rec, given or {"source": "static camera"}
+
+    def load_for_frame_loop(self) -> tuple[Recording | BagRecording, dict[str, Any] | None, OdometryStream | None]:
+        """:meth:`load_with_poses_note`, except that a vehicle without ego poses is loaded without them and
+        comes with the :class:`~pedenv.odometry.stream.OdometryStream` that estimates them in the frame loop
+        (:func:`pedenv.odometry.recording.open_for_odometry`; ``pedenv run``): no pre-pass reads the frames."""
+        if self.bag is not None or self.ego_poses is not None or self.static or self.calibration is None:
+            return (*self.load_with_poses_note(), None)
+        from pedenv.odometry.estimator import ESTIMATED_SOURCE
+        from pedenv.odometry.recording import open_for_odometry
+
+        rec, stream = open_for_odometry(calibration=self.calibration, images=self.images, video=self.video,
+                                        fps=self.fps, start_time=self.start_time)
+        if stream is None:
+            return rec, {"source": "static camera (the calibration's mount: static)"}, None
+        return rec, {"source": "estimated", "file": ESTIMATED_SOURCE}, stream
 
     def check_realtime(self, realtime: bool) -> None:
         """``--realtime`` on an image folder needs the frames' times: its timestamps.csv or ``fps``."""

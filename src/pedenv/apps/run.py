@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,6 +29,7 @@ from pedenv.detection import Detector, backend_options, create_detector
 from pedenv.errors import InputError
 from pedenv.odometry.estimator import ESTIMATED_SOURCE
 from pedenv.odometry.poses_file import write_ego_poses
+from pedenv.odometry.recording import posed_frames
 from pedenv.outputs.jsonl import EnvironmentWriter
 from pedenv.outputs.output_dir import holds_files
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
@@ -42,6 +43,7 @@ from pedenv.visualize.overlay import draw_environment
 from pedenv.visualize.plots import plot_birds_eye
 
 if TYPE_CHECKING:
+    from pedenv.odometry.stream import OdometryStream
     from pedenv.recordings.bag import BagRecording
     from pedenv.state import EnvironmentState
 
@@ -83,7 +85,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
     source, estimated, cfg = _self_calibrated(check_before_prepasses(source, output, config), pose, backend, cfg)
     pipe = _pipeline(pipeline or PipelineConfig(), output)
-    rec, backend, folder, poses = _open_run(source, output, pose, cfg, pipe, backend, config)
+    rec, backend, folder, (poses, stream) = _open_run(source, output, pose, cfg, pipe, backend, config)
     out = folder.work
     frames = Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update the model
     summary, stats = {**_start_summary(rec, cfg, folder, estimated), **_poses_note(poses, folder)}, PipelineStats()
@@ -96,12 +98,13 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
             step, write, finish = _calibration_stages(estimated, frames.process, outputs.write)
-            run_frames(rec.frames(), step, write, config=pipe, done=outputs.done, stats=stats)
+            run_frames(_posed(rec, stream), step, write, config=pipe, done=outputs.done, stats=stats)
         finish(out, summary)
         _check_ended_early(rec, stats, summary)
         finished = True
     finally:
         outputs.close()
+        _estimated_poses(stream, folder, summary)
         summary["frames_done"] = writer.lines  # the frames whose every output was written
         _finish_summary(summary, out, frames, stats, pipe, outputs, sinks)
         finish_run(folder, summary, sinks, finished=finished)
@@ -147,33 +150,51 @@ def _start_summary(rec: Recording | BagRecording, cfg: Config, folder: RunFolder
 
 def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions, cfg: Config,
               pipe: PipelineConfig, backend: PoseBackend | None, config: Config | str | Path | None
-              ) -> tuple[Recording | BagRecording, PoseBackend, RunFolder, dict | None]:
+              ) -> tuple[Recording | BagRecording, PoseBackend, RunFolder, tuple[dict | None, OdometryStream | None]]:
     """Everything checked before the output folder is touched (the extra outputs, ``--realtime``'s
     timestamps, the recording, no output on an input, every frame of a folder or video), then the
-    folder prepared and ``config.json`` saved: (recording, pose backend, output folder, what ``run.json``
-    says of the ego poses: :meth:`~pedenv.apps.options.RecordingSource.load_with_poses_note`)."""
+    folder prepared and ``config.json`` saved: (recording, pose backend, output folder, (what ``run.json``
+    says of the ego poses, the visual odometry's stage of a vehicle without them:
+    :meth:`~pedenv.apps.options.RecordingSource.load_for_frame_loop`))."""
     (output.extra or ExtraOutputs()).check()
     source.check_realtime(pipe.realtime)
     check_run_paths(source, output, config)
-    rec, poses = source.load_with_poses_note()  # a vehicle without ego poses: visual odometry's pre-pass
+    rec, poses, stream = source.load_for_frame_loop()  # a vehicle without ego poses: visual odometry in the loop
     backend = backend or _make_backend(pose, cfg, rec)
     if hasattr(rec, "check") and holds_files(Path(output.folder)):  # an earlier run there: every frame's size
         rec.check()  # and ego pose checked before it is touched (a bag is read once, as it runs); in a new folder
         # the frames before a bad one are run and stay on disk
     folder = open_run_folder(output.folder, overwrite=output.overwrite, command="pedenv run")
     cfg.save(folder.work / "config.json")
-    if isinstance(rec, Recording) and rec.trajectory is not None and rec.trajectory.source == ESTIMATED_SOURCE:
-        write_ego_poses(folder.work / ESTIMATED_SOURCE, rec.trajectory)  # visual odometry's poses (pedenv.odometry)
-    return rec, backend, folder, poses
+    return rec, backend, folder, (poses, stream)
+
+
+def _posed(rec: Recording | BagRecording, stream: OdometryStream | None) -> Iterable[Frame]:
+    """The frames the reader hands on: the recording's, each with its ego pose from the visual odometry's
+    stage where it estimates them (run in the reader's thread, beside the network:
+    :func:`pedenv.odometry.recording.posed_frames`)."""
+    return rec.frames() if stream is None else posed_frames(rec.frames(), stream, rec.name)
+
+
+def _estimated_poses(stream: OdometryStream | None, folder: RunFolder, summary: dict) -> None:
+    """The poses the visual odometry gave the frames, written as ``ego_poses_estimated.csv``, and what
+    ``run.json`` says of them (``ego_poses``), also when the run stopped early (the frames that had poses)."""
+    if stream is None:
+        return
+    trajectory, file = stream.trajectory(), None  # no frame had its pose: no file (``file`` null)
+    if trajectory is not None:
+        write_ego_poses(folder.work / ESTIMATED_SOURCE, trajectory)
+        file = str(folder.final / ESTIMATED_SOURCE)
+    summary["ego_poses"] = {**stream.report(), "file": file}
 
 
 def check_before_prepasses(source: RecordingSource, output: OutputOptions,
                            config: Config | str | Path | None) -> RecordingSource:
     """``source``, once what refuses a run is checked before any pre-pass reads the recording (the static
-    camera's warm-up, the visual odometry, the check of a ``--static`` camera): no output on an input, an
-    output folder that would be refused (:func:`refuse_output_folder`), then a camera declared ``--static``
-    whose view moves (:func:`pedenv.odometry.static_check.check_static`). A run without a pre-pass checks
-    its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
+    camera's warm-up, the check of a ``--static`` camera) or the visual odometry estimates its poses: no
+    output on an input, an output folder that would be refused (:func:`refuse_output_folder`), then a camera
+    declared ``--static`` whose view moves (:func:`pedenv.odometry.static_check.check_static`). Any other run
+    checks its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
     check_run_paths(source, output, config)
     if source.bag is not None or not (source.static or source.ego_poses is None or needs_estimate(
             source.images, source.video, source.calibration, source.static)):

@@ -25,6 +25,9 @@ Words used across the package, its settings and ``docs/visual_odometry.md``:
   (:func:`~pedenv.odometry.ground.guided_road_length`).
 * **matched descriptors**: when the flow loses the frames, ORB keypoints matched across them (and
   refined by the flow) give the essential matrix (:func:`~pedenv.odometry.features.match_features`).
+* **lag**: ``pedenv run`` estimates the poses in its frame loop
+  (:class:`~pedenv.odometry.stream.OdometryStream`): a frame's pose is final, and handed on, once
+  :data:`~pedenv.odometry.stream.POSE_LAG_FRAMES` more frames were estimated; no later frame changes it.
 * **static check**: a camera declared ``--static`` whose background flows between frames is refused
   (:mod:`pedenv.odometry.static_check`).
 * **ego poses**: the steps chained into vehicle -> world poses, the world being the vehicle

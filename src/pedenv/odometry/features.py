@@ -167,6 +167,8 @@ def track_half(gray0: np.ndarray, gray1: np.ndarray, points: np.ndarray) -> tupl
                                             flags=cv2.OPTFLOW_USE_INITIAL_FLOW)
     error = 2 * np.linalg.norm((back - p0).reshape(-1, 2), axis=1)
     keep = ok1.ravel().astype(bool) & ok2.ravel().astype(bool) & (error < MAX_ROUND_TRIP_PX)
+    if not keep.any():  # none tracked (a black frame): OpenCV refuses an empty list of points
+        return np.empty((0, 2)), np.empty((0, 2)), keep
     start, coarse = 2 * p0[keep], 2 * p1[keep]
     full = (FLOW_WINDOW_PX, FLOW_WINDOW_PX)
     fine, ok3, _ = cv2.calcOpticalFlowPyrLK(gray0, gray1, start, coarse.copy(), winSize=full, maxLevel=0,
