@@ -349,7 +349,12 @@ def estimate_for_source(source: RecordingSource, pose: PoseOptions,
     """``pedenv run``'s recording with its camera: as given, or (a static camera without a calibration,
     or any camera whose calibration has no ``cam_to_vehicle``) estimated in the warm-up and read
     from a temporary calibration file. A vehicle camera's estimated mounting puts the vehicle
-    origin on the road under the camera, its x axis along the camera's horizontal view."""
+    origin on the road under the camera, its x axis along the camera's horizontal view. The model
+    then runs with its settings as for a given camera: the estimate's error is one error shared by
+    every position, which its uncertainty added to the written covariances carries
+    (:meth:`SelfCalibration.widened`); widening the fused method's camera spreads instead moved
+    weight from the ground cue to the height cue and doubled the positions' error on the built-in
+    plaza (docs/any_camera.md)."""
     if source.bag is not None or not needs_estimate(source.images, source.video, source.calibration, source.static):
         return source, None
     ego = None if source.static else ego_lengths(source.ego_poses, source.images, source.video, source.fps,

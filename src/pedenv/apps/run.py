@@ -83,11 +83,10 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
     """
     output, pose = OutputOptions.of(output), pose or PoseOptions()
     cfg = detection_mode(load_config(config, method), pose.backend or "onnx", pose.detection)
-    source, estimated, cfg = _self_calibrated(check_before_prepasses(source, output, config), pose, backend, cfg)
+    source, estimated = estimate_for_source(check_before_prepasses(source, output, config), pose, backend)
     pipe = _pipeline(pipeline or PipelineConfig(), output)
     rec, backend, folder, (poses, stream) = _open_run(source, output, pose, cfg, pipe, backend, config)
-    out = folder.work
-    frames = Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update the model
+    out, frames = folder.work, Pipeline(cfg, backend)  # each frame: predict the tracks, detect with them, update
     summary, stats = {**_start_summary(rec, cfg, folder, estimated), **_poses_note(poses, folder)}, PipelineStats()
     extra = in_work_folder(output.extra or ExtraOutputs(), folder)
     writer, sinks, finished = EnvironmentWriter(out / "environment.jsonl"), Sinks(), False
@@ -109,18 +108,6 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         _finish_summary(summary, out, frames, stats, pipe, outputs, sinks)
         finish_run(folder, summary, sinks, finished=finished)
     return summary
-
-
-def _self_calibrated(source: RecordingSource, pose: PoseOptions, backend: PoseBackend | None,
-                     cfg: Config) -> tuple[RecordingSource, SelfCalibration | None, Config]:
-    """The recording with its camera (estimated in a warm-up where it has no placement,
-    :func:`~pedenv.apps.calibrate.estimate_for_source`) and ``cfg``. The model runs with ``cfg`` as
-    with a given camera: the estimate's error is one error shared by every position, which its
-    uncertainty added to the written covariances carries (:meth:`SelfCalibration.widened`); widening
-    the fused method's camera spreads instead moved weight from the ground cue to the height cue
-    and doubled the positions' error on the built-in plaza (docs/any_camera.md)."""
-    source, estimated = estimate_for_source(source, pose, backend)
-    return source, estimated, cfg
 
 
 def _calibration_stages(estimated: SelfCalibration | None, step: Callable[[Frame], Any],
