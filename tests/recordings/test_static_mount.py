@@ -80,7 +80,10 @@ def test_run_without_ego_poses_on_featureless_images_is_one_error_line(monkeypat
                             _images(tmp_path), "--fps", "10", "--output", tmp_path / "run")
     assert code == 2
     assert "000000.png: frame 0: too dark, blurred or covered for visual odometry: 0 tracks" in err
-    assert "Traceback" not in err and not (tmp_path / "run").exists()
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    # the odometry runs in the frame loop: the run stopped at its first frame, and run.json says so
+    run = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert run["frames_done"] == 0 and run["ego_poses"]["source"] == "estimated" and run["ego_poses"]["file"] is None
 
 
 def test_mot17_with_ucmctracks_camera_as_a_static_recording(tmp_path):
