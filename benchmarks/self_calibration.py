@@ -296,22 +296,11 @@ def vehicle(samples: Path) -> None:
             truth)
 
 
-def label_truth(labels) -> tuple[float, float]:
-    """(height m, tilt rad) of the camera over the plane fitted to every labelled object's 3D box
-    bottom (rectified camera frame: x right, y down, z forward)."""
-    solid = np.isin(labels.types, ("Pedestrian", "Car", "Van", "Cyclist", "Truck"))
-    loc = labels.locations[solid]
-    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
-    h, slope_z, _ = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
-    return float(h), float(np.arctan(-slope_z))
-
-
 def sequences(samples: Path) -> None:
     """KITTI tracking_sequences, skeletons rendered from the labels: each pedestrian's ankle and
     eye points (anatomical shares of the box height) projected with 2 px noise, the camera's
     height and tilt fitted with its intrinsics, against the plane of the labelled boxes' bottoms."""
-    from pedenv.body import ANKLE, EYE
-    from pedenv.calibration.observations import Observations
+    from pedenv.calibration.observations import rendered_observations
     from pedenv.datasets import kitti_files
     from pedenv.errors import InputError
 
@@ -327,15 +316,8 @@ def sequences(samples: Path) -> None:
             print(f"  seq {name}: not read ({exc})")
             continue
         k = calib.K
-        people = labels.of_type("Pedestrian")
-        bottom, tall = people.locations, people.dimensions[:, 0]
-        feet, heads = (np.c_[bottom[:, 0], bottom[:, 1] - share * tall, bottom[:, 2]] @ k.T for share in (ANKLE, EYE))
-        feet, heads = feet[:, :2] / feet[:, 2:], heads[:, :2] / heads[:, 2:]
-        feet, heads = feet + rng.normal(0, 2.0, feet.shape), heads + rng.normal(0, 2.0, heads.shape)
-        seen = (bottom[:, 2] > 1.0) & (feet[:, 1] - heads[:, 1] > 24) & (people.occluded <= 1)
-        obs = Observations(feet[seen], heads[seen], np.full(int(seen.sum()), EYE), people.track_id[seen],
-                           people.frame[seen])
-        h, tilt = label_truth(labels)
+        obs, _ = rendered_observations(labels.of_type("Pedestrian"), k, rng)
+        h, tilt, _ = labels.camera_over_ground()
         size = (int(round(2 * k[0, 2])), int(round(2 * k[1, 2])))
         est = fit(obs, size, focal=float(k[0, 0]), centre=(float(k[0, 2]), float(k[1, 2])))
         row(f"seq {name} ({len(np.unique(obs.tracks))} people)", est, (float(k[0, 0]), h, tilt, 0.0))

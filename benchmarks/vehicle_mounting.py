@@ -52,18 +52,6 @@ SCALE_MISSES = (-0.026, 0.036)
 #: A drive's frame-to-frame motion below this (metres) is no step (a parked car: the odometry's
 #: parallax gate keeps no keyframe).
 MIN_STEP_M = 0.2
-SOLID = ("Pedestrian", "Car", "Van", "Cyclist", "Truck")
-
-
-def label_plane(labels) -> tuple[float, float, float]:
-    """(height m, tilt rad, roll rad) of the camera over the plane fitted to every labelled object's 3D
-    box bottom (rectified camera frame: x right, y down, z forward)."""
-    loc = labels.locations[np.isin(labels.types, SOLID)]
-    a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
-    h, slope_z, slope_x = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
-    return float(h), float(np.arctan(-slope_z)), float(np.arctan(slope_x))
-
-
 def deg(x: float) -> str:
     return f"{np.degrees(x):+.2f}"
 
@@ -190,7 +178,7 @@ def road_real(samples: Path) -> None:
             print(f"  {folder.parent.name} {name} frames {frames}: odometry refused: {exc}")
             continue
         ref = orbslam_directions(poses, frames)
-        _, tilt, _ = label_plane(kitti_files.read_labels(folder / "label_02" / f"{name}.txt"))
+        _, tilt, _ = kitti_files.read_labels(folder / "label_02" / f"{name}.txt").camera_over_ground()
         cue = road_cue(found[np.isfinite(found).all(axis=1)])
         pitch = "no moving step" if cue is None else f"{np.degrees(cue.pitch):+.2f} +- {np.degrees(cue.std):.2f}"
         print(f"  {folder.parent.name} {name} frames {frames}: per step images "
@@ -242,7 +230,7 @@ def tracking_scale(folder: Path, name: str, frames: list[int], k: np.ndarray, po
     lengths, spans = scale_steps(images, k, np.array(frames, float) / 10.0)
     ego = np.array([np.linalg.norm(poses[frames[b], :3, 3] - poses[frames[a], :3, 3]) for a, b in spans])
     scale = road_scale(lengths, ego)
-    h, _, _ = label_plane(kitti_files.read_labels(folder / "label_02" / f"{name}.txt"))
+    h, _, _ = kitti_files.read_labels(folder / "label_02" / f"{name}.txt").camera_over_ground()
     text = "no step" if scale is None else (f"H {scale.height:.3f} +- {scale.std:.3f} m from {scale.steps} steps "
                                             f"(labelled ground {h:.3f} m: {100 * (scale.height / h - 1):+.1f} %; "
                                             f"KITTI 1.65 m: {100 * (scale.height / 1.65 - 1):+.1f} %)")
@@ -276,7 +264,7 @@ def real(samples: Path) -> None:
     training = samples / "kitti" / "tracking_mini" / "training"
     for name in ("0016", "0001"):
         seq = kitti_files.read_tracking_sequence(training, name)
-        h, tilt, _ = label_plane(seq.labels)
+        h, tilt, _ = seq.labels.camera_over_ground()
         rgb = [read_image_rgb(seq.image_path(n)) for n in seq.frames]
         obs = observe(rgb, backend)
         steps = np.array(_steps([_grey(seq.image_path(n)) for n in seq.frames], seq.calib.K))
@@ -312,23 +300,6 @@ def real(samples: Path) -> None:
                                                 NETWORK_BODY, None), (h, tilt))
 
 
-def rendered_people(labels, k: np.ndarray, rng: np.random.Generator):
-    """Each labelled pedestrian's ankle and eye points rendered from its 3D box (anatomical shares of
-    the box height) with 2 px noise, as :class:`~pedenv.calibration.observations.Observations`."""
-    from pedenv.body import ANKLE, EYE
-    from pedenv.calibration.observations import Observations
-
-    people = labels.of_type("Pedestrian")
-    bottom, tall = people.locations, people.dimensions[:, 0]
-    feet, heads = (np.c_[bottom[:, 0], bottom[:, 1] - share * tall, bottom[:, 2]] @ k.T for share in (ANKLE, EYE))
-    feet, heads = feet[:, :2] / feet[:, 2:], heads[:, :2] / heads[:, 2:]
-    feet, heads = feet + rng.normal(0, 2.0, feet.shape), heads + rng.normal(0, 2.0, heads.shape)
-    seen = (bottom[:, 2] > 1.0) & (feet[:, 1] - heads[:, 1] > 24) & (people.occluded <= 1)
-    obs = Observations(feet[seen], heads[seen], np.full(int(seen.sum()), EYE), people.track_id[seen],
-                       people.frame[seen])
-    return obs, float(np.mean(tall[seen])) if seen.any() else float("nan")
-
-
 def noisy(directions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """``directions`` (S, 3) turned by :data:`STEP_NOISE_DEG` of Gaussian noise in elevation and yaw."""
     d = directions[np.isfinite(directions).all(axis=1)]
@@ -357,6 +328,7 @@ def modelled_lengths(positions: np.ndarray, height: float, rng: np.random.Genera
 
 
 def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None:
+    from pedenv.calibration.observations import rendered_observations
     from pedenv.calibration.road import road_cue, road_scale
     from pedenv.calibration.vehicle import estimate_mounting
     from pedenv.datasets import kitti_files
@@ -372,8 +344,10 @@ def drives(samples: Path, names: list[str] | None, with_positions: bool) -> None
         labels = kitti_files.read_labels(training / "label_02" / f"{name}.txt")
         poses = kitti_files.read_camera_trajectory(training / "ego_poses_orbslam3" / name / "CameraTrajectory.txt")
         k = calib.K
-        obs, tall = rendered_people(labels, k, rng)
-        h, tilt, _ = label_plane(labels)
+        people = labels.of_type("Pedestrian")
+        obs, seen = rendered_observations(people, k, rng)
+        tall = float(np.mean(people.dimensions[seen, 0])) if seen.any() else float("nan")
+        h, tilt, _ = labels.camera_over_ground()
         travel = orbslam_directions(poses)
         road = road_cue(noisy(travel, rng))
         size = (int(round(2 * k[0, 2])), int(round(2 * k[1, 2])))

@@ -55,6 +55,22 @@ def test_projected_bottom_centre_lands_at_the_foot_of_the_2d_box():
     assert np.abs(uv[:, 1] - people.boxes[:, 3]).max() < 15
 
 
+def test_the_labelled_ground_lies_under_kittis_camera_and_rendered_people_stand_on_it():
+    from pedenv.calibration.observations import rendered_observations
+
+    seq = kitti.read_tracking_sequence(TRACKING, "0016")
+    height, tilt, roll = seq.labels.camera_over_ground()
+    # the boxes' bottoms of the parked drive: KITTI's camera 1.65 m over the road, looking about level
+    assert height == pytest.approx(1.63, abs=0.01) and abs(np.degrees(tilt)) < 1.0 and abs(np.degrees(roll)) < 2.5
+    people = seq.labels.of_type("Pedestrian")
+    obs, seen = rendered_observations(people, seq.calib.K, np.random.default_rng(0))
+    assert seen.shape == (len(people),) and len(obs) == seen.sum() > 100
+    assert np.all(people.occluded[seen] <= 1) and np.all(obs.heads[:, 1] < obs.feet[:, 1] - 24)
+    # the feet land where the labelled boxes' bottom centres project, within the rendering's noise
+    bottoms = seq.calib.project(people.locations[seen])
+    assert np.median(np.abs(obs.feet - bottoms)[:, 1]) < 5.0
+
+
 def test_object_labels_have_no_frame_or_track_columns():
     labels = kitti.read_labels(OBJECT / "label_2" / "000000.txt")
     assert list(labels.types) == ["Pedestrian"]

@@ -31,7 +31,7 @@ from pedenv.odometry.estimator import ESTIMATED_SOURCE
 from pedenv.odometry.poses_file import write_ego_poses
 from pedenv.odometry.recording import posed_frames
 from pedenv.outputs.jsonl import EnvironmentWriter
-from pedenv.outputs.output_dir import holds_files
+from pedenv.outputs.output_dir import holds_files, refuse_output_dir
 from pedenv.outputs.sinks import ExtraOutputs, Sinks
 from pedenv.pipeline import Pipeline
 from pedenv.pose.base import PoseBackend
@@ -179,40 +179,20 @@ def check_before_prepasses(source: RecordingSource, output: OutputOptions,
                            config: Config | str | Path | None) -> RecordingSource:
     """``source``, once what refuses a run is checked before any pre-pass reads the recording (the static
     camera's warm-up, the check of a ``--static`` camera) or the visual odometry estimates its poses: no
-    output on an input, an output folder that would be refused (:func:`refuse_output_folder`), then a camera
-    declared ``--static`` whose view moves (:func:`pedenv.odometry.static_check.check_static`). Any other run
-    checks its output folder after the recording, as :func:`_open_run` does (a bad input is named first)."""
+    output on an input, an output folder that would be refused
+    (:func:`~pedenv.outputs.output_dir.refuse_output_dir`), then a camera declared ``--static`` whose view
+    moves (:func:`pedenv.odometry.static_check.check_static`). Any other run checks its output folder after
+    the recording, as :func:`_open_run` does (a bad input is named first)."""
     check_run_paths(source, output, config)
     if source.bag is not None or not (source.static or source.ego_poses is None or needs_estimate(
             source.images, source.video, source.calibration, source.static)):
         return source
-    refuse_output_folder(Path(output.folder), output.overwrite)
+    refuse_output_dir(output.folder, overwrite=output.overwrite)
     if source.static and (source.images is not None or source.video is not None):
         from pedenv.odometry.static_check import check_static
 
         check_static(images=source.images, video=source.video)
     return source
-
-
-def refuse_output_folder(folder: Path, overwrite: bool) -> None:
-    """The refusals of :func:`~pedenv.apps.output_safety.open_run_folder`, without touching the folder: a
-    file, a folder under a file, a folder with something in it without ``overwrite``, or one pedenv did not
-    write (InputError, the same lines)."""
-    from pedenv.paths import MARKER
-
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"output folder {folder} is an existing file; choose a folder")
-    blocking = next((p for p in folder.parents if p.exists() and not p.is_dir()), None)
-    if blocking is not None:
-        raise InputError(f"output folder {folder} lies under {blocking}, which is a file")
-    if not holds_files(folder):
-        return
-    if not overwrite:
-        raise InputError(f"output folder {folder} is not empty; pass --overwrite to replace what an earlier run "
-                         f"wrote there, or choose another folder")
-    if not (folder / MARKER).is_file():
-        raise InputError(f"output folder {folder} is not empty and was not written by pedenv (no {MARKER} file); "
-                         f"--overwrite only replaces pedenv's own output folders: empty it or choose another folder")
 
 
 def _poses_note(poses: dict | None, folder: RunFolder) -> dict[str, Any]:

@@ -11,9 +11,11 @@ about 7 cm, in front of the axis, towards wherever the person faces), else the n
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from pedenv.body import ANKLE, EYE
 from pedenv.errors import check_array
 from pedenv.records import Detections
 from pedenv.skeleton import CocoKeypoint as KP
@@ -117,3 +119,32 @@ def observations_of(detections: Detections, frame: int = 0, tracks: np.ndarray |
     share = np.array([EAR, EYE, NOSE])[np.maximum(group, 0)]  # in the order of _HEADS
     ids = np.full(len(kp), -1) if tracks is None else np.asarray(tracks, int)
     return Observations(feet[keep], heads[keep], share[keep], ids[keep], np.full(int(keep.sum()), frame))
+
+
+#: Pixel noise (1-sigma) and least feet-to-eyes span of :func:`rendered_observations`: the rendering
+#: the calibration benchmarks chose for the KITTI drives without images (a modelled perception, not fitted
+#: to a network; the span :data:`MIN_SPAN_PX` had before people under 40 px were left out).
+RENDER_NOISE_PX, RENDER_MIN_SPAN_PX = 2.0, 24.0
+
+
+def rendered_observations(people: Any, intrinsics: np.ndarray, rng: np.random.Generator
+                          ) -> tuple[Observations, np.ndarray]:
+    """Upright people rendered from labelled 3D boxes: each one's ankle and eye points (their anatomical
+    shares of the box's height, :mod:`pedenv.body`) projected with ``intrinsics`` (3, 3) and
+    :data:`RENDER_NOISE_PX` of Gaussian noise from ``rng``; kept where the box stands over 1 m in front
+    of the camera, spans :data:`RENDER_MIN_SPAN_PX` and is at most partly occluded.
+
+    people: labels with ``locations`` (N, 3) bottom-face centres, camera frame (x right, y down, z
+    forward), ``dimensions`` (N, 3) with the height first, ``occluded``, ``track_id`` and ``frame``
+    (N,) (:class:`pedenv.datasets.kitti_files.KittiLabels`). Returns the observations and the (N,) mask
+    of the people kept."""
+    bottom, tall = people.locations, people.dimensions[:, 0]
+    feet, heads = (np.c_[bottom[:, 0], bottom[:, 1] - share * tall, bottom[:, 2]] @ intrinsics.T
+                   for share in (ANKLE, EYE))
+    feet, heads = feet[:, :2] / feet[:, 2:], heads[:, :2] / heads[:, 2:]
+    feet = feet + rng.normal(0, RENDER_NOISE_PX, feet.shape)
+    heads = heads + rng.normal(0, RENDER_NOISE_PX, heads.shape)
+    seen = (bottom[:, 2] > 1.0) & (feet[:, 1] - heads[:, 1] > RENDER_MIN_SPAN_PX) & (people.occluded <= 1)
+    obs = Observations(feet[seen], heads[seen], np.full(int(seen.sum()), EYE), people.track_id[seen],
+                       people.frame[seen])
+    return obs, seen

@@ -115,6 +115,10 @@ def _check_projection(path: Path, line: int, p: np.ndarray) -> None:
                          f"(at most {MAX_CAMERA_OFFSET_M:g})")
 
 
+#: The labelled types that stand on the ground, whose boxes' bottoms give the ground's plane.
+SOLID_TYPES = ("Pedestrian", "Car", "Van", "Cyclist", "Truck")
+
+
 @dataclass(frozen=True)
 class KittiLabels(RowTable):
     """KITTI object labels, one row per object (N rows).
@@ -143,6 +147,15 @@ class KittiLabels(RowTable):
     def of_type(self, *types: str) -> KittiLabels:
         """The rows whose type is one of ``types`` (e.g. ``"Pedestrian"``, ``"DontCare"``)."""
         return self.take(np.isin(self.types, types))
+
+    def camera_over_ground(self) -> tuple[float, float, float]:
+        """(height m, tilt rad, roll rad) of the camera over the plane fitted (least squares) to the
+        bottom-face centres of every labelled object that stands on the ground (:data:`SOLID_TYPES`),
+        the rectified camera frame's x right, y down, z forward: where KITTI's labels put the ground."""
+        loc = self.locations[np.isin(self.types, SOLID_TYPES)]
+        a = np.c_[np.ones(len(loc)), loc[:, 2], loc[:, 0]]
+        h, slope_z, slope_x = np.linalg.lstsq(a, loc[:, 1], rcond=None)[0]
+        return float(h), float(np.arctan(-slope_z)), float(np.arctan(slope_x))
 
 
 def read_labels(path: str | Path) -> KittiLabels:

@@ -21,7 +21,8 @@ from pathlib import Path
 from pedenv.errors import InputError
 from pedenv.paths import MARKER, check_path, is_utf8, writable_file
 
-__all__ = ["MARKER", "check_output_file", "glob_escape", "holds_files", "prepare_output_dir", "writable_file"]
+__all__ = ["MARKER", "check_output_file", "glob_escape", "holds_files", "prepare_output_dir", "refuse_output_dir",
+           "writable_file"]
 
 
 def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: str = "pedenv") -> Path:
@@ -30,6 +31,21 @@ def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: st
     Raises InputError if ``path`` is a file, lies under a file, is not writable, or is a
     non-empty folder and ``overwrite`` is off (or it is on but pedenv did not write the folder).
     """
+    path = refuse_output_dir(path, overwrite=overwrite)
+    if holds_files(path):
+        _clear(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        (path / MARKER).write_text(f"written by {command}; --overwrite may delete this folder's contents\n")
+    except OSError as exc:
+        raise InputError(f"output folder {path} cannot be written: {exc.strerror or exc}") from None
+    return path
+
+
+def refuse_output_dir(path: str | Path, *, overwrite: bool = False) -> Path:
+    """``path`` as :func:`prepare_output_dir` takes it, without touching it. Raises InputError if it is
+    a file, lies under a file, or is a non-empty folder and ``overwrite`` is off (or it is on but
+    pedenv did not write the folder)."""
     path = check_path(path, "output folder")
     if path.exists() and not path.is_dir():
         raise InputError(f"output folder {path} is an existing file; choose a folder")
@@ -45,12 +61,6 @@ def prepare_output_dir(path: str | Path, *, overwrite: bool = False, command: st
                 f"output folder {path} is not empty and was not written by pedenv (no {MARKER} file); "
                 f"--overwrite only replaces pedenv's own output folders: empty it or choose another folder"
             )
-        _clear(path)
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        (path / MARKER).write_text(f"written by {command}; --overwrite may delete this folder's contents\n")
-    except OSError as exc:
-        raise InputError(f"output folder {path} cannot be written: {exc.strerror or exc}") from None
     return path
 
 
