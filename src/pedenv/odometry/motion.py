@@ -39,10 +39,14 @@ MIN_PARALLAX_PX = 0.5
 #: Median flow, pixels, below which an essential matrix that finds no motion means too little
 #: baseline yet, not a bad image (on the rendered road it fails up to about 1.1 px of flow).
 MIN_BASELINE_FLOW_PX = 2.0
-#: The essential matrix's robust fit (OpenCV's USAC_ACCURATE: RANSAC with local optimisation, which
-#: on the rendered road gives the direction of travel to about 0.1 deg where plain RANSAC's best
-#: five-point sample was 1-2 deg off): the largest distance of a track from its epipolar line,
-#: pixels, and the confidence (OpenCV's defaults).
+#: The essential matrix's robust fit (:data:`ESSENTIAL_METHOD`) and its tolerance: the largest distance of a
+#: track from its epipolar line, pixels, and the confidence (OpenCV's defaults).
+#: OpenCV's USAC_DEFAULT: RANSAC with local optimisation (LO-RANSAC), which on the rendered road gives the
+#: direction of travel to about 0.1 deg where plain RANSAC's best five-point sample was 1-2 deg off. USAC_ACCURATE
+#: (graph-cut local optimisation) gave the same inliers, pose and figures on KITTI raw 0002, the tracking samples
+#: and the rendered roads at 3.5x the cost (frames 3-4, 692 tracks, one OpenCV thread: 5.0 against 1.4 ms;
+#: benchmarks/visual_odometry.py, tests/odometry/test_motion.py).
+ESSENTIAL_METHOD = cv2.USAC_DEFAULT
 EPIPOLAR_TOLERANCE_PX = 1.0
 RANSAC_CONFIDENCE = 0.999
 #: Largest angle, degrees, between the motion from matched descriptors and the vehicle's forward axis:
@@ -179,7 +183,7 @@ def _essential(p0: np.ndarray, p1: np.ndarray, k: np.ndarray) -> tuple[int, np.n
     """(inliers, rotation (3, 3), unit direction (3,), which tracks are inliers (N,) bool) of the essential
     matrix between the tracks ``p0`` -> ``p1`` (N, 2) pixels (USAC, then its pose with the most tracks in front,
     :func:`pose_in_front`); 0 inliers when none."""
-    essential, mask = cv2.findEssentialMat(p0, p1, k, method=cv2.USAC_ACCURATE, prob=RANSAC_CONFIDENCE,
+    essential, mask = cv2.findEssentialMat(p0, p1, k, method=ESSENTIAL_METHOD, prob=RANSAC_CONFIDENCE,
                                            threshold=EPIPOLAR_TOLERANCE_PX)
     if essential is None or essential.shape[0] < 3:
         return 0, np.eye(3), np.zeros(3), np.zeros(len(p0), bool)
