@@ -4,12 +4,18 @@ when the backward flow returns to the start (pure functions)."""
 
 from __future__ import annotations
 
+from operator import attrgetter
+
 import cv2
 import numpy as np
 
 #: FAST's contrast threshold, grey levels (OpenCV's default, 10): absolute, so a dark or
 #: flat image yields few corners instead of corners in its noise.
 FAST_THRESHOLD = 10
+#: More than the largest FAST score (a grey-level difference, below 256): a corner's sort key is its cell
+#: times this less its score, so that one sort puts each cell's corners strongest first (as sorting on the
+#: two keys did, in 0.5 against 0.8 ms for the 12866 corners of a KITTI raw frame).
+FAST_SCORE_SPAN = 1024
 #: Corners kept per cell of a :data:`GRID_CELLS` grid (strongest first), so that the road,
 #: with weaker corners than trees and signs, keeps its share of tracks. (Four a cell cost half
 #: as much but took the rendered road's distance 2.5 % short, beyond its 2 % test.)
@@ -94,11 +100,12 @@ def ranked_corners(gray: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.n
     if not points:
         return np.empty((0, 2), np.float32), np.empty(0, int)
     xy = np.asarray(cv2.KeyPoint.convert(points), np.float32).reshape(-1, 2)
-    strength = np.fromiter((p.response for p in points), np.float64, len(points))
+    strength = np.fromiter(map(attrgetter("response"), points), np.float64, len(points))
     rows, cols = GRID_CELLS
-    cell = (np.minimum(xy[:, 1] * rows // gray.shape[0], rows - 1) * cols
-            + np.minimum(xy[:, 0] * cols // gray.shape[1], cols - 1)).astype(int)
-    order = np.lexsort((-strength, cell))
+    pixel = xy.astype(np.int64)  # FAST's corners lie on whole pixels
+    cell = np.minimum(pixel[:, 1] * rows // gray.shape[0], rows - 1) * cols \
+        + np.minimum(pixel[:, 0] * cols // gray.shape[1], cols - 1)
+    order = np.argsort(cell * FAST_SCORE_SPAN - strength, kind="stable")  # by cell, strongest first
     rank = np.arange(len(order)) - np.searchsorted(cell[order], cell[order])
     order, rank = order[rank < CORNERS_PER_CELL], rank[rank < CORNERS_PER_CELL]
     by_rank = np.argsort(rank, kind="stable")
