@@ -55,3 +55,22 @@ def test_a_timestamp_out_of_order_is_one_line():
     stream.add(render(tex, vehicle_pose(0.0, 0.0, 0.0), mount), 1.0, where="a.png")
     with pytest.raises(InputError, match=r"^b\.png: timestamp 0\.500000 s is not after the previous frame's 1\.0+ s"):
         stream.add(render(tex, vehicle_pose(0.9, 0.0, 0.0), mount), 0.5, where="b.png")
+
+
+def test_a_step_without_the_road_takes_its_neighbours_speed():
+    # steps of 1 m in 0.1 s and 3 m in 0.1 s around a step of 0.2 s whose road gave no length: 20 m/s between them
+    # (fill_lengths, as the whole recording's estimate fills it), never changed once handed on
+    from pedenv.odometry.motion import Step
+
+    mount = cam_to_vehicle()
+    stream = OdometryStream(K, mount)
+    forward = -mount[:3, :3].T @ np.array([1.0, 0.0, 0.0])  # the car moving forward: the world moves back
+    stream.timestamps, stream.key_frames = [0.0, 0.1, 0.3, 0.4], [0, 1, 2, 3]
+    stream.steps = [Step(np.eye(3), forward, 1.0, 100, 100, 5.0, guided=True),
+                    Step(np.eye(3), forward, float("nan"), 100, 100, 5.0),  # no road tracks: no length
+                    Step(np.eye(3), forward, 3.0, 100, 100, 5.0, guided=True)]
+    poses = stream.finish()
+    np.testing.assert_allclose(stream.lengths, [1.0, 4.0, 3.0])
+    assert stream.filled == [False, True, False]
+    np.testing.assert_allclose([p[0, 3] for p in poses], [0.0, 1.0, 5.0, 8.0], atol=1e-9)
+    assert stream.report()["frames_without_road_scale"] == [2]

@@ -9,7 +9,7 @@ import numpy as np
 
 from pedenv.errors import InputError, check_array
 from pedenv.geometry import invert_transform, rotation_to_quaternion
-from pedenv.odometry.motion import Step, estimate_step, fill_lengths, road_length
+from pedenv.odometry.motion import Step, estimate_step, fill_lengths, pooled_pitch, road_length
 from pedenv.recordings.ego_poses import EgoTrajectory
 
 #: The ``source`` of an estimated trajectory (what its InputErrors and ``run.json`` name).
@@ -89,8 +89,7 @@ class VisualOdometry:
     def _settle(self) -> None:
         """Give the steps not yet settled their pooled pitch's length and let their road tracks go."""
         pool = self.steps[self._settled:]
-        pitches = [s.pitch for s in pool if s.moved and np.isfinite(s.length) and np.isfinite(s.pitch)]
-        pitch = float(np.median(pitches)) if pitches else None
+        pitch = pooled_pitch(pool)
         self.steps[self._settled:] = [
             dataclasses.replace(s, length=road_length(s, self.intrinsics, self.cam_to_vehicle, pitch),
                                 road=(np.empty((0, 2)), np.empty((0, 2)))) for s in pool]

@@ -240,6 +240,15 @@ def _require(count: int, needed: int, what: str, where: str) -> None:
                          f"frame, {needed} needed; give the ego poses (--ego-poses)")
 
 
+def pooled_pitch(pool: list[Step]) -> float | None:
+    """The road's pitch, radians, pooled over the steps ``pool``: the median of the moving steps' own fits
+    (:func:`~pedenv.odometry.ground.fit_road`; one step's pitch and length trade off against each other); None
+    without any. Both :class:`~pedenv.odometry.estimator.VisualOdometry` and
+    :class:`~pedenv.odometry.stream.OdometryStream` refit their steps' lengths with it (:func:`road_length`)."""
+    pitches = [s.pitch for s in pool if s.moved and np.isfinite(s.length) and np.isfinite(s.pitch)]
+    return float(np.median(pitches)) if pitches else None
+
+
 def fill_lengths(lengths: np.ndarray, durations: np.ndarray, where: str = "the recording") -> np.ndarray:
     """(S,) step lengths, metres, with each NaN (road not seen) replaced by the duration (S,) seconds
     times the speed interpolated from the nearest measured steps. InputError when no moving step

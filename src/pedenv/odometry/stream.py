@@ -23,7 +23,7 @@ import numpy as np
 from pedenv.errors import InputError, check_array
 from pedenv.geometry import rotation_to_quaternion
 from pedenv.odometry.estimator import ESTIMATED_SOURCE, PITCH_POOL_STEPS, chain_poses
-from pedenv.odometry.motion import Step, estimate_step, road_length
+from pedenv.odometry.motion import Step, estimate_step, fill_lengths, pooled_pitch, road_length
 from pedenv.recordings.ego_poses import EgoTrajectory
 
 #: Frames a pose lags behind the newest frame estimated: the steps of these frames join the pitch's pool
@@ -134,12 +134,10 @@ class OdometryStream:
         while len(self.key_poses) <= key:
             s = len(self.key_poses) - 1  # the step ending at keyframe s + 1
             step, filled = self.steps[s], False
-            pool = self.steps[max(0, s + 1 - PITCH_POOL_STEPS):]
-            pitches = [p.pitch for p in pool if p.moved and np.isfinite(p.length) and np.isfinite(p.pitch)]
-            length = road_length(step, self.intrinsics, self.cam_to_vehicle,
-                                 float(np.median(pitches)) if pitches else None)
+            pitch = pooled_pitch(self.steps[max(0, s + 1 - PITCH_POOL_STEPS):])
+            length = road_length(step, self.intrinsics, self.cam_to_vehicle, pitch)
             if np.isnan(length):
-                length, filled = self._neighbours_speed(s) * self._duration(s), True
+                length, filled = self._neighbours_length(s), True
                 if np.isnan(length):
                     if final:
                         raise InputError(f"{where}: visual odometry saw no road ahead of the camera to give the "
@@ -156,16 +154,15 @@ class OdometryStream:
     def _duration(self, s: int) -> float:
         return self.timestamps[self.key_frames[s + 1]] - self.timestamps[self.key_frames[s]]
 
-    def _neighbours_speed(self, s: int) -> float:
-        """Step ``s``'s speed, m/s, interpolated from the measured moving steps known now (the final
-        lengths before it, the steps' own after it; the nearest one's beyond them); NaN without any."""
-        known = [(i, n) for i, n in enumerate(self.lengths) if n > 0 and not self.filled[i]]
-        known += [(i, p.length) for i, p in enumerate(self.steps) if i > s and p.length > 0]  # NaN compares False
-        if not known:
+    def _neighbours_length(self, s: int) -> float:
+        """Step ``s``'s length, metres, from the speed interpolated between the measured moving steps known now
+        (:func:`~pedenv.odometry.motion.fill_lengths` over the final lengths before it, those from the
+        neighbours' speed left out, and the steps' own after it); NaN without any."""
+        lengths = np.array([n if not filled else np.nan for n, filled in zip(self.lengths, self.filled)]
+                           + [np.nan] + [p.length for p in self.steps[s + 1:]])  # NaN: not measured
+        if not np.any(lengths > 0):  # NaN compares False
             return float("nan")
-        index, lengths = np.array(known).T
-        speeds = lengths / np.array([self._duration(int(i)) for i in index])
-        return float(np.interp(s, index, speeds))
+        return float(fill_lengths(lengths, np.array([self._duration(i) for i in range(len(lengths))]))[s])
 
     def trajectory(self) -> EgoTrajectory | None:
         """The poses handed on, one a frame (None before the first), source :data:`ESTIMATED_SOURCE`."""
