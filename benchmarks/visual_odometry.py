@@ -268,15 +268,19 @@ def cost(root: Path, runs: int) -> None:
             rows["given"].append((ms, after))
             print(f"cost run {i + 1}: estimated {rows['estimated'][-1][0]:.0f} ms a frame "
                   f"({rows['estimated'][-1][1]:.0f} after the first {COST_WARMUP_FRAMES}), given {ms:.0f} ms "
-                  f"({after:.0f}); estimation {cpu[-1]:.1f} ms of the reader thread's CPU a frame; "
+                  f"({after:.0f}): {100 * (rows['estimated'][-1][1] / after - 1):+.1f} % after the first "
+                  f"{COST_WARMUP_FRAMES}; estimation {cpu[-1]:.1f} ms of the reader thread's CPU a frame; "
                   f"load {os.getloadavg()[0]:.1f}")
         est, giv = (statistics.median(r[0] for r in rows[k]) for k in ("estimated", "given"))
         est_after, giv_after = (statistics.median(r[1] for r in rows[k]) for k in ("estimated", "given"))
         print(f"cost: {COST_FRAMES} frames of KITTI raw 0002 (1242x375), {runs} runs each, medians: estimated "
               f"{est:.0f} against given {giv:.0f} ms a frame ({100 * (est / giv - 1):+.1f} %), after the first "
               f"{COST_WARMUP_FRAMES} frames {est_after:.0f} against {giv_after:.0f} ms "
-              f"({100 * (est_after / giv_after - 1):+.1f} %); estimation {statistics.median(cpu):.1f} ms of the reader "
-              f"thread's CPU a frame (median; {min(cpu):.1f}-{max(cpu):.1f})")
+              f"({100 * (est_after / giv_after - 1):+.1f} %; the pairs' median "
+              f"{100 * statistics.median(e[1] / g[1] - 1 for e, g in zip(rows['estimated'], rows['given'])):+.1f} %); "
+              f"estimation {statistics.median(cpu):.1f} ms of the reader thread's CPU a frame (median; "
+              f"{min(cpu):.1f}-{max(cpu):.1f}), {100 * statistics.median(cpu) / giv_after:.0f} % of a frame's time "
+              f"with the poses given")
 
 
 def main() -> None:
