@@ -237,18 +237,21 @@ def _cost_recording(root: Path, folder: Path) -> tuple[Path, Path]:
     return images, calib
 
 
-def _cost_run(images: Path, calib: Path, out: Path, ego_poses: Path | None) -> tuple[float, float, dict]:
+def _cost_run(images: Path, calib: Path, out: Path, ego_poses: Path | None) -> tuple[float, float, float, dict]:
     """One ``pedenv run --images images --calibration calib --fps 10 [--ego-poses ego_poses]`` into ``out``:
-    (ms a frame of the frame loop, the same after :data:`COST_WARMUP_FRAMES`, run.json's ``ego_poses``)."""
+    (ms a frame of the frame loop, the same after :data:`COST_WARMUP_FRAMES`, ms of the process's CPU (all its
+    threads) a frame, run.json's ``ego_poses``)."""
     from pedenv.apps.options import OutputOptions, RecordingSource
     from pedenv.apps.run import run_recording
 
     written: list[float] = []
+    cpu = time.process_time()
     summary = run_recording(RecordingSource(images=images, calibration=calib, ego_poses=ego_poses, fps=10.0),
                             OutputOptions(out), progress=lambda *_: written.append(time.perf_counter()))
+    cpu = time.process_time() - cpu
+    frames, after = summary["frames_done"], np.diff(written[COST_WARMUP_FRAMES - 1:])
     wall = summary["speed"]["wall_s"]
-    after = np.diff(written[COST_WARMUP_FRAMES - 1:])
-    return 1e3 * wall / summary["frames_done"], 1e3 * float(after.mean()), summary["ego_poses"]
+    return 1e3 * wall / frames, 1e3 * float(after.mean()), 1e3 * cpu / frames, summary["ego_poses"]
 
 
 def cost(root: Path, runs: int) -> None:
@@ -258,21 +261,23 @@ def cost(root: Path, runs: int) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         images, calib = _cost_recording(root, folder)
-        rows: dict[str, list[tuple[float, float]]] = {"estimated": [], "given": []}
+        rows: dict[str, list[tuple[float, float, float]]] = {"estimated": [], "given": []}
         cpu: list[float] = []
         for i in range(runs):
-            ms, after, poses = _cost_run(images, calib, folder / f"estimated{i}", None)
-            rows["estimated"].append((ms, after))
+            *times, poses = _cost_run(images, calib, folder / f"estimated{i}", None)
+            rows["estimated"].append((times[0], times[1], times[2]))
             cpu.append(1e3 * poses["estimate_cpu_s"] / poses["frames"])
-            ms, after, _ = _cost_run(images, calib, folder / f"given{i}", folder / "estimated0/ego_poses_estimated.csv")
-            rows["given"].append((ms, after))
-            print(f"cost run {i + 1}: estimated {rows['estimated'][-1][0]:.0f} ms a frame "
-                  f"({rows['estimated'][-1][1]:.0f} after the first {COST_WARMUP_FRAMES}), given {ms:.0f} ms "
-                  f"({after:.0f}): {100 * (rows['estimated'][-1][1] / after - 1):+.1f} % after the first "
-                  f"{COST_WARMUP_FRAMES}; estimation {cpu[-1]:.1f} ms of the reader thread's CPU a frame; "
-                  f"load {os.getloadavg()[0]:.1f}")
+            ms, after, process, _ = _cost_run(images, calib, folder / f"given{i}",
+                                              folder / "estimated0/ego_poses_estimated.csv")
+            rows["given"].append((ms, after, process))
+            print(f"cost run {i + 1}: estimated {times[0]:.0f} ms a frame ({times[1]:.0f} after the first "
+                  f"{COST_WARMUP_FRAMES}), given {ms:.0f} ms ({after:.0f}): {100 * (times[1] / after - 1):+.1f} % "
+                  f"after the first {COST_WARMUP_FRAMES}; the process's CPU {times[2]:.0f} against {process:.0f} ms "
+                  f"a frame ({100 * (times[2] / process - 1):+.1f} %); estimation {cpu[-1]:.1f} ms of the reader "
+                  f"thread's CPU a frame; load {os.getloadavg()[0]:.1f}")
         est, giv = (statistics.median(r[0] for r in rows[k]) for k in ("estimated", "given"))
         est_after, giv_after = (statistics.median(r[1] for r in rows[k]) for k in ("estimated", "given"))
+        est_cpu, giv_cpu = (statistics.median(r[2] for r in rows[k]) for k in ("estimated", "given"))
         print(f"cost: {COST_FRAMES} frames of KITTI raw 0002 (1242x375), {runs} runs each, medians: estimated "
               f"{est:.0f} against given {giv:.0f} ms a frame ({100 * (est / giv - 1):+.1f} %), after the first "
               f"{COST_WARMUP_FRAMES} frames {est_after:.0f} against {giv_after:.0f} ms "
@@ -280,7 +285,8 @@ def cost(root: Path, runs: int) -> None:
               f"{100 * statistics.median(e[1] / g[1] - 1 for e, g in zip(rows['estimated'], rows['given'])):+.1f} %); "
               f"estimation {statistics.median(cpu):.1f} ms of the reader thread's CPU a frame (median; "
               f"{min(cpu):.1f}-{max(cpu):.1f}), {100 * statistics.median(cpu) / giv_after:.0f} % of a frame's time "
-              f"with the poses given")
+              f"with the poses given; the process's CPU {est_cpu:.0f} against {giv_cpu:.0f} ms a frame "
+              f"({100 * (est_cpu / giv_cpu - 1):+.1f} %)")
 
 
 def main() -> None:
