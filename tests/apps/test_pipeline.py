@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
+from pedenv.apps.pipeline import DECODE_AHEAD, PipelineConfig, PipelineStats, decoded_ahead, run_frames
 from pedenv.errors import InputError
 from pedenv.records import Camera, EgoPose, Frame
 
@@ -53,6 +53,41 @@ def test_a_bad_frame_stops_the_run_after_every_frame_before_it_is_written():
     with pytest.raises(InputError, match=r"f05\.png: frame 5 cannot be read"):
         run_frames(_frames(np.arange(10) * 0.1, fail_at=5), lambda f: f.index, written.append, stats=stats)
     assert written == [0, 1, 2, 3, 4] and stats.written == 5
+
+
+def test_frames_decoded_ahead_come_in_order_from_their_own_thread_and_a_bad_one_after_the_rest():
+    threads = []
+
+    def frames():
+        for frame in _frames(np.arange(8) * 0.1, fail_at=6):
+            threads.append(threading.current_thread().name)
+            yield frame
+
+    taken = []
+    with pytest.raises(InputError, match=r"f06\.png: frame 6 cannot be read"):
+        for frame in decoded_ahead(frames()):
+            taken.append(frame.index)
+    assert taken == [0, 1, 2, 3, 4, 5]
+    assert set(threads) == {"pedenv-decoder"}
+
+
+def test_closing_the_frames_decoded_ahead_stops_their_thread_and_closes_the_source():
+    closed, read = threading.Event(), []
+
+    def frames():
+        try:
+            for frame in _frames(np.arange(100) * 0.1):
+                read.append(frame.index)
+                yield frame
+        finally:
+            closed.set()  # a video's capture released
+
+    ahead = decoded_ahead(frames())
+    assert next(ahead).index == 0
+    ahead.close()
+    assert closed.wait(5.0)
+    assert not any(t.name == "pedenv-decoder" for t in threading.enumerate())
+    assert len(read) <= 2 + DECODE_AHEAD  # the frame taken, those queued, the one waiting to be put
 
 
 def test_ctrl_c_in_the_network_leaves_every_computed_frame_written():

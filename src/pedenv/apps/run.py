@@ -15,7 +15,7 @@ import numpy as np
 from pedenv.apps.calibrate import SelfCalibration, estimate_for_source, needs_estimate
 from pedenv.apps.options import OutputOptions, PoseOptions, RecordingSource, load_config
 from pedenv.apps.output_safety import DiskGuard, RunFolder, open_run_folder
-from pedenv.apps.pipeline import PipelineConfig, PipelineStats, run_frames
+from pedenv.apps.pipeline import PipelineConfig, PipelineStats, decoded_ahead, run_frames
 from pedenv.apps.run_outputs import (
     OverlayWriter,
     check_run_paths,
@@ -97,7 +97,7 @@ def run_recording(source: RecordingSource, output: OutputOptions | str | Path, p
         with writer, sinks, outputs.guard:
             outputs.writer, outputs.sinks = writer, sinks
             step, write, finish = _calibration_stages(estimated, frames.process, outputs.write)
-            run_frames(_posed(rec, stream), step, write, config=pipe, done=outputs.done, stats=stats)
+            run_frames(_posed(rec, stream, pipe.nice), step, write, config=pipe, done=outputs.done, stats=stats)
         finish(out, summary)
         _check_ended_early(rec, stats, summary)
         finished = True
@@ -156,11 +156,14 @@ def _open_run(source: RecordingSource, output: OutputOptions, pose: PoseOptions,
     return rec, backend, folder, (poses, stream)
 
 
-def _posed(rec: Recording | BagRecording, stream: OdometryStream | None) -> Iterable[Frame]:
+def _posed(rec: Recording | BagRecording, stream: OdometryStream | None, nice: int | None) -> Iterable[Frame]:
     """The frames the reader hands on: the recording's, each with its ego pose from the visual odometry's
     stage where it estimates them (run in the reader's thread, beside the network:
-    :func:`pedenv.odometry.recording.posed_frames`)."""
-    return rec.frames() if stream is None else posed_frames(rec.frames(), stream, rec.name)
+    :func:`pedenv.odometry.recording.posed_frames`, the frames decoded ahead of it in a thread of their own,
+    niced by ``nice``: :func:`pedenv.apps.pipeline.decoded_ahead`)."""
+    if stream is None:
+        return rec.frames()
+    return posed_frames(decoded_ahead(rec.frames(), nice), stream, rec.name)
 
 
 def _estimated_poses(stream: OdometryStream | None, folder: RunFolder, summary: dict) -> None:
