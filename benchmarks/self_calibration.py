@@ -298,7 +298,7 @@ def vtest(video: Path, frames: int) -> None:
     if not video.is_file():
         print(f"vtest: {video} not found (apt-get install opencv-doc)")
         return
-    images = [image for _, image in warmup_frames(None, video, frames, seconds=float("inf"))]
+    images = [image for _, image in warmup_frames(None, video, frames, seconds=1e6)]
     obs = observe_frames(images, onnx_far())
     size = (images[0].shape[1], images[0].shape[0])
     half = len(images) // 2
