@@ -26,7 +26,9 @@
   (measured by ``--only road``): people only, road only, people and road, people, road and scale,
   against the plane of the labelled boxes' bottoms; then the fused method's positions
   (detector model ``yolo11n-pose-far-kitti``, the dataset's ego poses) with the true mounting
-  (KITTI's camera 1.65 m up, level) and with the estimate, side by side.
+  (KITTI's camera 1.65 m up, level) and with the estimate, side by side, and with the estimate given
+  the data set's lever arm (its camera's place in the vehicle frame its ego poses move, which the
+  estimate puts on the road under the camera).
 """
 
 from __future__ import annotations
