@@ -1,13 +1,20 @@
 """Self-calibration: the camera estimated from the people it sees, against the truth or a reference.
 
     PYTHONPATH=src python benchmarks/self_calibration.py [--samples ../shared/samples/real]
-        [--only synthetic|mot17|vtest|vehicle] [--video vtest.avi] [--frames 800]
+        [--only synthetic|seeds|refinement|mot17|vtest|vehicle|sequences|cost] [--seeds 60]
+        [--video vtest.avi] [--frames 800]
 
 - synthetic: the built-in ``static-plaza`` scene (seed 0, 150 frames, a camera 6 m up, 20 deg
   down, 64.5 deg field of view), skeletons from the detector model (``yolo11n-pose-far``
   profile) and exact skeletons: the estimate against the truth, then the positions of the fused
   method with the true and with the estimated camera side by side, and with the estimate's
   uncertainty added to the covariances as ``pedenv run`` writes them.
+- seeds: the same scene over ``--seeds`` seeds (0..n-1, 60 by default, about 4 min of a core;
+  detector model): per seed the estimate's errors in its stated 1-sigma and the positions with the
+  estimate (its uncertainty added) against those with the true camera; pooled over the seeds, the
+  normalised errors' RMS (honest: about 1) and the coverage (one calibration error is shared by a
+  scene's positions, so only many scenes show whether the covariances are calibrated), also
+  without the crowd's mean-height term, which a synthetic crowd drawn around the prior's mean lacks.
 - refinement: the estimate as ``pedenv run`` refines it on a 60 s synthetic scene (first 200
   frames, then more), against the truth, and the true ground points cut with it again.
 - mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
@@ -86,7 +93,7 @@ def onnx_far():
     return create_detector("onnx", **backend_options("onnx", detection="far"))
 
 
-def coverage(frames, camera, spec, fused: dict, estimate=None) -> dict:
+def coverage(frames, camera, spec, fused: dict, estimate=None, details: bool = False) -> dict:
     """The fused method over ``frames`` seen by ``camera`` (skeletons from backend ``spec``): mean
     relative error and the share of errors within the 1- and 2-sigma ellipses, each estimate
     matched to the nearest truth whose box overlaps its box; ``estimate``: covariances widened by
@@ -114,7 +121,7 @@ def coverage(frames, camera, spec, fused: dict, estimate=None) -> dict:
             d2.append(float(err @ np.linalg.solve(p.covariances[i], err)))
     d2a = np.array(d2)
     return {"rel_error_pct": 100 * float(np.mean(rel)), "within_1sigma": 100 * float(np.mean(d2a <= 1.0)),
-            "within_2sigma": 100 * float(np.mean(d2a <= 4.0)), "count": len(d2)}
+            "within_2sigma": 100 * float(np.mean(d2a <= 4.0)), "count": len(d2), **({"d2": d2a} if details else {})}
 
 
 def synthetic() -> None:
@@ -146,6 +153,71 @@ def synthetic() -> None:
             m = coverage(scene.frames, camera, spec, fused, spread)
             print(f"  {'':34s} positions, {name:20s}: rel error {m['rel_error_pct']:5.2f} %  within 1/2 sigma "
                   f"{m['within_1sigma']:.1f} / {m['within_2sigma']:.1f} %  ({m['count']} pairs)")
+
+
+def seeds(count: int) -> None:
+    """The static scene over ``count`` seeds (0..count-1; 150 frames each, detector model): each seed's
+    calibration error in its stated 1-sigma, the fused method's positions with the estimate (its
+    uncertainty added, as ``pedenv run`` writes them) against those with the true camera, and the
+    coverage per seed and pooled (one calibration error is shared by a scene's positions: only many
+    scenes together can show whether the covariances are calibrated)."""
+    from pedenv.calibration.geometry import parameters_of
+    from pedenv.calibration.linking import BoxLinker
+    from pedenv.calibration.observations import Observations, observations_of
+    from pedenv.detection import create_detector
+    from pedenv.synthetic import generate_scenes
+
+    spec = "detector-model:yolo11n-pose-far"
+    print(f"static-plaza seeds 0-{count - 1} (150 frames each, {spec}): calibration error / its 1-sigma, positions "
+          "with the estimate (its uncertainty added) / with the true camera, coverage within 1 / 2 sigma")
+    z, ratios, pooled = [], [], {"true": [], "estimated": [], "estimated, no crowd offset": []}
+    for seed in range(count):
+        scene = generate_scenes(seed, ["static-plaza"])[0]
+        camera = scene.frames[0].camera
+        truth = np.array(parameters_of(camera))
+        backend, linker, parts = create_detector(spec), BoxLinker(), []
+        for frame in scene.frames:
+            det = backend(frame)
+            parts.append(observations_of(det, frame.index, linker(det.boxes)))
+        est = fit(Observations.concat(parts), (camera.width, camera.height), walking=True)
+        if isinstance(est, Exception):
+            print(f"  seed {seed}: refused: {est}")
+            continue
+        error = np.array([est.focal, est.height, est.tilt, est.roll]) - truth
+        z.append(error / est.std)
+        true = coverage(scene.frames, camera, spec, EXACT, details=True)
+        mine = coverage(scene.frames, est.camera(), spec, EXACT, est, details=True)
+        pooled["true"].append(true["d2"])
+        pooled["estimated"].append(mine["d2"])
+        pooled["estimated, no crowd offset"].append(coverage(scene.frames, est.camera(), spec, EXACT,
+                                                             without_crowd(est), details=True)["d2"])
+        ratios.append(mine["rel_error_pct"] / true["rel_error_pct"])
+        print(f"  seed {seed:2d}: f {100 * error[0] / truth[0]:+5.1f} % ({z[-1][0]:+.1f} sigma)  H "
+              f"{100 * error[1] / truth[1]:+5.1f} % ({z[-1][1]:+.1f})  tilt {np.degrees(error[2]):+.2f} deg "
+              f"({z[-1][2]:+.1f})  positions {mine['rel_error_pct']:.2f} / {true['rel_error_pct']:.2f} % "
+              f"({ratios[-1]:.2f}x)  within 1/2 sigma {mine['within_1sigma']:5.1f} / {mine['within_2sigma']:5.1f} % "
+              f"(true camera {true['within_1sigma']:.1f} / {true['within_2sigma']:.1f} %)")
+    if not z:
+        return
+    rms = np.sqrt(np.mean(np.square(z), axis=0))
+    print(f"  pooled over {len(z)} seeds: RMS of the errors in sigmas f {rms[0]:.2f}  H {rms[1]:.2f}  "
+          f"tilt {rms[2]:.2f}  roll {rms[3]:.2f} (honest: about 1); positions' ratio estimate / true median "
+          f"{np.median(ratios):.2f}, "
+          f"{np.sum(np.array(ratios) <= 1.5)} of {len(ratios)} within 1.5x")
+    for name, d2 in pooled.items():
+        d2a = np.concatenate(d2)
+        print(f"  pooled, {name:26s}: within 1/2 sigma {100 * np.mean(d2a <= 1):.1f} / "
+              f"{100 * np.mean(d2a <= 4):.1f} % ({len(d2a)} pairs; ideal 39.3 / 86.5 %)")
+
+
+def without_crowd(est):
+    """``est`` without its crowd's mean-height term (:data:`pedenv.calibration.fit.CROWD_MEAN_STD_M`):
+    the spread a synthetic crowd, drawn around the prior's mean, has."""
+    from pedenv.calibration.fit import CROWD_MEAN_STD_M, PERSON_HEIGHT_MEAN_M
+
+    cov = est.covariance.copy()
+    cov[1, 1] -= (est.height * CROWD_MEAN_STD_M / PERSON_HEIGHT_MEAN_M) ** 2
+    return dataclasses.replace(est, covariance=cov)
 
 
 def refinement() -> None:
@@ -226,7 +298,7 @@ def vtest(video: Path, frames: int) -> None:
     if not video.is_file():
         print(f"vtest: {video} not found (apt-get install opencv-doc)")
         return
-    images = [image for _, image in warmup_frames(None, video, frames, seconds=float("inf"))]
+    images = [image for _, image in warmup_frames(None, video, frames, seconds=1e6)]
     obs = observe_frames(images, onnx_far())
     size = (images[0].shape[1], images[0].shape[0])
     half = len(images) // 2
@@ -342,13 +414,16 @@ def cost() -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--samples", type=Path, default=DEFAULT_SAMPLES)
-    parser.add_argument("--only", choices=("synthetic", "refinement", "mot17", "vtest", "vehicle", "sequences",
+    parser.add_argument("--only", choices=("synthetic", "seeds", "refinement", "mot17", "vtest", "vehicle", "sequences",
                                            "cost"))
     parser.add_argument("--video", type=Path, default=DEFAULT_VIDEO)
+    parser.add_argument("--seeds", type=int, default=60, help="seeds: how many static scenes (seeds 0..n-1)")
     parser.add_argument("--frames", type=int, default=800, help="vtest: its first frames (all 795 by default)")
     args = parser.parse_args(argv)
     if args.only in (None, "synthetic"):
         synthetic()
+    if args.only in (None, "seeds"):
+        seeds(args.seeds)
     if args.only in (None, "refinement"):
         refinement()
     if args.only in (None, "mot17"):

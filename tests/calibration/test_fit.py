@@ -120,3 +120,19 @@ def test_geometry_round_trip() -> None:
     f, h, tilt, roll = parameters_of(camera)
     assert (f, h) == pytest.approx((1000.0, 4.0))
     assert np.degrees([tilt, roll]) == pytest.approx([15.0, -2.0])
+
+
+def test_the_stated_spread_widens_the_fits_own_and_holds_the_crowds_height(monkeypatch: pytest.MonkeyPatch) -> None:
+    import pedenv.calibration.refusals as refusals
+    from pedenv.calibration.fit import CROWD_MEAN_STD_M, FIT_STD_SCALE, PERSON_HEIGHT_MEAN_M
+
+    obs = _people(1266.4, 6.0, 20.0, n=1000)
+    est = estimate_camera(obs, (1600, 900))
+    crowd = est.height * CROWD_MEAN_STD_M / PERSON_HEIGHT_MEAN_M
+    assert crowd < est.std[1] < crowd * 1.3  # a thousand people: the crowd's mean height is most of it
+    own = est.std[0] / FIT_STD_SCALE  # the focal length has no crowd term
+    monkeypatch.setattr(refusals, "MAX_FOCAL_RELATIVE_STD", 1.2 * own / est.focal)  # below the stated 1-sigma
+    assert estimate_camera(obs, (1600, 900)).focal == pytest.approx(est.focal)  # the people fix it: kept
+    monkeypatch.setattr(refusals, "MAX_FOCAL_RELATIVE_STD", 0.8 * own / est.focal)
+    with pytest.raises(CalibrationRefused, match="too close to parallel"):
+        estimate_camera(obs, (1600, 900))

@@ -39,3 +39,22 @@ def test_a_vehicle_frame_turned_by_its_ego_pose_turns_the_spread() -> None:
     cov = widen_state(state, est, turned).pedestrians.covariances[0]
     assert np.sqrt(cov[1, 1]) == pytest.approx(0.2, rel=0.02)  # 20 m along the vehicle's x, now the world's y
     assert cov[0, 0] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_spread_matches_cameras_drawn_from_the_estimates_covariance() -> None:
+    from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics, project
+
+    cov = np.diag([12.0, 0.16, np.radians(0.15), np.radians(0.2)]) ** 2
+    cov[0, 1] = cov[1, 0] = 0.6 * 12.0 * 0.16  # a longer focal length goes with a higher camera
+    est = CameraEstimate(1266.4, 6.0, np.radians(20.0), np.radians(0.5), cov, (1600, 900), (800.0, 450.0), 10, 100,
+                         3.0)
+    points = np.array([[8.0, 3.0, 0.0], [25.0, -6.0, 0.0], [50.0, 10.0, 0.0]])
+    pixels = project(points, intrinsics(est.focal, est.centre), camera_rotation(est.tilt, est.roll), est.height)
+    draws = np.random.default_rng(0).multivariate_normal([est.focal, est.height, est.tilt, est.roll], cov, 4000)
+    cuts = np.array([ground_points(pixels, intrinsics(f, est.centre), camera_rotation(t, r), h)[:, :2]
+                     for f, h, t, r in draws])
+    for i, spread in enumerate(calibration_covariances(points, est)):
+        drawn = np.cov(cuts[:, i].T)
+        assert np.sqrt(np.diag(spread)) == pytest.approx(np.sqrt(np.diag(drawn)), rel=0.05)
+        assert spread[0, 1] / np.sqrt(spread[0, 0] * spread[1, 1]) == pytest.approx(
+            drawn[0, 1] / np.sqrt(drawn[0, 0] * drawn[1, 1]), abs=0.03)

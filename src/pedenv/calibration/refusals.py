@@ -45,7 +45,8 @@ def check_spread(obs: Observations, size: tuple[int, int]) -> None:
 
 
 def check_result(estimate: CameraEstimate, start: Start) -> None:
-    """Refuse a focal length or height the people do not fix."""
+    """Refuse a focal length or height the people do not fix: ``estimate``'s covariance is the fit's
+    own (before :data:`pedenv.calibration.fit.FIT_STD_SCALE` and the crowd's mean height widen it)."""
     f_std, h_std = estimate.std[0], estimate.std[1]
     if not estimate.focal_given and (start.focal is None or f_std > MAX_FOCAL_RELATIVE_STD * estimate.focal):
         raise CalibrationRefused(
