@@ -15,7 +15,7 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.sparse import lil_matrix
 
-from pedenv.body import ANKLE
+from pedenv.body import ANKLE, CROWD_MEAN_STD_M
 from pedenv.calibration.estimate import CameraEstimate
 from pedenv.calibration.geometry import camera_rotation, ground_points, intrinsics, project
 from pedenv.calibration.initial import closed_form
@@ -25,15 +25,6 @@ from pedenv.calibration.refusals import check_result, check_spread
 #: Prior of adult body height, metres (the fused method's ``person_height_mean_m`` and
 #: ``person_height_std_m``: 1.72 m, 0.09 m; the paper's refinement assumes 1.7 m).
 PERSON_HEIGHT_MEAN_M, PERSON_HEIGHT_STD_M = 1.72, 0.09
-#: How far the mean height of the people one camera sees may be off the prior, metres (beyond
-#: their own number's spread, which the per-track heights carry): it bounds the height's accuracy
-#: however many people pass. The labelled pedestrians' mean height (median box height per track)
-#: of the KITTI ``tracking_sequences`` drives with at least 5 of them: 1.58, 1.71, 1.69, 1.78,
-#: 1.85, 1.72 m (0004, 0011, 0013, 0015, 0016, 0017; 5-42 people), 0.090 m apart (1-sigma), of
-#: which their numbers' own spread (each drive's spread of heights over its count) is 0.037 m:
-#: 0.082, rounded (the fused method's road level counts the same, ``pedenv.localization.fused.
-#: road_level.CROWD_MEAN_STD_M``). The synthetic scenes draw every crowd around 1.72 m (no offset).
-CROWD_MEAN_STD_M = 0.08
 #: The fit's own 1-sigma (the clustered covariance) times this is its stated one: over 60
 #: ``static-plaza`` scenes (seeds 0-59, detector model, ``benchmarks/self_calibration.py --only
 #: seeds``) the errors of focal length, tilt and roll were 1.66, 1.26 and 1.46 times it (RMS of the

@@ -179,7 +179,7 @@ class OdometryStream:
         (the flow lost them), the lag and the time spent estimating (wall and CPU of the estimating thread,
         the decoding not counted: it is the frame loop's)."""
         frames = len(self.poses)
-        ends = [f for f in self.key_frames[1:len(self.lengths) + 1]]  # step i ends at keyframe i + 1
+        ends = self.key_frames[1:len(self.lengths) + 1]  # step i ends at keyframe i + 1
         steps = self.steps[:len(self.lengths)]
         return {
             "source": "estimated", "file": ESTIMATED_SOURCE, "frames": frames,

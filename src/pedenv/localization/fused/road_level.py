@@ -20,7 +20,7 @@ plane and keeps no level.
 
 The level rests on the people's mean height being the population's, and a scene's people may all
 be tall (the parked KITTI drive 0016, whose people average 1.85 m): however many are seen, their
-mean level is off by the crowd's mean height (:data:`CROWD_MEAN_STD_M`, :func:`crowd_floor`), so
+mean level is off by the crowd's mean height (:data:`pedenv.body.CROWD_MEAN_STD_M`, :func:`crowd_floor`), so
 it is fused with the prior with that floor in its variance (:meth:`RoadLevel.estimate`) and moves
 the plane only part of the way; the level's error from the people goes into the ground cue's
 per-person covariance (and so into its weight in the fusion and into the track heights learned
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from pedenv.body import CROWD_MEAN_STD_M
 from pedenv.localization.fused.body_height import along_variance
 from pedenv.localization.fused.cue import CueEstimate
 from pedenv.localization.fused.ground import ROAD_HEIGHT_STD_M
@@ -46,14 +47,6 @@ MEMORY_S = 10.0
 #: The level is kept within this many metres of the vehicle's plane (a step or a slope beyond
 #: is not one level under the scene's people).
 MAX_LEVEL_M = 0.5
-#: How far (metres, 1 sigma) the mean height of one scene's people may lie off the population's:
-#: the labelled pedestrians of the eight KITTI tracking drives average 1.58-1.86 m per drive
-#: (each track's mean box height, then the drive's mean over its tracks: sample spread 0.09 m,
-#: 0.07 m once the few-people drives' own sampling spread is taken out); the parked drive 0016's
-#: 19 people average 1.85 m. It is the same for all of a scene's people, so however many are
-#: seen, the level cannot tell a tall crowd from a raised ground better than this share of the
-#: camera's height (:func:`crowd_floor`).
-CROWD_MEAN_STD_M = 0.08
 
 
 class RoadLevel:
@@ -105,7 +98,7 @@ class RoadLevel:
 
 def crowd_floor(camera_height: float, mean_height: float) -> float:
     """Metres: how far the level may be off however many people are seen, the crowd's unknown
-    mean height (:data:`CROWD_MEAN_STD_M`) as a share of ``mean_height`` (metres) times the
+    mean height (:data:`pedenv.body.CROWD_MEAN_STD_M`) as a share of ``mean_height`` (metres) times the
     ``camera_height`` (metres above the plane)."""
     return float(camera_height) * CROWD_MEAN_STD_M / float(mean_height)
 
