@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from pedenv.apps.pipeline import DECODE_AHEAD, PipelineConfig, PipelineStats, decoded_ahead, run_frames
+from pedenv.apps.pipeline import BLAS_THREADS, DECODE_AHEAD, PipelineConfig, PipelineStats, decoded_ahead, run_frames
 from pedenv.errors import InputError
 from pedenv.records import Camera, EgoPose, Frame
 
@@ -45,6 +45,27 @@ def test_outputs_come_in_frame_order_whatever_each_stage_takes():
     assert (stats.taken, stats.written, stats.dropped) == (40, 40, 0) and len(stats.latencies_s) == 40
     summary = stats.to_dict()
     assert summary["frames_per_second"] > 0 and summary["latency_ms"]["p95"] >= summary["latency_ms"]["median"] > 0
+
+
+def _blas_threads() -> list[int]:
+    from threadpoolctl import threadpool_info
+
+    return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
+
+
+def test_numpys_blas_runs_one_thread_while_the_frames_run_and_its_own_count_again_after():
+    before = _blas_threads()
+    assert before, "numpy's BLAS is found (its wheels bundle OpenBLAS)"
+    seen = []
+
+    def step(frame):
+        seen.append((_blas_threads(), np.linalg.inv(np.eye(3) * (frame.index + 1))[0, 0]))
+        return frame.index
+
+    run_frames(_frames(np.arange(3) * 0.1), step, lambda _: None)
+    assert [threads for threads, _ in seen] == [[BLAS_THREADS] * len(before)] * 3
+    assert [round(x, 6) for _, x in seen] == [1.0, 0.5, round(1 / 3, 6)]
+    assert _blas_threads() == before
 
 
 def test_a_bad_frame_stops_the_run_after_every_frame_before_it_is_written():

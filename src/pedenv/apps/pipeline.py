@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from pedenv.errors import InputError
 from pedenv.records import Frame
@@ -51,6 +52,14 @@ class _End(enum.Enum):
 
 _END: Final = _End.END
 _POLL_S = 0.1  # how often a blocked stage looks whether the others have stopped
+#: BLAS threads while the frames run (numpy's OpenBLAS, or MKL; :func:`run_frames`). pedenv's linear algebra
+#: is on small matrices (3x3 intrinsics and rotations, the Kalman filters' few states, a road fit's few hundred
+#: points), which one thread does fastest; a BLAS pool only costs there: OpenBLAS's workers busy-wait after
+#: each call, so the 3x3 inverses of each frame's visual odometry kept one spinning a whole core beside the
+#: network. On 2 cores, KITTI raw 0002 through ``pedenv run`` (``benchmarks/visual_odometry.py --only cost``,
+#: medians of 5-6 runs each): with OpenBLAS's pool of 2 the odometry took the process's CPU +37 % and the
+#: time +17 % a frame; with one thread +16 % and +9 %.
+BLAS_THREADS = 1
 
 
 @dataclass(frozen=True)
@@ -242,9 +251,17 @@ def run_frames(frames: Iterable[Frame], step: Callable[[Frame], Any], write: Cal
     ``done(result)`` is called in the writer thread after ``write`` (a progress bar).
     ``stats``: filled as the run goes (also when it stops with an error); a new one if None.
     ``clock`` and ``sleep`` (seconds) pace ``realtime`` runs. Returns the :class:`PipelineStats`;
-    raises the first error of a stage once every finished result is written.
+    raises the first error of a stage once every finished result is written. numpy's BLAS runs
+    :data:`BLAS_THREADS` threads meanwhile (as it was again after).
     """
-    config = config or PipelineConfig()
+    with threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
+        return _run_frames(frames, step, write, config or PipelineConfig(), done, stats, clock, sleep)
+
+
+def _run_frames(frames: Iterable[Frame], step: Callable[[Frame], Any], write: Callable[[Any], None],
+                config: PipelineConfig, done: Callable[[Any], None], stats: PipelineStats | None,
+                clock: Callable[[], float], sleep: Callable[[float], None]) -> PipelineStats:
+    """:func:`run_frames`' loop."""
     stats = stats if stats is not None else PipelineStats()
     stop = threading.Event()
     inbox: queue.Queue[Frame | _Failure | _End] = queue.Queue(config.read_ahead)
