@@ -403,35 +403,29 @@ def compare_positions(frames, spec, est) -> None:
     """The fused method over ``frames()`` (skeletons from backend ``spec``: a name, or a function that
     makes the backend) with their own camera and with ``est``'s mounting: mean relative error (to the
     ego) and the share within 1 and 2 sigma. ``est`` puts the ego poses' origin on the road under the
-    camera; the last line gives it the data set's lever arm (the camera's place over the road in the
-    vehicle frame the ego poses move: KITTI's colour camera sits 6 cm left of it), which people and
-    road cannot show."""
+    camera; the last line gives it the data set's lever arm as a calibration's ``camera_position`` would (the
+    camera's place in the vehicle frame the ego poses move: KITTI's colour camera sits 6 cm left of it),
+    which people and road cannot show."""
     from pedenv.calibration.spread import widen_state
     from pedenv.config import Config
     from pedenv.detection import create_detector
     from pedenv.evaluation.matching import match_to_ground_truth
     from pedenv.model import PedestrianEnvironmentModel
-    from pedenv.records import Camera, EgoPose
 
     for label in ("true mounting", "estimated", "estimated, spread", "estimated, lever arm"):
         model = PedestrianEnvironmentModel(Config())
         backend = create_detector(spec) if isinstance(spec, str) else spec()
         rel, d2 = [], []
         for frame in frames():
-            ego = frame.ego
+            used = est
+            if label == "estimated, lever arm":  # the calibration's camera_position
+                used = dataclasses.replace(est, position=tuple(frame.camera.cam_to_vehicle[:2, 3]))
             if label != "true mounting":
-                camera = est.camera("vehicle")
-                if label == "estimated, lever arm":
-                    mount = camera.cam_to_vehicle.copy()
-                    mount[:2, 3] = frame.camera.cam_to_vehicle[:2, 3]
-                    camera = Camera(camera.intrinsics, camera.width, camera.height, mount, camera.mount)
-                    ego = EgoPose(ego.translation + ego.rotation @ (mount[:3, 3] * [1, 1, 0]),
-                                  ego.rotation)  # the estimate's frame: its origin under the camera
-                frame = dataclasses.replace(frame, camera=camera)
+                frame = dataclasses.replace(frame, camera=used.camera("vehicle"))
             frame = dataclasses.replace(frame, detections=backend(frame))
             state = model.update(frame)
             if label.startswith("estimated, "):
-                state = widen_state(state, est, ego)
+                state = widen_state(state, used, frame.ego)
             p, gt = state.pedestrians, frame.ground_truth
             match = match_to_ground_truth(p.boxes, p.positions[:, :2], gt.boxes, gt.positions[:, :2])
             for i in np.flatnonzero(match >= 0):

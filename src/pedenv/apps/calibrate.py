@@ -153,20 +153,24 @@ def body_of(backend_name: str) -> BodyModel:
 
 
 def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | None = None,
-                  road: TravelWatcher | None = None, static: bool = False) -> CameraEstimate:
+                  road: TravelWatcher | None = None, static: bool = False,
+                  position: tuple[float, float] = (0.0, 0.0)) -> CameraEstimate:
     """The camera fitted to the warm-up's people (``intrinsics`` (3, 3) pixels fix focal length
     and principal point when given); ``road``: a vehicle camera's travel directions seen during the
     warm-up, combined with the people (:func:`pedenv.calibration.vehicle.estimate_mounting`);
     ``static``: a fixed camera, whose tracks' ground points give each walker's direction of travel
-    (:func:`~pedenv.calibration.fit.estimate_camera` ``walking``)."""
+    (:func:`~pedenv.calibration.fit.estimate_camera` ``walking``); ``position``: a vehicle camera's
+    place in the vehicle frame (``camera_position``, :attr:`CameraEstimate.position`)."""
     size = (warmup.image.shape[1], warmup.image.shape[0])
     focal = None if intrinsics is None else float(intrinsics[0, 0])
     centre = None if intrinsics is None else (float(intrinsics[0, 2]), float(intrinsics[1, 2]))
     if road is not None and focal is not None:
-        return estimate_mounting(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
-                                 road=road.cue(), scale=road.scale())
-    return estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
-                           walking=static)
+        estimate = estimate_mounting(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
+                                     road=road.cue(), scale=road.scale())
+    else:
+        estimate = estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
+                                   walking=static)
+    return dataclasses.replace(estimate, position=position) if any(position) else estimate
 
 
 def road_watcher(intrinsics: np.ndarray | None, mount: str,
@@ -241,17 +245,17 @@ def calibrate(*, output: str | Path, source: RecordingSource, backend: PoseBacke
     (one line: what could not be estimated and what to give instead) before ``output`` is touched.
     """
     from pedenv.outputs.output_dir import prepare_output_dir
-    from pedenv.recordings.footage import load_intrinsics
+    from pedenv.recordings.footage import load_camera_position, load_intrinsics
 
     images, video, calibration, static = source.images, source.video, source.calibration, source.static
     if (images is None) == (video is None):
         raise InputError("give exactly one of an image folder (--images) or a video (--video)")
     if video is not None and not Path(video).is_file():
         raise InputError(f"{video}: video file not found")
-    k, size = None, None
+    k, size, position = None, None, (0.0, 0.0)
     if calibration is not None:
         width, height, k = load_intrinsics(calibration)
-        size = (width, height)
+        size, position = (width, height), load_camera_position(calibration, static)
     ego = None if static else ego_lengths(source.ego_poses, images, video, source.fps, source.start_time)
     road = road_watcher(k, "static" if static else "vehicle", ego)
 
@@ -259,7 +263,7 @@ def calibrate(*, output: str | Path, source: RecordingSource, backend: PoseBacke
         if size is not None and (warmup.image.shape[1], warmup.image.shape[0]) != size:
             raise InputError(f"{calibration}: the calibration is {size[0]}x{size[1]} pixels, the frames "
                              f"{warmup.image.shape[1]}x{warmup.image.shape[0]}")
-        return estimate_from(warmup, backend.name, k, road, static)
+        return estimate_from(warmup, backend.name, k, road, static, position)
 
     warmup, estimate = warm_up(images, video, backend, fit, block_frames(video, frames), road)
     folder = prepare_output_dir(output, overwrite=overwrite, command="pedenv calibrate")
@@ -324,16 +328,18 @@ def self_calibrate(images: str | Path | None, video: str | Path | None, calibrat
     import tempfile
 
     from pedenv.calibration.files import calibration_mapping
-    from pedenv.recordings.footage import load_intrinsics
+    from pedenv.recordings.footage import load_camera_position, load_intrinsics
 
     k = load_intrinsics(calibration)[2] if calibration is not None else None
+    position = load_camera_position(calibration, mount == "static") if calibration is not None else (0.0, 0.0)
     if backend is None:
         from pedenv.detection import backend_options, create_detector
 
         backend = create_detector(backend_name, **backend_options(backend_name, None, None, "far", device=device))
     road = road_watcher(k, mount, ego_length)
     warmup, estimate = warm_up(images, video, backend, partial(estimate_from, backend_name=backend_name,
-                                                               intrinsics=k, road=road, static=mount == "static"),
+                                                               intrinsics=k, road=road, static=mount == "static",
+                                                               position=position),
                                block_frames(video, WARMUP_MAX_FRAMES), road)
     mapping = {key: v for key, v in calibration_mapping(estimate, mount).items()
                if key not in ("estimated", "uncertainty")}

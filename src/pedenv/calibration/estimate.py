@@ -24,6 +24,8 @@ class CameraEstimate:
     the fit used. rms_px: root mean square of the head points' misfit, pixels. road: where a
     vehicle camera's road cue was combined (:func:`pedenv.calibration.vehicle.combine`), its
     summary (the road's own pitch, the people's tilt, their disagreement in sigmas), else None.
+    position: a vehicle camera's (x, y) in the vehicle frame of the ego poses, metres, given
+    (``camera_position``), not estimated; the estimate's ground frame lies under the camera.
     """
 
     focal: float
@@ -38,6 +40,7 @@ class CameraEstimate:
     rms_px: float
     focal_given: bool = False
     road: dict | None = None
+    position: tuple[float, float] = (0.0, 0.0)
 
     @property
     def std(self) -> np.ndarray:
@@ -46,10 +49,14 @@ class CameraEstimate:
 
     def camera(self, mount: str = "static") -> Camera:
         """The estimate as a :class:`~pedenv.records.Camera` (``mount`` static, or vehicle: the
-        vehicle origin on the road under the camera, its x axis the camera's horizontal view)."""
+        vehicle origin on the road :attr:`position` behind and right of the camera (under it by
+        default), its x axis the camera's horizontal view)."""
         camera = static_camera(self.focal, self.height, self.tilt, self.roll, self.size, self.centre)
-        return camera if mount == "static" else Camera(camera.intrinsics, camera.width, camera.height,
-                                                       camera.cam_to_vehicle, mount)
+        if mount == "static":
+            return camera
+        mount_pose = camera.cam_to_vehicle.copy()
+        mount_pose[:2, 3] = self.position
+        return Camera(camera.intrinsics, camera.width, camera.height, mount_pose, mount)
 
     def uncertainty(self) -> dict[str, float]:
         """1-sigma of each parameter in the units of :data:`PARAMETERS`."""
@@ -63,4 +70,5 @@ class CameraEstimate:
                 "height_m": self.height, "tilt_deg": float(np.degrees(self.tilt)),
                 "roll_deg": float(np.degrees(self.roll)), "std": self.uncertainty(), "people": self.people,
                 "observations": self.observations, "rms_px": self.rms_px, "focal_given": self.focal_given,
-                **({"road": self.road} if self.road is not None else {})}
+                **({"road": self.road} if self.road is not None else {}),
+                **({"camera_position": list(self.position)} if any(self.position) else {})}

@@ -47,7 +47,8 @@ def calibration_covariances(positions: np.ndarray, estimate: CameraEstimate) -> 
 def widen_state(state: EnvironmentState, estimate: CameraEstimate, ego: EgoPose | None = None) -> EnvironmentState:
     """``state`` (an :class:`~pedenv.state.EnvironmentState`) with every pedestrian's covariance
     widened by :func:`calibration_covariances`; ``ego``: the frame's vehicle -> world pose (the
-    estimate's ground frame is the vehicle's; None: the world's)."""
+    estimate's ground frame is the vehicle's moved to under the camera, :attr:`CameraEstimate.position`;
+    None: the world's)."""
     people = state.pedestrians
     if not len(people):
         return state
@@ -55,6 +56,7 @@ def widen_state(state: EnvironmentState, estimate: CameraEstimate, ego: EgoPose 
         extra = calibration_covariances(people.positions, estimate)
     else:
         local = (people.positions - ego.translation) @ ego.rotation  # rows: R^T (p - t), the vehicle frame
+        local[:, :2] -= estimate.position  # the ground under the camera
         turn = ego.rotation[:2, :2]
         extra = turn @ calibration_covariances(local, estimate) @ turn.T
     covariances = people.covariances + extra

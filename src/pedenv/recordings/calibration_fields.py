@@ -28,6 +28,8 @@ CALIBRATION_FIELDS: dict[str, str] = {
     "cam_to_vehicle": "the camera's mounting (rotation, translation)",
     "mount": "vehicle (the default) or static (a camera fixed to the ground)",
     "fov_deg": "horizontal field of view, degrees, instead of the intrinsics (principal point at the centre)",
+    "camera_position": "[x, y] metres: where a vehicle camera whose mounting is estimated (no cam_to_vehicle) sits "
+                       "in the vehicle frame of the ego poses (x forward, y left; a tape measure's figures)",
     "estimated": "true: the camera was estimated from the people seen (pedenv calibrate), not measured",
     "uncertainty": "1-sigma of an estimated camera (focal_px, height_m, tilt_deg, roll_deg)",
 }
@@ -52,7 +54,11 @@ MAX_MOUNT_DISTANCE_M = 100.0
 
 
 def check_keys(data: dict, path: Path) -> None:
-    """InputError naming the file and the first unknown key of ``data`` (a calibration mapping)."""
+    """InputError naming the file and the first unknown key of ``data`` (a calibration mapping), or
+    ``camera_position`` beside ``cam_to_vehicle`` (both place the camera)."""
+    if "camera_position" in data and "cam_to_vehicle" in data:
+        raise InputError(f"{path}: calibration fields 'camera_position' and 'cam_to_vehicle' both place the camera: "
+                         "give cam_to_vehicle alone, or camera_position to have the rest of the mounting estimated")
     for key, value in data.items():
         if key not in CALIBRATION_FIELDS:
             raise InputError(f"{path}: unknown calibration field {str(key)!r}; fields: {', '.join(CALIBRATION_FIELDS)}")

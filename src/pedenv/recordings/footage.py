@@ -15,7 +15,9 @@ to the vehicle frame, x forward / y left / z up; translation in metres)::
 centre) may stand for the intrinsics. A file written by ``pedenv calibrate`` carries
 ``estimated: true`` and the estimate's 1-sigma ``uncertainty``; loading it warns. A file with
 the size and intrinsics (or ``fov_deg``) but no ``cam_to_vehicle`` is read by
-:func:`load_intrinsics`: the mounting is then estimated (:mod:`pedenv.calibration`).
+:func:`load_intrinsics`: the mounting is then estimated (:mod:`pedenv.calibration`); on a
+vehicle its ``camera_position: [x, y]`` (metres, :func:`load_camera_position`) says where the
+camera sits in the vehicle frame of the ego poses, which the people and the road cannot show.
 
 A ``static`` camera (an infrastructure camera, a parked vehicle) needs no ego poses: its
 vehicle frame stays where it is (the world frame), with ``cam_to_vehicle`` placing the
@@ -41,7 +43,7 @@ from pedenv.errors import InputError
 from pedenv.geometry import quaternion_to_rotation
 from pedenv.images import image_size, read_image_rgb
 from pedenv.paths import check_path
-from pedenv.recordings.calibration_fields import FOV_RANGE_DEG, check_keys, check_ranges
+from pedenv.recordings.calibration_fields import FOV_RANGE_DEG, MAX_MOUNT_DISTANCE_M, check_keys, check_ranges
 from pedenv.recordings.ego_poses import (  # noqa: F401 - the recordings' API in one place
     MAX_PLAUSIBLE_EGO_SPEED_MPS,
     EgoTrajectory,
@@ -111,6 +113,25 @@ def load_intrinsics(path: str | Path) -> tuple[int, int, np.ndarray | None]:
     if k is not None:
         check_ranges(path, k, float(width), float(height), np.zeros(3))
     return int(width), int(height), k
+
+
+def load_camera_position(path: str | Path, static: bool = False) -> tuple[float, float]:
+    """``camera_position`` (x forward, y left, metres) of a calibration YAML without ``cam_to_vehicle``:
+    where the camera sits in the vehicle frame of the ego poses; (0, 0) when the file gives none (the
+    vehicle origin then lies on the road under the camera). InputError for a static camera (``static``),
+    whose ground frame lies under it by definition."""
+    path = Path(path)
+    data = load_yaml(path, "the calibration")
+    if not isinstance(data, dict) or "camera_position" not in data:
+        return 0.0, 0.0
+    if static or data.get("mount") == "static":
+        raise InputError(f"{path}: calibration field 'camera_position' places a vehicle camera on its vehicle; "
+                         "a static camera's world lies on the ground under it")
+    x, y = _numbers(data["camera_position"], "camera_position", path, (2,))
+    if np.hypot(x, y) > MAX_MOUNT_DISTANCE_M:
+        raise InputError(f"{path}: calibration field 'camera_position' must be within {MAX_MOUNT_DISTANCE_M:g} m of "
+                         f"the vehicle origin, got [{x:g}, {y:g}]")
+    return float(x), float(y)
 
 
 def has_mounting(path: str | Path) -> bool:
