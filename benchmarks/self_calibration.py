@@ -12,9 +12,10 @@
 - seeds: the same scene over ``--seeds`` seeds (0..n-1, 60 by default, about 4 min of a core;
   detector model): per seed the estimate's errors in its stated 1-sigma and the positions with the
   estimate (its uncertainty added) against those with the true camera; pooled over the seeds, the
-  normalised errors' RMS (honest: about 1) and the coverage (one calibration error is shared by a
-  scene's positions, so only many scenes show whether the covariances are calibrated), also
-  without the crowd's mean-height term, which a synthetic crowd drawn around the prior's mean lacks.
+  normalised errors' RMS (honest: about 1), the mean errors (the fit's bias) and the coverage (one
+  calibration error is shared by a scene's positions, so only many scenes show whether the
+  covariances are calibrated), also without the crowd's mean-height term, which a synthetic crowd
+  drawn around the prior's mean lacks.
 - refinement: the estimate as ``pedenv run`` refines it on a 60 s synthetic scene (first 200
   frames, then more), against the truth, and the true ground points cut with it again.
 - mot17: the real network (``onnx``, ``far``) on MOT17-02, -04 and -09 (static cameras; 5 or
@@ -171,6 +172,7 @@ def seeds(count: int) -> None:
     print(f"static-plaza seeds 0-{count - 1} (150 frames each, {spec}): calibration error / its 1-sigma, positions "
           "with the estimate (its uncertainty added) / with the true camera, coverage within 1 / 2 sigma")
     z, ratios, pooled = [], [], {"true": [], "estimated": [], "estimated, no crowd offset": []}
+    relative = []  # focal %, height %, tilt deg: the signed errors, whose mean is the fit's bias
     for seed in range(count):
         scene = generate_scenes(seed, ["static-plaza"])[0]
         camera = scene.frames[0].camera
@@ -192,6 +194,7 @@ def seeds(count: int) -> None:
         pooled["estimated, no crowd offset"].append(coverage(scene.frames, est.camera(), spec, EXACT,
                                                              without_crowd(est), details=True)["d2"])
         ratios.append(mine["rel_error_pct"] / true["rel_error_pct"])
+        relative.append([100 * error[0] / truth[0], 100 * error[1] / truth[1], np.degrees(error[2])])
         print(f"  seed {seed:2d}: f {100 * error[0] / truth[0]:+5.1f} % ({z[-1][0]:+.1f} sigma)  H "
               f"{100 * error[1] / truth[1]:+5.1f} % ({z[-1][1]:+.1f})  tilt {np.degrees(error[2]):+.2f} deg "
               f"({z[-1][2]:+.1f})  positions {mine['rel_error_pct']:.2f} / {true['rel_error_pct']:.2f} % "
@@ -204,6 +207,9 @@ def seeds(count: int) -> None:
           f"tilt {rms[2]:.2f}  roll {rms[3]:.2f} (honest: about 1); positions' ratio estimate / true median "
           f"{np.median(ratios):.2f}, "
           f"{np.sum(np.array(ratios) <= 1.5)} of {len(ratios)} within 1.5x")
+    mean, sem = np.mean(relative, axis=0), np.std(relative, axis=0) / np.sqrt(len(relative))
+    print(f"  mean error (the fit's bias, +- its standard error): f {mean[0]:+.2f} +- {sem[0]:.2f} %  H "
+          f"{mean[1]:+.2f} +- {sem[1]:.2f} %  tilt {mean[2]:+.3f} +- {sem[2]:.3f} deg")
     for name, d2 in pooled.items():
         d2a = np.concatenate(d2)
         print(f"  pooled, {name:26s}: within 1/2 sigma {100 * np.mean(d2a <= 1):.1f} / "
