@@ -170,7 +170,7 @@ def estimate_from(warmup: WarmUp, backend_name: str, intrinsics: np.ndarray | No
     else:
         estimate = estimate_camera(warmup.people, size, focal=focal, centre=centre, body=body_of(backend_name),
                                    walking=static)
-    return dataclasses.replace(estimate, position=position) if any(position) else estimate
+    return dataclasses.replace(estimate, position=position)
 
 
 def road_watcher(intrinsics: np.ndarray | None, mount: str,
